@@ -1,1 +1,42 @@
+//! # `firmware` — the LIVES controller core
+//!
+//! `#![no_std]`, no allocator: every buffer is an array or a `heapless` container whose capacity is
+//! a constant in [`capacity`]. The same code runs inside the host simulator, as a Linux process on
+//! a serial port, and on a Cortex-M; it never reads a clock or a random source (time is the
+//! `now_us` argument of [`Controller::tick`]), and it decides every output with integer or
+//! fixed-point arithmetic, so the same inputs give bit-identical outputs everywhere.
+//!
+//! One planning step (the paper's Algorithm 1), module by module:
+//!
+//! | step | module | what it owns |
+//! |---|---|---|
+//! | scan in, resampled to the 897-beam grid | [`scan`] | [`BeamScan`], input validation |
+//! | LiDAR and visual search maps | [`grid`] | [`LidarGrid`], [`VisualGrid`], ray traversal |
+//! | non-map points, pooled and filtered | [`nonmap`] | [`NonMapStore`] |
+//! | frontiers of both maps | [`frontier`] | [`FrontierSet`] |
+//! | viewpoints, path distance, utility, argmax | [`planner`] | [`Planner`] |
+//! | the fixed-rate state machine | [`controller`] | [`Controller`] |
+//!
+//! Parameters a user may tune are in [`Config`] (units in the names); capacities that size memory
+//! are compile-time constants in [`capacity`].
 #![no_std]
+#![deny(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod capacity;
+pub mod config;
+pub mod controller;
+pub mod frontier;
+pub mod grid;
+pub mod nonmap;
+pub mod planner;
+pub mod scan;
+
+pub use config::{Config, PlannerKind};
+pub use controller::{Command, Controller, Detection, Inputs, Mode, Outputs, Status};
+pub use fixed_point::{BinaryAngle, Meters, Pose2};
+pub use frontier::{Frontier, FrontierSet};
+pub use grid::{Cell, GridGeometry, LidarGrid, VisualGrid};
+pub use nonmap::NonMapStore;
+pub use planner::{Goal, Planner, Viewpoint};
+pub use scan::{BeamLabel, BeamScan, ScanError, ScanInput};

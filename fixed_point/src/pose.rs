@@ -50,11 +50,7 @@ impl Pose2 {
 
     /// From `f64` metres and radians (the boundary); `None` if any part is not finite or too large.
     pub fn from_f64(x: f64, y: f64, theta_rad: f64) -> Option<Pose2> {
-        Some(Pose2 {
-            x: crate::meters_from_f64(x)?,
-            y: crate::meters_from_f64(y)?,
-            theta: BinaryAngle::from_radians(theta_rad)?,
-        })
+        Some(Pose2 { x: crate::meters_from_f64(x)?, y: crate::meters_from_f64(y)?, theta: BinaryAngle::from_radians(theta_rad)? })
     }
 
     /// To `f64` metres and radians, for rendering and logs.

@@ -72,11 +72,7 @@ pub fn atan2(y: i32, x: i32) -> BinaryAngle {
         return BinaryAngle::ZERO;
     }
     // First-octant angle in [0, 45°], then unfold.
-    let base = if ay <= ax {
-        atan_unit_ratio(ay, ax)
-    } else {
-        (1 << 30) - atan_unit_ratio(ax, ay)
-    };
+    let base = if ay <= ax { atan_unit_ratio(ay, ax) } else { (1 << 30) - atan_unit_ratio(ax, ay) };
     let first_quadrant = base; // [0, 90°]
     let a = if x >= 0 {
         first_quadrant

@@ -22,7 +22,11 @@ impl Inputs {
 
 fn wrap_pi(a: f64) -> f64 {
     let r = (a + PI).rem_euclid(2.0 * PI) - PI;
-    if r <= -PI { r + 2.0 * PI } else { r }
+    if r <= -PI {
+        r + 2.0 * PI
+    } else {
+        r
+    }
 }
 
 #[test]

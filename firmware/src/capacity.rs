@@ -1,0 +1,43 @@
+//! Compile-time capacities: everything that sizes the core's memory is here.
+//!
+//! The static memory these imply is tabulated in `docs/architecture.md`; a test
+//! (`firmware/tests/memory.rs`) checks that the table and `size_of::<Controller>()` agree.
+
+/// Grid width and height in cells (512 × 512 at 0.10 m covers 51.2 m × 51.2 m).
+pub const GRID_CELLS: usize = 512;
+/// Cells per metre (0.10 m cells).
+pub const CELLS_PER_METER: i64 = 10;
+/// Cell side in millimetres.
+pub const CELL_MM: i64 = 1000 / CELLS_PER_METER;
+/// Total cells in a grid.
+pub const GRID_AREA: usize = GRID_CELLS * GRID_CELLS;
+
+/// The classifier's beam grid: 897 beams over 360° (the paper's VLP-16 projection).
+pub const BEAMS: usize = 897;
+/// Most beams a scan may carry on input (before resampling onto [`BEAMS`]).
+pub const MAX_INPUT_BEAMS: usize = 2048;
+
+/// Non-map points kept after pooling (a power of two: it sizes the pool's hash index).
+pub const MAX_NONMAP_POINTS: usize = 1024;
+
+/// Frontier groups kept per grid; more are dropped (smallest first) and counted.
+pub const MAX_FRONTIERS_PER_GRID: usize = 96;
+/// Work list for grouping frontier cells (8-connected flood fill).
+pub const FRONTIER_QUEUE: usize = 8192;
+
+/// Candidate viewpoints scored per planning step (4 per frontier centroid).
+pub const MAX_VIEWPOINTS: usize = 4 * 2 * MAX_FRONTIERS_PER_GRID;
+/// Open list of the path-distance search (Dijkstra); overflow is counted, never silent.
+pub const DIJKSTRA_HEAP: usize = 16384;
+/// Waypoints in a goal's path.
+pub const MAX_PATH_WAYPOINTS: usize = 64;
+/// Blacklisted goal positions remembered (oldest forgotten first).
+pub const MAX_BLACKLIST: usize = 64;
+/// Camera rays cast for the visual-map update.
+pub const MAX_CAMERA_RAYS: usize = 512;
+/// Inflation disk offsets (robot radius up to 1.0 m at 0.10 m cells).
+pub const MAX_INFLATION_OFFSETS: usize = 21 * 21;
+/// Side of a frontier-count block (cells) used for the "frontier cells near the path" term.
+pub const BLOCK_CELLS: usize = 8;
+/// Blocks per grid side.
+pub const BLOCKS: usize = GRID_CELLS / BLOCK_CELLS;

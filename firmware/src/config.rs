@@ -1,0 +1,168 @@
+//! Every parameter a user may tune, with units in the names and documented defaults.
+//!
+//! All values are fixed-point or integer so that the controller's decisions do not depend on a
+//! platform's float behaviour. `Config::default()` is the tuned default (see `docs/architecture.md`
+//! for the rationale of each number).
+
+use fixed_point::{BinaryAngle, Meters};
+
+/// A utility weight: Q16.16, "utility points per unit of the term".
+pub type Weight = fixed_point::fixed::types::I16F16;
+
+/// Which viewpoint-selection rule the planner uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PlannerKind {
+    /// LIVES: all four utility terms (path distance, unseen cells, frontier cells near the path,
+    /// non-map points in the camera cone).
+    Lives,
+    /// The paper's "multisensor frontier" baseline: LIVES with `w_nonmap = 0`.
+    Multisensor,
+    /// Yamauchi's nearest frontier: the reachable frontier with the shortest path, LiDAR frontiers
+    /// first, camera frontiers once the LiDAR map has none.
+    Nearest,
+}
+
+/// Work budgets per stage, in work units (cells or points touched). A stage that exceeds its
+/// budget still completes (its work is bounded by the capacities anyway) and is counted in
+/// [`crate::Status::overruns`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StageBudgets {
+    /// LiDAR-map update, cells touched.
+    pub lidar_cells: u32,
+    /// Visual-map update, cells touched.
+    pub visual_cells: u32,
+    /// Non-map store update and filters, points and cells examined.
+    pub nonmap_ops: u32,
+    /// One planning step (inflation, frontiers, path distance, utilities), cells and points.
+    pub plan_ops: u32,
+}
+
+/// The controller's configuration. Distances in metres ([`Meters`], Q16.16), angles as
+/// [`BinaryAngle`], times in microseconds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Config {
+    /// Viewpoint-selection rule. Default [`PlannerKind::Lives`].
+    pub planner: PlannerKind,
+    /// World coordinates of the grids' lower-left corner (the search area, given at start).
+    pub origin_x_m: Meters,
+    /// See [`Config::origin_x_m`].
+    pub origin_y_m: Meters,
+    /// Readings at or beyond this range are "no return": they clear cells up to it and mark
+    /// nothing. Default 30 m (VLP-16 indoor).
+    pub lidar_max_range_m: Meters,
+    /// Readings below this are invalid (the robot's own body). Default 0.10 m.
+    pub lidar_min_range_m: Meters,
+    /// Camera field of view (full angle). Default 90°.
+    pub camera_fov: BinaryAngle,
+    /// Camera range. Default 4.0 m.
+    pub camera_range_m: Meters,
+    /// Clearance the planner keeps from occupied cells (robot radius plus margin). Default 0.35 m.
+    pub robot_radius_m: Meters,
+    /// Frontier groups with fewer cells are dropped. Default 8 (0.8 m of frontier).
+    pub min_frontier_cells: u16,
+    /// Weight of the path length to a viewpoint, utility per metre (subtracted). Default 1.0.
+    pub w_dist_per_m: Weight,
+    /// Weight of camera-unseen cells inside a viewpoint's cone, per cell. Default 0.02.
+    pub w_unknown_per_cell: Weight,
+    /// Weight of frontier cells near the path to a viewpoint, per cell. Default 0.01.
+    pub w_frontier_per_cell: Weight,
+    /// Weight of non-map points inside a viewpoint's cone, per pooled point. Default 1.5.
+    /// Ignored (zero) under [`PlannerKind::Multisensor`].
+    pub w_nonmap_per_point: Weight,
+    /// "Near the path" for the frontier term: blocks of 8 × 8 cells around each path cell.
+    /// Default 1 (the path's block and its 8 neighbours, 0.8–1.6 m).
+    pub frontier_near_path_blocks: u8,
+    /// Non-map points closer than this to a kept point are merged into it. Default 0.20 m.
+    pub nonmap_pool_radius_m: Meters,
+    /// Non-map points closer than this to a map (wall) point are dropped (localisation drift).
+    /// Default 0.25 m.
+    pub nonmap_wall_clearance_m: Meters,
+    /// Replan at least this often while exploring. Default 1.0 s.
+    pub replan_interval_us: u64,
+    /// A new best viewpoint replaces the current goal only if it beats the current goal's
+    /// re-scored utility by this much (hysteresis against goal oscillation). Default 2.0.
+    pub switch_margin: Weight,
+    /// The goal counts as reached within this distance. Default 0.30 m.
+    pub goal_tolerance_m: Meters,
+    /// ... and within this heading error. Default 20°.
+    pub goal_heading_tolerance: BinaryAngle,
+    /// A goal towards which the robot has not gained `progress_m` for this long is blacklisted.
+    /// Default 15 s.
+    pub goal_timeout_us: u64,
+    /// Progress that resets the goal timeout. Default 0.25 m.
+    pub progress_m: Meters,
+    /// Candidate viewpoints within this distance of a blacklisted goal are dropped. Default 0.5 m.
+    pub blacklist_radius_m: Meters,
+    /// A frontier's viewpoint is moved to the nearest reachable cell within this distance when
+    /// its own cell is not reachable. Default 1.0 m.
+    pub viewpoint_snap_radius_m: Meters,
+    /// No pose or scan for this long stops the robot. Default 1.0 s.
+    pub watchdog_us: u64,
+    /// Per-stage work budgets.
+    pub budgets: StageBudgets,
+}
+
+const fn m(millimetres: i32) -> Meters {
+    // Exact for whole millimetres up to rounding of 1/1000 in Q16.16 (≤ 7.6 µm).
+    Meters::from_bits(((millimetres as i64 * 65_536 + 500) / 1000) as i32)
+}
+
+const fn w(thousandths: i32) -> Weight {
+    Weight::from_bits(((thousandths as i64 * 65_536 + 500) / 1000) as i32)
+}
+
+impl Config {
+    /// The defaults, as a `const` so a `static` can hold them.
+    pub const DEFAULT: Config = Config {
+        planner: PlannerKind::Lives,
+        origin_x_m: Meters::ZERO,
+        origin_y_m: Meters::ZERO,
+        lidar_max_range_m: m(30_000),
+        lidar_min_range_m: m(100),
+        camera_fov: BinaryAngle::from_degrees(90),
+        camera_range_m: m(4_000),
+        robot_radius_m: m(350),
+        min_frontier_cells: 8,
+        w_dist_per_m: w(1_000),
+        w_unknown_per_cell: w(20),
+        w_frontier_per_cell: w(10),
+        w_nonmap_per_point: w(1_500),
+        frontier_near_path_blocks: 1,
+        nonmap_pool_radius_m: m(200),
+        nonmap_wall_clearance_m: m(250),
+        replan_interval_us: 1_000_000,
+        switch_margin: w(2_000),
+        goal_tolerance_m: m(300),
+        goal_heading_tolerance: BinaryAngle::from_degrees(20),
+        goal_timeout_us: 15_000_000,
+        progress_m: m(250),
+        blacklist_radius_m: m(500),
+        viewpoint_snap_radius_m: m(1_000),
+        watchdog_us: 1_000_000,
+        budgets: StageBudgets { lidar_cells: 400_000, visual_cells: 40_000, nonmap_ops: 100_000, plan_ops: 12_000_000 },
+    };
+
+    /// Metres from whole millimetres (for building configs in `const` context and tests).
+    pub const fn mm(millimetres: i32) -> Meters {
+        m(millimetres)
+    }
+
+    /// A weight from thousandths.
+    pub const fn weight_milli(thousandths: i32) -> Weight {
+        w(thousandths)
+    }
+
+    /// The non-map weight actually used by the selected planner.
+    pub fn effective_w_nonmap(&self) -> Weight {
+        match self.planner {
+            PlannerKind::Lives => self.w_nonmap_per_point,
+            PlannerKind::Multisensor | PlannerKind::Nearest => Weight::ZERO,
+        }
+    }
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}

@@ -1,0 +1,395 @@
+//! The controller: a fixed-rate state machine, `tick(now_us, inputs) → outputs`.
+//!
+//! Each tick, in this order: commands → pose → scan (validated, resampled onto the beam grid) →
+//! LiDAR-map, visual-map and non-map updates (when a new scan arrived with a pose) → detection →
+//! watchdog → planning (when due) → outputs. Every stage reports its work in deterministic work
+//! units (cells or points touched); a stage above its budget in [`crate::config::StageBudgets`]
+//! is counted in [`Status::overruns`].
+//!
+//! Modes: [`Mode::Idle`] until `Start`; [`Mode::Exploring`]; [`Mode::TargetFound`] on a detection;
+//! [`Mode::Exhausted`] when no reachable viewpoint is left; [`Mode::Stopped`] when the watchdog
+//! fires (no pose or scan for `watchdog_us`), left again automatically when both flow again.
+//! Every mode but `Exploring` asks the base to stop.
+//!
+//! The controller never reads a clock or a random source: time is `now_us`.
+
+use crate::config::Config;
+use crate::frontier::FrontierSet;
+use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
+use crate::nonmap::NonMapStore;
+use crate::planner::{Goal, Planner, HEADINGS};
+use crate::scan::{BeamScan, ScanError, ScanInput};
+use fixed_point::{hypot, Meters, Pose2};
+
+/// Operator commands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Command {
+    /// Begin (or resume) the search.
+    Start,
+    /// Stop the robot and stay idle.
+    Stop,
+    /// Forget maps, points, blacklist and goal; stay idle.
+    Reset,
+}
+
+/// A detection by the camera's target detector.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Detection {
+    /// Where the target was seen, if the detector localised it.
+    pub position: Option<(Meters, Meters)>,
+}
+
+/// What the controller is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Mode {
+    /// Waiting for `Start`.
+    Idle,
+    /// Searching.
+    Exploring,
+    /// The target was detected; the robot stops.
+    TargetFound,
+    /// No reachable viewpoint is left; the robot stops.
+    Exhausted,
+    /// The watchdog fired (no pose or no scan for too long); the robot stops.
+    Stopped,
+}
+
+/// One tick's inputs. Everything is optional but the time.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Inputs<'a> {
+    /// The robot's pose in the world frame, if a new one arrived.
+    pub pose: Option<Pose2>,
+    /// A new LiDAR scan, taken at `pose` (or at the last pose).
+    pub scan: Option<ScanInput<'a>>,
+    /// A detection of the target.
+    pub detection: Option<Detection>,
+    /// An operator command.
+    pub command: Option<Command>,
+    /// The base reports it cannot follow the path (an obstacle in the way).
+    pub base_blocked: bool,
+}
+
+/// Work per stage in the last tick that ran it (work units: cells or points touched).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StageCost {
+    /// LiDAR-map update.
+    pub lidar: u32,
+    /// Visual-map update.
+    pub visual: u32,
+    /// Non-map store update and filters.
+    pub nonmap: u32,
+    /// Planning step (frontiers + planner).
+    pub plan: u32,
+}
+
+/// Counters and state, reported every tick.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Status {
+    /// Current mode (`None` never occurs after the first tick).
+    pub mode: Option<Mode>,
+    /// Ticks run.
+    pub ticks: u32,
+    /// Scans integrated.
+    pub scans: u32,
+    /// Scans refused (see [`ScanError`]).
+    pub scans_rejected: u32,
+    /// Poses refused (outside the search area).
+    pub poses_rejected: u32,
+    /// The last scan error.
+    pub last_scan_error: Option<ScanError>,
+    /// Planning steps run.
+    pub plans: u32,
+    /// Goals issued (a new goal, not a re-issue of the same one).
+    pub goals: u32,
+    /// Goals blacklisted (blocked or no progress).
+    pub blacklisted: u32,
+    /// Times the watchdog fired.
+    pub watchdog_trips: u32,
+    /// Work per stage, last time each ran.
+    pub cost: StageCost,
+    /// Stage runs above budget: lidar, visual, nonmap, plan.
+    pub overruns: [u32; 4],
+    /// Dijkstra open-list overflows, cumulative.
+    pub heap_overflows: u32,
+}
+
+/// What the controller asks of the robot this tick.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Outputs {
+    /// The goal being pursued (present every tick while exploring).
+    pub goal: Option<Goal>,
+    /// True on the tick a different goal was chosen.
+    pub new_goal: bool,
+    /// Stop the base now.
+    pub stop: bool,
+    /// Status.
+    pub status: Status,
+}
+
+/// The LIVES controller core with all its state. About 1 MiB: keep it in a `static` (MCU) or a
+/// `Box` (host), never on a small stack.
+pub struct Controller {
+    cfg: Config,
+    /// The LiDAR search map.
+    pub lidar: LidarGrid,
+    /// The visual search map.
+    pub visual: VisualGrid,
+    /// Non-map points.
+    pub nonmap: NonMapStore,
+    /// Frontiers of the last planning step.
+    pub frontiers: FrontierSet,
+    /// The planner.
+    pub planner: Planner,
+    beams: BeamScan,
+    mode: Mode,
+    pose: Option<Pose2>,
+    last_pose_us: Option<u64>,
+    last_scan_us: Option<u64>,
+    last_plan_us: Option<u64>,
+    goal: Option<Goal>,
+    goal_best_dist: Meters,
+    goal_progress_us: u64,
+    status: Status,
+}
+
+impl Controller {
+    /// A controller with `cfg`, idle, all maps unknown.
+    pub const fn new(cfg: Config) -> Self {
+        let geom = GridGeometry { origin_x: cfg.origin_x_m, origin_y: cfg.origin_y_m };
+        Self {
+            cfg,
+            lidar: LidarGrid::new(geom),
+            visual: VisualGrid::new(),
+            nonmap: NonMapStore::new(),
+            frontiers: FrontierSet::new(),
+            planner: Planner::new(),
+            beams: BeamScan::new(),
+            mode: Mode::Idle,
+            pose: None,
+            last_pose_us: None,
+            last_scan_us: None,
+            last_plan_us: None,
+            goal: None,
+            goal_best_dist: Meters::MAX,
+            goal_progress_us: 0,
+            status: Status {
+                mode: Some(Mode::Idle),
+                ticks: 0,
+                scans: 0,
+                scans_rejected: 0,
+                poses_rejected: 0,
+                last_scan_error: None,
+                plans: 0,
+                goals: 0,
+                blacklisted: 0,
+                watchdog_trips: 0,
+                cost: StageCost { lidar: 0, visual: 0, nonmap: 0, plan: 0 },
+                overruns: [0; 4],
+                heap_overflows: 0,
+            },
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    /// The current mode.
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// The last accepted pose.
+    pub fn pose(&self) -> Option<Pose2> {
+        self.pose
+    }
+
+    /// The goal being pursued.
+    pub fn goal(&self) -> Option<&Goal> {
+        self.goal.as_ref()
+    }
+
+    /// The latest resampled scan (labels included).
+    pub fn beams(&self) -> &BeamScan {
+        &self.beams
+    }
+
+    /// Forgets everything but the configuration; idle.
+    pub fn reset(&mut self) {
+        self.lidar.grid.clear();
+        self.visual.grid.clear();
+        self.nonmap.clear();
+        self.planner.clear();
+        self.mode = Mode::Idle;
+        self.pose = None;
+        self.last_pose_us = None;
+        self.last_scan_us = None;
+        self.last_plan_us = None;
+        self.goal = None;
+    }
+
+    fn budget_check(&mut self, stage: usize, work: u32) {
+        let b = &self.cfg.budgets;
+        let budget = [b.lidar_cells, b.visual_cells, b.nonmap_ops, b.plan_ops][stage];
+        if work > budget {
+            self.status.overruns[stage] += 1;
+        }
+    }
+
+    /// Runs one tick at time `now_us` (microseconds, monotonic, supplied by the caller).
+    pub fn tick(&mut self, now_us: u64, inputs: &Inputs<'_>) -> Outputs {
+        self.status.ticks = self.status.ticks.wrapping_add(1);
+        let mut new_goal = false;
+
+        match inputs.command {
+            Some(Command::Start) if matches!(self.mode, Mode::Idle | Mode::Exhausted) => {
+                self.mode = Mode::Exploring;
+                self.last_plan_us = None;
+            }
+            Some(Command::Stop) => {
+                self.mode = Mode::Idle;
+                self.goal = None;
+            }
+            Some(Command::Reset) => self.reset(),
+            _ => {}
+        }
+
+        if let Some(p) = inputs.pose {
+            let (cx, cy) = self.lidar.geom.cell_of(p.x, p.y);
+            if crate::grid::PackedGrid::in_bounds(cx, cy) {
+                self.pose = Some(p);
+                self.last_pose_us = Some(now_us);
+            } else {
+                self.status.poses_rejected += 1;
+            }
+        }
+
+        if let (Some(scan), Some(pose)) = (inputs.scan, self.pose) {
+            match self.beams.resample(&scan) {
+                Ok(_) => {
+                    self.last_scan_us = Some(now_us);
+                    self.status.scans += 1;
+                    let w = self.lidar.integrate(&pose, &self.beams, self.cfg.lidar_max_range_m);
+                    self.status.cost.lidar = w;
+                    self.budget_check(0, w);
+                    let w = self.visual.integrate(&self.lidar, &pose, self.cfg.camera_fov, self.cfg.camera_range_m);
+                    self.status.cost.visual = w;
+                    self.budget_check(1, w);
+                    let geom = self.lidar.geom;
+                    let mut w = self.nonmap.integrate(
+                        &geom,
+                        &self.visual,
+                        &pose,
+                        &self.beams,
+                        self.cfg.nonmap_pool_radius_m,
+                        self.cfg.nonmap_wall_clearance_m,
+                    );
+                    w += self.nonmap.filter(&geom, &self.visual, self.cfg.nonmap_pool_radius_m, self.cfg.nonmap_wall_clearance_m);
+                    self.status.cost.nonmap = w;
+                    self.budget_check(2, w);
+                }
+                Err(e) => {
+                    self.status.scans_rejected += 1;
+                    self.status.last_scan_error = Some(e);
+                }
+            }
+        }
+
+        if inputs.detection.is_some() && matches!(self.mode, Mode::Exploring | Mode::Stopped) {
+            self.mode = Mode::TargetFound;
+            self.goal = None;
+        }
+
+        // Watchdog: stale pose or scan stops the robot; fresh data resumes the search.
+        let stale = |t: Option<u64>| t.is_none_or(|t| now_us.saturating_sub(t) > self.cfg.watchdog_us);
+        let data_stale = stale(self.last_pose_us) || stale(self.last_scan_us);
+        match self.mode {
+            Mode::Exploring if data_stale => {
+                self.mode = Mode::Stopped;
+                self.status.watchdog_trips += 1;
+            }
+            Mode::Stopped if !data_stale => {
+                self.mode = Mode::Exploring;
+                self.last_plan_us = None;
+            }
+            _ => {}
+        }
+
+        if self.mode == Mode::Exploring {
+            if let Some(pose) = self.pose {
+                new_goal = self.maybe_plan(now_us, &pose, inputs.base_blocked);
+            }
+        }
+
+        self.status.mode = Some(self.mode);
+        let exploring = self.mode == Mode::Exploring;
+        Outputs { goal: if exploring { self.goal.clone() } else { None }, new_goal, stop: !exploring, status: self.status }
+    }
+
+    /// Plans when due; returns true if a different goal was chosen.
+    fn maybe_plan(&mut self, now_us: u64, pose: &Pose2, base_blocked: bool) -> bool {
+        let mut force = self.goal.is_none() || self.last_plan_us.is_none();
+        if let Some(g) = &self.goal {
+            let d = hypot(g.pose.x - pose.x, g.pose.y - pose.y);
+            let heading_err = (g.pose.theta - pose.theta).unsigned_abs();
+            if d <= self.cfg.goal_tolerance_m && heading_err <= self.cfg.goal_heading_tolerance.unsigned_abs() {
+                // Reached: whatever it offered has been looked at.
+                self.goal = None;
+                force = true;
+            } else if base_blocked || now_us.saturating_sub(self.goal_progress_us) > self.cfg.goal_timeout_us {
+                let cell = g.viewpoint.cell;
+                self.planner.blacklist(cell);
+                self.status.blacklisted += 1;
+                self.goal = None;
+                force = true;
+            } else if d.saturating_add(self.cfg.progress_m) <= self.goal_best_dist {
+                self.goal_best_dist = d;
+                self.goal_progress_us = now_us;
+            }
+        }
+        let due = self.last_plan_us.is_none_or(|t| now_us.saturating_sub(t) >= self.cfg.replan_interval_us);
+        if !force && !due {
+            return false;
+        }
+        self.last_plan_us = Some(now_us);
+        let mut work = self.frontiers.compute(&self.lidar, &self.visual, self.cfg.min_frontier_cells);
+        let current = self.goal.as_ref().map(|g| (g.viewpoint.cell, g.viewpoint.heading));
+        let (best, current_utility) = self.planner.plan(&self.cfg, &self.lidar, &self.visual, &self.frontiers, &self.nonmap, pose, current);
+        work += self.planner.stats.work;
+        self.status.plans += 1;
+        self.status.heap_overflows += self.planner.stats.heap_overflows;
+        self.status.cost.plan = work;
+        self.budget_check(3, work);
+        match best {
+            None if self.goal.is_none() => {
+                self.mode = Mode::Exhausted;
+                false
+            }
+            None => false,
+            Some(b) => {
+                let keep = match (&self.goal, current_utility) {
+                    (Some(_), Some(cu)) => b.viewpoint.utility <= cu.saturating_add(self.cfg.switch_margin.to_bits() as i64),
+                    _ => false,
+                };
+                if keep {
+                    return false;
+                }
+                let same =
+                    self.goal.as_ref().is_some_and(|g| g.viewpoint.cell == b.viewpoint.cell && g.viewpoint.heading == b.viewpoint.heading);
+                self.goal_best_dist = hypot(b.pose.x - pose.x, b.pose.y - pose.y);
+                self.goal_progress_us = now_us;
+                self.goal = Some(b);
+                if !same {
+                    self.status.goals += 1;
+                }
+                !same
+            }
+        }
+    }
+
+    /// The heading of viewpoint heading index `h`.
+    pub fn heading(h: u8) -> fixed_point::BinaryAngle {
+        HEADINGS[h as usize & 3]
+    }
+}

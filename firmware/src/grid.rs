@@ -1,0 +1,442 @@
+//! The two global search maps of LIVES: the [`LidarGrid`] (what the 360° LiDAR has swept) and the
+//! [`VisualGrid`] (what the narrow camera has actually looked at).
+//!
+//! Both are [`GRID_CELLS`]² occupancy grids packed at 2 bits a cell (64 KiB each), indexed by
+//! integer cell coordinates; [`GridGeometry`] converts between metres and cells with exact integer
+//! arithmetic. Rays are traversed with Bresenham's integer line algorithm ([`Line`]).
+//!
+//! This module owns the cell states and their update rules; it does not decide where to go.
+
+use crate::capacity::{BEAMS, CELLS_PER_METER, GRID_AREA, GRID_CELLS, MAX_CAMERA_RAYS};
+use crate::scan::{BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
+use fixed_point::{cos, sin, BinaryAngle, Meters, Pose2};
+
+/// The state of one cell. In the ROS convention: −1 unknown, 0 free, 100 occupied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum Cell {
+    /// Never observed (for the visual grid: never seen by the camera).
+    Unknown = 0,
+    /// Observed free (visual grid: seen by the camera, and free).
+    Free = 1,
+    /// Observed occupied (visual grid: an occupied cell the camera has looked at).
+    Occupied = 2,
+}
+
+impl Cell {
+    #[inline]
+    const fn from_bits(b: u8) -> Cell {
+        match b & 3 {
+            1 => Cell::Free,
+            2 => Cell::Occupied,
+            _ => Cell::Unknown,
+        }
+    }
+
+    /// The ROS `nav_msgs/OccupancyGrid` value: −1, 0 or 100.
+    pub const fn to_ros(self) -> i8 {
+        match self {
+            Cell::Unknown => -1,
+            Cell::Free => 0,
+            Cell::Occupied => 100,
+        }
+    }
+}
+
+/// A [`GRID_CELLS`]² grid of [`Cell`]s, 4 cells per byte. Out-of-bounds reads are `Unknown`,
+/// out-of-bounds writes are ignored.
+#[derive(Clone)]
+pub struct PackedGrid {
+    bytes: [u8; GRID_AREA / 4],
+}
+
+impl PackedGrid {
+    /// All unknown.
+    pub const fn new() -> Self {
+        Self { bytes: [0; GRID_AREA / 4] }
+    }
+
+    /// True if `(x, y)` is inside the grid.
+    #[inline]
+    pub const fn in_bounds(x: i32, y: i32) -> bool {
+        (x as u32) < GRID_CELLS as u32 && (y as u32) < GRID_CELLS as u32
+    }
+
+    /// The cell at `(x, y)`.
+    #[inline]
+    pub fn get(&self, x: i32, y: i32) -> Cell {
+        if !Self::in_bounds(x, y) {
+            return Cell::Unknown;
+        }
+        let i = y as usize * GRID_CELLS + x as usize;
+        Cell::from_bits(self.bytes[i >> 2] >> ((i & 3) * 2))
+    }
+
+    /// Sets the cell at `(x, y)`; returns false when out of bounds.
+    #[inline]
+    pub fn set(&mut self, x: i32, y: i32, c: Cell) -> bool {
+        if !Self::in_bounds(x, y) {
+            return false;
+        }
+        let i = y as usize * GRID_CELLS + x as usize;
+        let shift = (i & 3) * 2;
+        let b = &mut self.bytes[i >> 2];
+        *b = (*b & !(3 << shift)) | ((c as u8) << shift);
+        true
+    }
+
+    /// Number of cells in state `c`.
+    pub fn count(&self, c: Cell) -> u32 {
+        let mut n = 0;
+        for &b in self.bytes.iter() {
+            for k in 0..4 {
+                if Cell::from_bits(b >> (k * 2)) == c {
+                    n += 1;
+                }
+            }
+        }
+        n
+    }
+
+    /// The packed bytes (cell `i = y·W + x` in bits `2·(i mod 4)` of byte `i / 4`).
+    pub fn as_bytes(&self) -> &[u8] {
+        &self.bytes
+    }
+
+    /// Forgets everything.
+    pub fn clear(&mut self) {
+        self.bytes.fill(0);
+    }
+}
+
+impl Default for PackedGrid {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// A bit per cell.
+#[derive(Clone)]
+pub struct BitGrid {
+    bits: [u32; GRID_AREA / 32],
+}
+
+impl BitGrid {
+    /// All clear.
+    pub const fn new() -> Self {
+        Self { bits: [0; GRID_AREA / 32] }
+    }
+    /// Bit at `(x, y)`; false out of bounds.
+    #[inline]
+    pub fn get(&self, x: i32, y: i32) -> bool {
+        if !PackedGrid::in_bounds(x, y) {
+            return false;
+        }
+        let i = y as usize * GRID_CELLS + x as usize;
+        self.bits[i >> 5] & (1 << (i & 31)) != 0
+    }
+    /// Sets or clears the bit at `(x, y)` (ignored out of bounds).
+    #[inline]
+    pub fn put(&mut self, x: i32, y: i32, v: bool) {
+        if !PackedGrid::in_bounds(x, y) {
+            return;
+        }
+        let i = y as usize * GRID_CELLS + x as usize;
+        if v {
+            self.bits[i >> 5] |= 1 << (i & 31);
+        } else {
+            self.bits[i >> 5] &= !(1 << (i & 31));
+        }
+    }
+    /// Clears every bit.
+    pub fn clear(&mut self) {
+        self.bits.fill(0);
+    }
+    /// The words, 32 cells each, row-major.
+    pub fn words(&self) -> &[u32] {
+        &self.bits
+    }
+}
+
+impl Default for BitGrid {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Where the grid sits in the world: the world coordinates of cell (0, 0)'s lower-left corner,
+/// and [`CELLS_PER_METER`] cells a metre.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridGeometry {
+    /// World x of the grid's lower-left corner.
+    pub origin_x: Meters,
+    /// World y of the grid's lower-left corner.
+    pub origin_y: Meters,
+}
+
+impl GridGeometry {
+    /// The cell containing world point `(x, y)` (possibly out of bounds), by exact integer floor.
+    #[inline]
+    pub fn cell_of(&self, x: Meters, y: Meters) -> (i32, i32) {
+        let cx = ((x.to_bits() as i64 - self.origin_x.to_bits() as i64) * CELLS_PER_METER).div_euclid(1 << 16);
+        let cy = ((y.to_bits() as i64 - self.origin_y.to_bits() as i64) * CELLS_PER_METER).div_euclid(1 << 16);
+        (cx.clamp(i32::MIN as i64, i32::MAX as i64) as i32, cy.clamp(i32::MIN as i64, i32::MAX as i64) as i32)
+    }
+
+    /// The world coordinates of the centre of cell `(cx, cy)`.
+    #[inline]
+    pub fn center_of(&self, cx: i32, cy: i32) -> (Meters, Meters) {
+        let half_cells = |c: i32| ((2 * c as i64 + 1) << 16) / (2 * CELLS_PER_METER);
+        (
+            Meters::from_bits((self.origin_x.to_bits() as i64 + half_cells(cx)) as i32),
+            Meters::from_bits((self.origin_y.to_bits() as i64 + half_cells(cy)) as i32),
+        )
+    }
+
+    /// A length in metres as a whole number of cells, rounded to nearest.
+    #[inline]
+    pub fn cells(len: Meters) -> i32 {
+        ((len.to_bits() as i64 * CELLS_PER_METER + (1 << 15)) >> 16) as i32
+    }
+}
+
+/// Bresenham's line from one cell to another, both ends included.
+#[derive(Clone, Debug)]
+pub struct Line {
+    x: i32,
+    y: i32,
+    x1: i32,
+    y1: i32,
+    dx: i32,
+    dy: i32,
+    sx: i32,
+    sy: i32,
+    err: i32,
+    done: bool,
+}
+
+impl Line {
+    /// The cells from `(x0, y0)` to `(x1, y1)`.
+    pub fn new(x0: i32, y0: i32, x1: i32, y1: i32) -> Self {
+        let dx = (x1 as i64 - x0 as i64).abs().min(i32::MAX as i64 / 2) as i32;
+        let dy = -((y1 as i64 - y0 as i64).abs().min(i32::MAX as i64 / 2) as i32);
+        Line { x: x0, y: y0, x1, y1, dx, dy, sx: if x0 < x1 { 1 } else { -1 }, sy: if y0 < y1 { 1 } else { -1 }, err: dx + dy, done: false }
+    }
+}
+
+impl Iterator for Line {
+    type Item = (i32, i32);
+    #[inline]
+    fn next(&mut self) -> Option<(i32, i32)> {
+        if self.done {
+            return None;
+        }
+        let out = (self.x, self.y);
+        if self.x == self.x1 && self.y == self.y1 {
+            self.done = true;
+        } else {
+            let e2 = 2 * self.err;
+            if e2 >= self.dy {
+                self.err += self.dy;
+                self.x += self.sx;
+            }
+            if e2 <= self.dx {
+                self.err += self.dx;
+                self.y += self.sy;
+            }
+        }
+        Some(out)
+    }
+}
+
+/// The angle of beam `b` of the core's beam grid in the sensor frame: −π + b·2π/[`BEAMS`], exactly.
+#[inline]
+pub fn beam_angle(b: usize) -> BinaryAngle {
+    BinaryAngle::HALF + BinaryAngle::from_fraction(b as i64, BEAMS as i64)
+}
+
+/// The cell at distance `len` along heading `a` from world point `(x, y)`.
+#[inline]
+pub fn ray_end(geom: &GridGeometry, x: Meters, y: Meters, a: BinaryAngle, len: Meters) -> (i32, i32) {
+    let ex = x.saturating_add(fixed_point::mul_unit(len, cos(a)));
+    let ey = y.saturating_add(fixed_point::mul_unit(len, sin(a)));
+    geom.cell_of(ex, ey)
+}
+
+/// Meters from a range in millimetres.
+#[inline]
+pub fn mm_to_meters(mm: u16) -> Meters {
+    Meters::from_bits(((mm as i64 * 65_536 + 500) / 1000) as i32)
+}
+
+/// The LiDAR search map: every cell a beam crosses up to its hit is free, the hit cell occupied;
+/// a "no return" beam clears up to the maximum range and marks nothing.
+#[derive(Clone)]
+pub struct LidarGrid {
+    /// The cells.
+    pub grid: PackedGrid,
+    /// Where the grid is.
+    pub geom: GridGeometry,
+    hits: [(i32, i32); BEAMS],
+}
+
+impl LidarGrid {
+    /// An all-unknown grid at `geom`.
+    pub const fn new(geom: GridGeometry) -> Self {
+        Self { grid: PackedGrid::new(), geom, hits: [(0, 0); BEAMS] }
+    }
+
+    /// The cell at `(x, y)`.
+    #[inline]
+    pub fn get(&self, x: i32, y: i32) -> Cell {
+        self.grid.get(x, y)
+    }
+
+    /// Integrates one resampled scan taken at `pose`. Clearing runs first for every beam and the
+    /// hits are marked afterwards, so a beam grazing a wall cannot erase a hit of the same scan.
+    /// Returns the number of cells touched (the stage's work).
+    pub fn integrate(&mut self, pose: &Pose2, scan: &BeamScan, max_range: Meters) -> u32 {
+        let (rx, ry) = self.geom.cell_of(pose.x, pose.y);
+        let mut work = 0u32;
+        let mut nhits = 0usize;
+        for b in 0..BEAMS {
+            let r = scan.ranges_mm[b];
+            if r == RANGE_INVALID {
+                continue;
+            }
+            let a = pose.theta + beam_angle(b);
+            let no_return = r == RANGE_NO_RETURN || mm_to_meters(r) >= max_range;
+            let len = if no_return { max_range } else { mm_to_meters(r) };
+            let (ex, ey) = ray_end(&self.geom, pose.x, pose.y, a, len);
+            for (x, y) in Line::new(rx, ry, ex, ey) {
+                if !PackedGrid::in_bounds(x, y) {
+                    break;
+                }
+                work += 1;
+                if !no_return && x == ex && y == ey {
+                    break;
+                }
+                self.grid.set(x, y, Cell::Free);
+            }
+            if !no_return && PackedGrid::in_bounds(ex, ey) {
+                self.hits[nhits] = (ex, ey);
+                nhits += 1;
+            }
+        }
+        for &(x, y) in self.hits[..nhits].iter() {
+            self.grid.set(x, y, Cell::Occupied);
+        }
+        work + nhits as u32
+    }
+}
+
+/// Rays needed so that neighbouring rays are at most half a cell apart at `range_cells`.
+pub fn camera_rays(fov: BinaryAngle, range_cells: i32) -> usize {
+    // arc length in cells = fov_rad · range; 2π in Q16 is 411 775.
+    let fov_units = fov.0 as u32 as u64;
+    let arc_q16 = (fov_units * 411_775) >> 32; // fov in radians, Q16
+    let rays = ((arc_q16 * range_cells.max(1) as u64 * 2) >> 16) + 2;
+    (rays as usize).min(MAX_CAMERA_RAYS)
+}
+
+/// The visual search map: cells the camera has looked at. `Free` = seen and free, `Occupied` = an
+/// occupied cell the camera has looked at, `Unknown` = never seen by the camera.
+#[derive(Clone)]
+pub struct VisualGrid {
+    /// The cells.
+    pub grid: PackedGrid,
+}
+
+impl VisualGrid {
+    /// All unseen.
+    pub const fn new() -> Self {
+        Self { grid: PackedGrid::new() }
+    }
+
+    /// The cell at `(x, y)`.
+    #[inline]
+    pub fn get(&self, x: i32, y: i32) -> Cell {
+        self.grid.get(x, y)
+    }
+
+    /// True once the camera has looked at the cell.
+    #[inline]
+    pub fn seen(&self, x: i32, y: i32) -> bool {
+        self.grid.get(x, y) != Cell::Unknown
+    }
+
+    /// Marks what the camera at `pose` (looking along its heading) sees: rays across `fov` out to
+    /// `range`, each stopping at (and including) the first cell the LiDAR map knows is occupied.
+    /// Returns cells touched.
+    pub fn integrate(&mut self, lidar: &LidarGrid, pose: &Pose2, fov: BinaryAngle, range: Meters) -> u32 {
+        let (rx, ry) = lidar.geom.cell_of(pose.x, pose.y);
+        let rays = camera_rays(fov, GridGeometry::cells(range));
+        let start = pose.theta - BinaryAngle((fov.0 as u32 / 2) as i32);
+        let mut work = 0;
+        for j in 0..rays {
+            let off = ((fov.0 as u32 as u64 * j as u64) / (rays as u64 - 1)) as u32;
+            let a = start + BinaryAngle(off as i32);
+            let (ex, ey) = ray_end(&lidar.geom, pose.x, pose.y, a, range);
+            for (x, y) in Line::new(rx, ry, ex, ey) {
+                if !PackedGrid::in_bounds(x, y) {
+                    break;
+                }
+                work += 1;
+                if lidar.get(x, y) == Cell::Occupied {
+                    self.grid.set(x, y, Cell::Occupied);
+                    break;
+                }
+                self.grid.set(x, y, Cell::Free);
+            }
+        }
+        work
+    }
+
+    /// Estimated number of cells not yet seen by the camera that a camera at cell `(cx, cy)`
+    /// looking along `heading` would see: `rays` rays across `fov`, occluded by LiDAR-occupied
+    /// cells; a cell at step `d` along a ray stands for `d·Δθ` cells of the cone's area.
+    /// Returns `(cells, work)`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn unseen_in_cone(
+        &self,
+        lidar: &LidarGrid,
+        cx: i32,
+        cy: i32,
+        heading: BinaryAngle,
+        fov: BinaryAngle,
+        range_cells: i32,
+        rays: usize,
+    ) -> (u32, u32) {
+        let rays = rays.max(2);
+        let start = heading - BinaryAngle((fov.0 as u32 / 2) as i32);
+        let mut weighted: u64 = 0;
+        let mut work = 0u32;
+        for j in 0..rays {
+            let off = ((fov.0 as u32 as u64 * j as u64) / (rays as u64 - 1)) as u32;
+            let a = start + BinaryAngle(off as i32);
+            let ex = cx + ((range_cells as i64 * cos(a).to_bits() as i64 + (1 << 29)) >> 30) as i32;
+            let ey = cy + ((range_cells as i64 * sin(a).to_bits() as i64 + (1 << 29)) >> 30) as i32;
+            for (d, (x, y)) in Line::new(cx, cy, ex, ey).enumerate() {
+                if !PackedGrid::in_bounds(x, y) {
+                    break;
+                }
+                work += 1;
+                if !self.seen(x, y) {
+                    weighted += d as u64;
+                }
+                if lidar.get(x, y) == Cell::Occupied {
+                    break;
+                }
+            }
+        }
+        // Δθ = fov / rays in radians (Q16): fov_units · 2π / 2³² / rays.
+        let dtheta_q16 = ((fov.0 as u32 as u64 * 411_775) >> 32) / rays as u64;
+        (((weighted * dtheta_q16) >> 16) as u32, work)
+    }
+}
+
+impl Default for VisualGrid {
+    fn default() -> Self {
+        Self::new()
+    }
+}

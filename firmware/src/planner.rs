@@ -1,0 +1,545 @@
+//! Viewpoint selection: the LIVES utility over four candidate viewpoints per frontier.
+//!
+//! Each planning step:
+//! 1. **Traversable cells**: LiDAR-free cells farther than `robot_radius_m` from every occupied
+//!    cell (unknown cells are never traversable). Cells within that radius of the robot itself
+//!    stay traversable if free, so a robot that drifted close to a wall can still leave.
+//! 2. **Path distance** from the robot to every traversable cell: Dijkstra on the 8-connected grid
+//!    with integer step costs 5 (straight) and 7 (diagonal) — one unit is 0.02 m, 7/5 ≈ √2 — and
+//!    no corner cutting. The open list is a fixed-capacity binary heap ([`DIJKSTRA_HEAP`]); an
+//!    overflow is counted in [`PlanStats::heap_overflows`].
+//! 3. **Candidates**: at each frontier's anchor cell (or the nearest reachable cell within
+//!    `viewpoint_snap_radius_m`), four viewpoints facing 0°, 90°, 180°, 270°. Unreachable and
+//!    blacklisted candidates are dropped.
+//! 4. **Utility** (Q16.16 fixed point), the paper's weighted sum:
+//!    `U = − w_dist·path_m + w_unknown·unseen_cells + w_frontier·frontier_cells_near_path
+//!         + w_nonmap·nonmap_points_in_cone`.
+//!    `unseen_cells` is estimated by casting rays across the camera cone from the viewpoint
+//!    (occluded by LiDAR-occupied cells); `frontier_cells_near_path` counts the frontier cells of
+//!    either map in the 8 × 8-cell blocks within `frontier_near_path_blocks` of the path, each
+//!    block once; `nonmap_points_in_cone` counts stored non-map points within camera range and
+//!    field of view with an unoccluded line of sight.
+//! 5. **Argmax** (ties: the first candidate in frontier order wins) → a [`Goal`]: the viewpoint
+//!    pose and a path of at most [`MAX_PATH_WAYPOINTS`] waypoints down the distance field.
+//!
+//! `nearest` (Yamauchi) replaces 4–5 with the reachable LiDAR frontier of shortest path (camera
+//! frontiers once the LiDAR map has none), facing the direction of travel.
+
+use crate::capacity::{
+    BLOCKS, BLOCK_CELLS, DIJKSTRA_HEAP, GRID_AREA, GRID_CELLS, MAX_BLACKLIST, MAX_INFLATION_OFFSETS, MAX_NONMAP_POINTS, MAX_PATH_WAYPOINTS,
+    MAX_VIEWPOINTS,
+};
+use crate::config::{Config, PlannerKind, Weight};
+use crate::frontier::{FrontierSet, FrontierSource};
+use crate::grid::{BitGrid, Cell, GridGeometry, LidarGrid, Line, PackedGrid, VisualGrid};
+use crate::nonmap::NonMapStore;
+use fixed_point::{atan2, BinaryAngle, Meters, Pose2};
+use heapless::binary_heap::{BinaryHeap, Min};
+
+/// Path-distance cost of a straight step (one unit = 0.02 m at 0.10 m cells).
+pub const STEP_STRAIGHT: u16 = 5;
+/// Path-distance cost of a diagonal step.
+pub const STEP_DIAGONAL: u16 = 7;
+/// Distance value of an unreachable cell.
+pub const UNREACHABLE: u16 = u16::MAX;
+/// Rays cast across the camera cone when scoring a viewpoint's unseen cells.
+pub const SCORE_RAYS: usize = 24;
+
+/// The four viewpoint headings.
+pub const HEADINGS: [BinaryAngle; 4] = [BinaryAngle::ZERO, BinaryAngle::QUARTER, BinaryAngle::HALF, BinaryAngle(-(1 << 30))];
+
+/// A scored candidate viewpoint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Viewpoint {
+    /// Cell where the robot would stand.
+    pub cell: (i32, i32),
+    /// Which of [`HEADINGS`] it faces.
+    pub heading: u8,
+    /// The map whose frontier produced it.
+    pub source: FrontierSource,
+    /// Utility, Q16.16 bits.
+    pub utility: i64,
+    /// Path distance in units of 0.02 m.
+    pub path_units: u16,
+    /// Estimated camera-unseen cells in its cone.
+    pub unseen: u32,
+    /// Frontier cells near the path.
+    pub frontier_near_path: u32,
+    /// Non-map points in its cone.
+    pub nonmap: u32,
+}
+
+/// A goal for the base: a viewpoint pose and how to get there.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Goal {
+    /// Where to stand and which way to look.
+    pub pose: Pose2,
+    /// The viewpoint it came from.
+    pub viewpoint: Viewpoint,
+    /// Waypoints from (near) the robot to the goal, the last one the goal position.
+    pub path: heapless::Vec<(Meters, Meters), MAX_PATH_WAYPOINTS>,
+    /// Path length.
+    pub path_length_m: Meters,
+}
+
+/// Counters of the last planning step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PlanStats {
+    /// Viewpoints scored.
+    pub candidates: u32,
+    /// Frontiers with no reachable cell near their anchor.
+    pub unreachable: u32,
+    /// Frontiers dropped for being near a blacklisted goal.
+    pub blacklisted: u32,
+    /// Dijkstra pushes refused because the open list was full.
+    pub heap_overflows: u32,
+    /// Cells reached by the path-distance search.
+    pub reachable_cells: u32,
+    /// Work units spent.
+    pub work: u32,
+}
+
+/// The planner's working memory and its blacklist.
+pub struct Planner {
+    blocked: BitGrid,
+    dist: [u16; GRID_AREA],
+    heap: BinaryHeap<u64, Min, DIJKSTRA_HEAP>,
+    block_stamp: [u16; BLOCKS * BLOCKS],
+    stamp: u16,
+    blacklist: heapless::Deque<(i32, i32), MAX_BLACKLIST>,
+    visible: heapless::Vec<BinaryAngle, MAX_NONMAP_POINTS>,
+    /// The candidates scored in the last step (for logs and pictures).
+    pub candidates: heapless::Vec<Viewpoint, MAX_VIEWPOINTS>,
+    /// Counters of the last step.
+    pub stats: PlanStats,
+    robot_cell: (i32, i32),
+}
+
+#[inline]
+fn idx(x: i32, y: i32) -> usize {
+    y as usize * GRID_CELLS + x as usize
+}
+
+impl Planner {
+    /// Empty, no blacklist.
+    pub const fn new() -> Self {
+        Self {
+            blocked: BitGrid::new(),
+            dist: [UNREACHABLE; GRID_AREA],
+            heap: BinaryHeap::new(),
+            block_stamp: [0; BLOCKS * BLOCKS],
+            stamp: 0,
+            blacklist: heapless::Deque::new(),
+            visible: heapless::Vec::new(),
+            candidates: heapless::Vec::new(),
+            stats: PlanStats { candidates: 0, unreachable: 0, blacklisted: 0, heap_overflows: 0, reachable_cells: 0, work: 0 },
+            robot_cell: (0, 0),
+        }
+    }
+
+    /// Forgets the blacklist and the last step.
+    pub fn clear(&mut self) {
+        self.blacklist.clear();
+        self.candidates.clear();
+        self.dist.fill(UNREACHABLE);
+        self.stats = PlanStats::default();
+    }
+
+    /// Path distance (units of 0.02 m) from the robot to `(x, y)` as of the last step.
+    #[inline]
+    pub fn distance(&self, x: i32, y: i32) -> u16 {
+        if PackedGrid::in_bounds(x, y) {
+            self.dist[idx(x, y)]
+        } else {
+            UNREACHABLE
+        }
+    }
+
+    /// True if the last step considered `(x, y)` traversable.
+    pub fn traversable(&self, x: i32, y: i32) -> bool {
+        PackedGrid::in_bounds(x, y) && !self.blocked.get(x, y)
+    }
+
+    /// Remembers a failed goal; candidates near it are dropped from now on.
+    pub fn blacklist(&mut self, cell: (i32, i32)) {
+        if self.blacklist.is_full() {
+            self.blacklist.pop_front();
+        }
+        let _ = self.blacklist.push_back(cell);
+    }
+
+    /// Goals blacklisted so far (oldest first).
+    pub fn blacklisted(&self) -> impl Iterator<Item = &(i32, i32)> {
+        self.blacklist.iter()
+    }
+
+    fn is_blacklisted(&self, c: (i32, i32), radius_cells: i32) -> bool {
+        let r2 = radius_cells as i64 * radius_cells as i64;
+        self.blacklist.iter().any(|b| ((b.0 - c.0) as i64).pow(2) + ((b.1 - c.1) as i64).pow(2) <= r2)
+    }
+
+    /// Step 1: which cells the robot may stand on.
+    fn inflate(&mut self, lidar: &LidarGrid, radius_cells: i32, robot: (i32, i32)) -> u32 {
+        let mut offsets: heapless::Vec<(i8, i8), MAX_INFLATION_OFFSETS> = heapless::Vec::new();
+        let r = radius_cells.clamp(0, 10);
+        for dy in -r..=r {
+            for dx in -r..=r {
+                if dx * dx + dy * dy <= r * r {
+                    let _ = offsets.push((dx as i8, dy as i8));
+                }
+            }
+        }
+        let mut work = 0;
+        for y in 0..GRID_CELLS as i32 {
+            for x in 0..GRID_CELLS as i32 {
+                let c = lidar.get(x, y);
+                self.blocked.put(x, y, c != Cell::Free);
+                work += 1;
+            }
+        }
+        for y in 0..GRID_CELLS as i32 {
+            for x in 0..GRID_CELLS as i32 {
+                if lidar.get(x, y) == Cell::Occupied {
+                    for &(dx, dy) in offsets.iter() {
+                        self.blocked.put(x + dx as i32, y + dy as i32, true);
+                    }
+                    work += offsets.len() as u32;
+                }
+            }
+        }
+        for &(dx, dy) in offsets.iter() {
+            let (x, y) = (robot.0 + dx as i32, robot.1 + dy as i32);
+            if lidar.get(x, y) == Cell::Free {
+                self.blocked.put(x, y, false);
+            }
+        }
+        work
+    }
+
+    /// Step 2: Dijkstra from the robot's cell over traversable cells.
+    fn distances(&mut self, robot: (i32, i32)) -> u32 {
+        self.dist.fill(UNREACHABLE);
+        self.heap.clear();
+        let mut work = 0;
+        if !PackedGrid::in_bounds(robot.0, robot.1) {
+            return work;
+        }
+        self.dist[idx(robot.0, robot.1)] = 0;
+        let _ = self.heap.push(idx(robot.0, robot.1) as u64);
+        const N8: [(i32, i32, u16); 8] = [
+            (1, 0, STEP_STRAIGHT),
+            (-1, 0, STEP_STRAIGHT),
+            (0, 1, STEP_STRAIGHT),
+            (0, -1, STEP_STRAIGHT),
+            (1, 1, STEP_DIAGONAL),
+            (1, -1, STEP_DIAGONAL),
+            (-1, 1, STEP_DIAGONAL),
+            (-1, -1, STEP_DIAGONAL),
+        ];
+        while let Some(e) = self.heap.pop() {
+            let d = (e >> 32) as u16;
+            let i = (e & 0xFFFF_FFFF) as usize;
+            if d > self.dist[i] {
+                continue;
+            }
+            work += 1;
+            self.stats.reachable_cells += 1;
+            let (x, y) = ((i % GRID_CELLS) as i32, (i / GRID_CELLS) as i32);
+            for &(dx, dy, cost) in N8.iter() {
+                let (nx, ny) = (x + dx, y + dy);
+                if !self.traversable(nx, ny) {
+                    continue;
+                }
+                if dx != 0 && dy != 0 && (!self.traversable(x + dx, y) || !self.traversable(x, y + dy)) {
+                    continue;
+                }
+                let nd = d.saturating_add(cost);
+                let ni = idx(nx, ny);
+                if nd < self.dist[ni] {
+                    self.dist[ni] = nd;
+                    if self.heap.push(((nd as u64) << 32) | ni as u64).is_err() {
+                        self.stats.heap_overflows += 1;
+                    }
+                }
+            }
+            work += 8;
+        }
+        work
+    }
+
+    /// One step down the distance field from `(x, y)`, or `None` at the robot / a dead end.
+    #[inline]
+    fn descend(&self, x: i32, y: i32) -> Option<(i32, i32)> {
+        let here = self.distance(x, y);
+        if here == 0 || here == UNREACHABLE {
+            return None;
+        }
+        let mut best = (here, None);
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                let d = self.distance(x + dx, y + dy);
+                if d < best.0 {
+                    best = (d, Some((x + dx, y + dy)));
+                }
+            }
+        }
+        best.1
+    }
+
+    /// Frontier cells in blocks near the path from the robot to `(x, y)`, each block once.
+    fn frontier_near_path(&mut self, frontiers: &FrontierSet, x: i32, y: i32, reach: i32) -> (u32, u32) {
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.block_stamp.fill(0);
+            self.stamp = 1;
+        }
+        let mut total = 0u32;
+        let mut work = 0u32;
+        let mut cur = Some((x, y));
+        let mut last_block = (-1, -1);
+        let mut steps = 0usize;
+        while let Some((cx, cy)) = cur {
+            let b = (cx / BLOCK_CELLS as i32, cy / BLOCK_CELLS as i32);
+            if b != last_block {
+                last_block = b;
+                for by in b.1 - reach..=b.1 + reach {
+                    for bx in b.0 - reach..=b.0 + reach {
+                        if (bx as u32) < BLOCKS as u32 && (by as u32) < BLOCKS as u32 {
+                            let k = by as usize * BLOCKS + bx as usize;
+                            if self.block_stamp[k] != self.stamp {
+                                self.block_stamp[k] = self.stamp;
+                                total += frontiers.block_count(bx, by) as u32;
+                            }
+                        }
+                        work += 1;
+                    }
+                }
+            }
+            steps += 1;
+            if steps > GRID_AREA {
+                break;
+            }
+            cur = self.descend(cx, cy);
+            work += 9;
+        }
+        (total, work)
+    }
+
+    /// The nearest reachable cell to `c` within `radius` cells (Euclidean), `c` itself first.
+    fn reachable_near(&self, c: (i32, i32), radius: i32) -> Option<(i32, i32)> {
+        if self.distance(c.0, c.1) != UNREACHABLE {
+            return Some(c);
+        }
+        let mut best: Option<(i64, (i32, i32))> = None;
+        for dy in -radius..=radius {
+            for dx in -radius..=radius {
+                let d2 = (dx * dx + dy * dy) as i64;
+                if d2 > (radius * radius) as i64 || self.distance(c.0 + dx, c.1 + dy) == UNREACHABLE {
+                    continue;
+                }
+                if best.is_none_or(|(bd, _)| d2 < bd) {
+                    best = Some((d2, (c.0 + dx, c.1 + dy)));
+                }
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// Collects the bearings of the non-map points visible (range + line of sight) from `c`.
+    fn visible_nonmap(&mut self, lidar: &LidarGrid, nonmap: &NonMapStore, c: (i32, i32), range_cells: i32) -> u32 {
+        self.visible.clear();
+        let mut work = 0;
+        let r2 = range_cells as i64 * range_cells as i64;
+        for p in nonmap.points() {
+            work += 1;
+            let (px, py) = lidar.geom.cell_of(p.x, p.y);
+            let (dx, dy) = ((px - c.0) as i64, (py - c.1) as i64);
+            if dx * dx + dy * dy > r2 {
+                continue;
+            }
+            let mut clear = true;
+            for (x, y) in Line::new(c.0, c.1, px, py) {
+                work += 1;
+                if (x - px).abs() <= 1 && (y - py).abs() <= 1 {
+                    break;
+                }
+                if lidar.get(x, y) == Cell::Occupied {
+                    clear = false;
+                    break;
+                }
+            }
+            if clear {
+                let _ = self.visible.push(atan2(dy as i32, dx as i32));
+            }
+        }
+        work
+    }
+
+    /// One planning step. `current` is the goal being pursued (cell and heading index), re-scored
+    /// with the same terms so the caller can apply hysteresis; returns `(best, current_utility)`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn plan(
+        &mut self,
+        cfg: &Config,
+        lidar: &LidarGrid,
+        visual: &VisualGrid,
+        frontiers: &FrontierSet,
+        nonmap: &NonMapStore,
+        pose: &Pose2,
+        current: Option<((i32, i32), u8)>,
+    ) -> (Option<Goal>, Option<i64>) {
+        self.stats = PlanStats::default();
+        self.candidates.clear();
+        let robot = lidar.geom.cell_of(pose.x, pose.y);
+        self.robot_cell = robot;
+        let mut work = self.inflate(lidar, GridGeometry::cells(cfg.robot_radius_m), robot);
+        work += self.distances(robot);
+        let snap = GridGeometry::cells(cfg.viewpoint_snap_radius_m);
+        let bl = GridGeometry::cells(cfg.blacklist_radius_m);
+        let range_cells = GridGeometry::cells(cfg.camera_range_m);
+        let w_nonmap = cfg.effective_w_nonmap();
+        let half_fov = (cfg.camera_fov.0 as u32 / 2) as i32;
+
+        let mut best: Option<Viewpoint> = None;
+        let mut current_utility = None;
+        let nearest = cfg.planner == PlannerKind::Nearest;
+        let lidar_frontiers_reachable = nearest
+            && frontiers.frontiers().iter().any(|f| f.source == FrontierSource::Lidar && self.reachable_near(f.anchor, snap).is_some());
+
+        // Sites: every frontier anchor, then the current goal's cell (re-scored for hysteresis).
+        let n_frontiers = frontiers.frontiers().len();
+        for k in 0..=n_frontiers {
+            let (site, source, is_current) = if k < n_frontiers {
+                let f = frontiers.frontiers()[k];
+                if nearest && lidar_frontiers_reachable && f.source != FrontierSource::Lidar {
+                    continue;
+                }
+                let Some(c) = self.reachable_near(f.anchor, snap) else {
+                    self.stats.unreachable += 1;
+                    continue;
+                };
+                work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
+                if self.is_blacklisted(c, bl) {
+                    self.stats.blacklisted += 1;
+                    continue;
+                }
+                (c, f.source, false)
+            } else {
+                match current {
+                    Some((c, _)) if self.distance(c.0, c.1) != UNREACHABLE => (c, FrontierSource::Lidar, true),
+                    _ => break,
+                }
+            };
+            let path_units = self.distance(site.0, site.1);
+            let path_mm = path_units as i64 * (crate::capacity::CELL_MM / STEP_STRAIGHT as i64);
+            let dist_term = (cfg.w_dist_per_m.to_bits() as i64 * path_mm) / 1000;
+            if nearest {
+                let heading = self.travel_heading(site, pose);
+                let vp =
+                    Viewpoint { cell: site, heading, source, utility: -dist_term, path_units, unseen: 0, frontier_near_path: 0, nonmap: 0 };
+                if is_current {
+                    current_utility = Some(vp.utility);
+                } else {
+                    self.consider(vp, &mut best);
+                }
+                continue;
+            }
+            let (near, w) = self.frontier_near_path(frontiers, site.0, site.1, cfg.frontier_near_path_blocks as i32);
+            work += w;
+            work += if w_nonmap != Weight::ZERO { self.visible_nonmap(lidar, nonmap, site, range_cells) } else { 0 };
+            for (h, &heading) in HEADINGS.iter().enumerate() {
+                if is_current && current.map(|c| c.1) != Some(h as u8) {
+                    continue;
+                }
+                let (unseen, w) = visual.unseen_in_cone(lidar, site.0, site.1, heading, cfg.camera_fov, range_cells, SCORE_RAYS);
+                work += w;
+                let nm = if w_nonmap != Weight::ZERO {
+                    self.visible.iter().filter(|a| (**a - heading).0.unsigned_abs() <= half_fov as u32).count() as u32
+                } else {
+                    0
+                };
+                let utility = -dist_term
+                    + cfg.w_unknown_per_cell.to_bits() as i64 * unseen as i64
+                    + cfg.w_frontier_per_cell.to_bits() as i64 * near as i64
+                    + w_nonmap.to_bits() as i64 * nm as i64;
+                let vp =
+                    Viewpoint { cell: site, heading: h as u8, source, utility, path_units, unseen, frontier_near_path: near, nonmap: nm };
+                if is_current {
+                    current_utility = Some(utility);
+                } else {
+                    self.consider(vp, &mut best);
+                }
+            }
+        }
+        self.stats.work = work;
+        let goal = best.map(|vp| self.goal_for(lidar, vp));
+        (goal, current_utility)
+    }
+
+    fn consider(&mut self, vp: Viewpoint, best: &mut Option<Viewpoint>) {
+        self.stats.candidates += 1;
+        let _ = self.candidates.push(vp);
+        if best.is_none_or(|b| vp.utility > b.utility) {
+            *best = Some(vp);
+        }
+    }
+
+    /// For `nearest`: the heading index closest to the direction of travel into `site`.
+    fn travel_heading(&self, site: (i32, i32), pose: &Pose2) -> u8 {
+        let mut back = site;
+        for _ in 0..5 {
+            match self.descend(back.0, back.1) {
+                Some(c) => back = c,
+                None => break,
+            }
+        }
+        let a = if back == site { pose.theta } else { atan2(site.1 - back.1, site.0 - back.0) };
+        // Round to the nearest quarter turn.
+        ((((a.0 as u32).wrapping_add(1 << 29)) >> 30) & 3) as u8
+    }
+
+    fn goal_for(&self, lidar: &LidarGrid, vp: Viewpoint) -> Goal {
+        // Count the path's cells, then emit every `stride`-th one from the goal back to the robot.
+        let mut n = 0usize;
+        let mut cur = Some(vp.cell);
+        while let Some(c) = cur {
+            n += 1;
+            if n > GRID_AREA {
+                break;
+            }
+            cur = self.descend(c.0, c.1);
+        }
+        let stride = n.div_ceil(MAX_PATH_WAYPOINTS - 1).max(5);
+        let mut rev: heapless::Vec<(i32, i32), MAX_PATH_WAYPOINTS> = heapless::Vec::new();
+        let mut cur = Some(vp.cell);
+        let mut i = 0usize;
+        while let Some(c) = cur {
+            if i.is_multiple_of(stride) && !rev.is_full() {
+                let _ = rev.push(c);
+            }
+            i += 1;
+            if i > n {
+                break;
+            }
+            cur = self.descend(c.0, c.1);
+        }
+        let mut path = heapless::Vec::new();
+        for &(x, y) in rev.iter().rev() {
+            let _ = path.push(lidar.geom.center_of(x, y));
+        }
+        let (gx, gy) = lidar.geom.center_of(vp.cell.0, vp.cell.1);
+        let path_mm = vp.path_units as i64 * (crate::capacity::CELL_MM / STEP_STRAIGHT as i64);
+        Goal {
+            pose: Pose2::new(gx, gy, HEADINGS[vp.heading as usize & 3]),
+            viewpoint: vp,
+            path,
+            path_length_m: Meters::from_bits(((path_mm << 16) / 1000) as i32),
+        }
+    }
+}
+
+impl Default for Planner {
+    fn default() -> Self {
+        Self::new()
+    }
+}

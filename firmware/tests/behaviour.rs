@@ -1,0 +1,339 @@
+//! Behaviour of the controller core that a user relies on (issue 2's acceptance list).
+
+mod common;
+use common::*;
+use firmware::frontier::FrontierSource;
+use firmware::grid::{Cell, GridGeometry, LidarGrid, VisualGrid};
+use firmware::scan::{BeamLabel, BeamScan, RANGE_NO_RETURN};
+use firmware::{BinaryAngle, Command, Config, FrontierSet, Inputs, Mode, NonMapStore, Planner, PlannerKind};
+
+fn geom() -> GridGeometry {
+    GridGeometry { origin_x: Config::mm(0), origin_y: Config::mm(0) }
+}
+
+fn one_beam_scan(angle_deg: i32, range_mm: u16) -> BeamScan {
+    let mut s = BeamScan::new();
+    let ranges = [range_mm];
+    s.resample(&scan_input(&ranges, None)).unwrap();
+    // scan_input starts at −π; rebuild with the wanted angle instead.
+    let input = firmware::ScanInput {
+        angle_min: BinaryAngle::from_degrees(angle_deg),
+        angle_increment: BinaryAngle::from_degrees(1),
+        ranges_mm: &ranges,
+        labels: None,
+    };
+    s.resample(&input).unwrap();
+    s
+}
+
+#[test]
+fn a_beam_clears_the_cells_it_crosses_and_marks_its_hit() {
+    let mut g = Box::new(LidarGrid::new(geom()));
+    // Robot at the centre of cell (100, 100), looking along +x; one beam straight ahead, 3.0 m.
+    let p = pose(10.05, 10.05, 0.0);
+    let s = one_beam_scan(0, 3000);
+    g.integrate(&p, &s, Config::DEFAULT.lidar_max_range_m);
+    for x in 100..130 {
+        assert_eq!(g.get(x, 100), Cell::Free, "cell ({x}, 100) on the beam");
+    }
+    assert_eq!(g.get(130, 100), Cell::Occupied, "the hit at 13.05 m");
+    assert_eq!(g.get(131, 100), Cell::Unknown, "nothing beyond the hit");
+    assert_eq!(g.get(115, 101), Cell::Unknown, "nothing beside the beam");
+    assert_eq!(g.grid.count(Cell::Occupied), 1);
+    assert_eq!(g.grid.count(Cell::Free), 30);
+
+    // A no-return beam (pointing −y) clears up to the maximum range and marks nothing.
+    let s = one_beam_scan(-90, RANGE_NO_RETURN);
+    let cfg = Config { lidar_max_range_m: Config::mm(5_000), ..Config::DEFAULT };
+    g.integrate(&p, &s, cfg.lidar_max_range_m);
+    for y in 50..100 {
+        assert_eq!(g.get(100, y), Cell::Free, "cell (100, {y}) on the no-return beam");
+    }
+    assert_eq!(g.get(100, 49), Cell::Unknown);
+    assert_eq!(g.grid.count(Cell::Occupied), 1);
+
+    // A hit seen again later by a grazing beam of the same scan stays occupied.
+    let mut s2 = BeamScan::new();
+    let ranges = [3000u16, 2950];
+    s2.resample(&firmware::ScanInput { angle_min: BinaryAngle::ZERO, angle_increment: BinaryAngle::from_fraction(1, 897), ranges_mm: &ranges, labels: None })
+        .unwrap();
+    g.integrate(&p, &s2, Config::DEFAULT.lidar_max_range_m);
+    assert_eq!(g.get(130, 100), Cell::Occupied);
+}
+
+#[test]
+fn the_camera_does_not_see_through_an_occupied_cell() {
+    let mut lidar = Box::new(LidarGrid::new(geom()));
+    // Known free ahead of the robot, and a wall 2 m ahead spanning the whole cone.
+    for y in 60..141 {
+        for x in 100..150 {
+            lidar.grid.set(x, y, Cell::Free);
+        }
+        lidar.grid.set(120, y, Cell::Occupied);
+    }
+    let mut vis = Box::new(VisualGrid::new());
+    let p = pose(10.05, 10.05, 0.0);
+    vis.integrate(&lidar, &p, Config::DEFAULT.camera_fov, Config::DEFAULT.camera_range_m);
+    assert!(vis.seen(110, 100), "in front of the wall");
+    assert_eq!(vis.get(120, 100), Cell::Occupied, "the wall itself is seen");
+    for y in 60..141 {
+        for x in 121..150 {
+            assert!(!vis.seen(x, y), "({x}, {y}) is behind the wall");
+        }
+    }
+    // Without the wall the same cells are seen (the test above is not vacuous).
+    for y in 60..141 {
+        lidar.grid.set(120, y, Cell::Free);
+    }
+    vis.integrate(&lidar, &p, Config::DEFAULT.camera_fov, Config::DEFAULT.camera_range_m);
+    assert!(vis.seen(125, 100) && vis.seen(135, 100));
+    // And nothing outside the 90° cone: straight behind and to the side stay unseen.
+    assert!(!vis.seen(95, 100) && !vis.seen(100, 110));
+}
+
+/// A closed square room (walls occupied, inside free) with an optional doorway to unknown space.
+fn room_grid(door: bool) -> Box<LidarGrid> {
+    let mut g = Box::new(LidarGrid::new(geom()));
+    for y in 50..=100 {
+        for x in 50..=100 {
+            let edge = x == 50 || x == 100 || y == 50 || y == 100;
+            g.grid.set(x, y, if edge { Cell::Occupied } else { Cell::Free });
+        }
+    }
+    if door {
+        for y in 70..80 {
+            g.grid.set(100, y, Cell::Unknown);
+        }
+    }
+    g
+}
+
+#[test]
+fn a_closed_room_has_no_frontier_and_an_open_doorway_has_one() {
+    let vis = Box::new(VisualGrid::new());
+    let mut f = Box::new(FrontierSet::new());
+    f.compute(&room_grid(false), &vis, 8);
+    assert_eq!(f.frontiers().iter().filter(|fr| fr.source == FrontierSource::Lidar).count(), 0);
+
+    f.compute(&room_grid(true), &vis, 8);
+    let lidar: Vec<_> = f.frontiers().iter().filter(|fr| fr.source == FrontierSource::Lidar).collect();
+    assert_eq!(lidar.len(), 1, "{lidar:?}");
+    assert_eq!(lidar[0].cells, 10);
+    assert_eq!(lidar[0].anchor.0, 99, "the frontier is the free column inside the doorway");
+    assert!((70..80).contains(&lidar[0].anchor.1));
+    // A doorway narrower than min_frontier_cells is dropped.
+    let mut g = room_grid(false);
+    for y in 70..73 {
+        g.grid.set(100, y, Cell::Unknown);
+    }
+    f.compute(&g, &vis, 8);
+    assert_eq!(f.frontiers().iter().filter(|fr| fr.source == FrontierSource::Lidar).count(), 0);
+    assert_eq!(f.stats.dropped_small, 1);
+}
+
+/// Room with a doorway; the visual map has seen everything inside, so only the non-map term can
+/// tell the four viewpoints apart when the unknown/frontier weights are zero.
+fn score_headings(kind: PlannerKind, with_points: bool) -> [i64; 4] {
+    let lidar = room_grid(true);
+    let mut vis = Box::new(VisualGrid::new());
+    for y in 51..100 {
+        for x in 51..100 {
+            vis.grid.set(x, y, Cell::Free);
+        }
+    }
+    let mut f = Box::new(FrontierSet::new());
+    let mut store = Box::new(NonMapStore::new());
+    let cfg = Config {
+        planner: kind,
+        w_unknown_per_cell: Config::weight_milli(0),
+        w_frontier_per_cell: Config::weight_milli(0),
+        ..Config::DEFAULT
+    };
+    if with_points {
+        // A cluster of non-map points 2 m west of the doorway, inside the room.
+        for k in 0..6 {
+            store.insert(&geom(), Config::mm(7_800), Config::mm(7_000 + 100 * k), cfg.nonmap_pool_radius_m);
+            store.insert(&geom(), Config::mm(7_850), Config::mm(7_050 + 100 * k), cfg.nonmap_pool_radius_m);
+        }
+        assert!(store.points().len() >= 3);
+    }
+    f.compute(&lidar, &vis, cfg.min_frontier_cells);
+    let mut planner = Box::new(Planner::new());
+    let robot = pose(6.05, 6.05, 0.0);
+    let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None);
+    assert!(goal.is_some());
+    let anchor = f.frontiers().iter().find(|fr| fr.source == FrontierSource::Lidar).unwrap().anchor;
+    let mut out = [i64::MIN; 4];
+    for vp in planner.candidates.iter().filter(|v| v.cell == anchor) {
+        out[vp.heading as usize] = vp.utility;
+    }
+    assert!(out.iter().all(|&u| u != i64::MIN), "all four viewpoints scored: {out:?}");
+    out
+}
+
+#[test]
+fn non_map_points_make_a_viewpoint_win_under_lives_but_not_multisensor() {
+    // Headings: 0 = east (out of the door), 1 = north, 2 = west (towards the points), 3 = south.
+    let lives = score_headings(PlannerKind::Lives, true);
+    assert!(lives[2] > lives[0] && lives[2] > lives[1] && lives[2] > lives[3], "{lives:?}");
+    let multi = score_headings(PlannerKind::Multisensor, true);
+    assert_eq!(multi[2], multi[0], "{multi:?}");
+    assert!(multi.iter().all(|&u| u == multi[0]), "{multi:?}");
+    // And under lives without points, the west viewpoint has no advantage either.
+    let empty = score_headings(PlannerKind::Lives, false);
+    assert!(empty.iter().all(|&u| u == empty[0]), "{empty:?}");
+}
+
+#[test]
+fn an_unreachable_frontier_is_never_chosen() {
+    // The robot's closed room (no frontier) and, separately, an enclosed pocket of free space
+    // with a big frontier and many non-map points: attractive but unreachable.
+    let mut lidar = room_grid(false);
+    for y in 200..=240 {
+        for x in 200..=240 {
+            let edge = x == 200 || y == 200 || y == 240;
+            lidar.grid.set(x, y, if edge { Cell::Occupied } else { Cell::Free });
+        }
+    }
+    // x = 240 column left unknown: a 39-cell frontier inside the pocket.
+    for y in 201..240 {
+        lidar.grid.set(240, y, Cell::Unknown);
+    }
+    let vis = Box::new(VisualGrid::new());
+    let mut store = Box::new(NonMapStore::new());
+    for k in 0..20 {
+        store.insert(&geom(), Config::mm(22_000 + 50 * k), Config::mm(22_000), Config::mm(200));
+    }
+    let mut f = Box::new(FrontierSet::new());
+    let cfg = Config::DEFAULT;
+    let robot = pose(7.55, 7.55, 0.0);
+    for kind in [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest] {
+        let cfg = Config { planner: kind, ..cfg };
+        f.compute(&lidar, &vis, cfg.min_frontier_cells);
+        assert!(f.frontiers().iter().any(|fr| fr.source == FrontierSource::Lidar && fr.anchor.0 > 200));
+        let mut planner = Box::new(Planner::new());
+        let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None);
+        if let Some(g) = &goal {
+            assert!(g.viewpoint.cell.0 <= 100 && g.viewpoint.cell.1 <= 100, "{kind:?} chose {:?}", g.viewpoint);
+        }
+        assert!(planner.candidates.iter().all(|c| c.cell.0 <= 100), "{kind:?} scored an unreachable viewpoint");
+        assert!(planner.stats.unreachable >= 1);
+    }
+    // With a doorway in the robot's room, its frontier is chosen (and only it).
+    let mut lidar2 = room_grid(true);
+    for y in 200..=240 {
+        for x in 200..240 {
+            let edge = x == 200 || y == 200 || y == 240;
+            lidar2.grid.set(x, y, if edge { Cell::Occupied } else { Cell::Free });
+        }
+    }
+    f.compute(&lidar2, &vis, cfg.min_frontier_cells);
+    let mut planner = Box::new(Planner::new());
+    let (goal, _) = planner.plan(&cfg, &lidar2, &vis, &f, &store, &robot, None);
+    let g = goal.expect("the doorway frontier is reachable");
+    assert!(g.viewpoint.cell.0 <= 100);
+    assert!(!g.path.is_empty() && g.path.len() <= firmware::capacity::MAX_PATH_WAYPOINTS);
+    // The path starts near the robot and ends at the goal, over traversable cells.
+    let last = g.path.last().unwrap();
+    assert_eq!((last.0, last.1), (g.pose.x, g.pose.y));
+    for &(x, y) in g.path.iter() {
+        let (cx, cy) = geom().cell_of(x, y);
+        assert!(planner.traversable(cx, cy) || planner.distance(cx, cy) == 0);
+    }
+}
+
+fn run_room(ctrl: &mut firmware::Controller, ticks: u32, feed_until: u32) -> Vec<firmware::Outputs> {
+    let world = room_world();
+    let mut out = Vec::new();
+    let mut p = (5.0, 5.0, 0.3);
+    for t in 0..ticks {
+        let now = t as u64 * 200_000;
+        let (ranges, labels) = scan_of(&world, p, 897);
+        let feeding = t < feed_until;
+        let inputs = Inputs {
+            pose: feeding.then(|| pose(p.0, p.1, p.2)),
+            scan: feeding.then(|| scan_input(&ranges, Some(&labels))),
+            command: (t == 0).then_some(Command::Start),
+            ..Inputs::default()
+        };
+        let o = ctrl.tick(now, &inputs);
+        // A crude base: jump 0.1 m along the path each tick.
+        if let Some(g) = &o.goal {
+            if let Some(&(wx, wy)) = g.path.iter().find(|w| (w.0.to_num::<f64>() - p.0).hypot(w.1.to_num::<f64>() - p.1) > 0.15) {
+                let (dx, dy) = (wx.to_num::<f64>() - p.0, wy.to_num::<f64>() - p.1);
+                let d = dx.hypot(dy);
+                p = (p.0 + dx / d * 0.1, p.1 + dy / d * 0.1, dy.atan2(dx));
+            } else {
+                p.2 = g.pose.theta.to_radians();
+            }
+        }
+        out.push(o);
+    }
+    out
+}
+
+#[test]
+fn the_watchdog_stops_the_robot_and_fresh_data_resumes() {
+    let mut c = controller(Config { origin_x_m: Config::mm(0), origin_y_m: Config::mm(0), ..Config::DEFAULT });
+    let out = run_room(&mut c, 30, 10);
+    assert_eq!(out[9].status.mode, Some(Mode::Exploring));
+    assert!(out[9].goal.is_some() && !out[9].stop);
+    // Data stops after tick 9 (t = 1.8 s); the watchdog (1.0 s) fires at t > 2.8 s: tick 15.
+    assert!(!out[14].stop, "still within the watchdog period");
+    assert!(out[15].stop && out[15].goal.is_none());
+    assert_eq!(out[15].status.mode, Some(Mode::Stopped));
+    assert!(out[29].stop);
+    assert_eq!(out[29].status.watchdog_trips, 1);
+    // Data flows again: the search resumes.
+    let world = room_world();
+    let (ranges, labels) = scan_of(&world, (5.0, 5.0, 0.0), 897);
+    let o = c.tick(30 * 200_000, &Inputs { pose: Some(pose(5.0, 5.0, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), ..Inputs::default() });
+    assert_eq!(o.status.mode, Some(Mode::Exploring));
+    assert!(!o.stop && o.goal.is_some());
+}
+
+#[test]
+fn the_same_ticks_give_the_same_outputs() {
+    let a = run_room(&mut controller(Config::DEFAULT), 120, 120);
+    let b = run_room(&mut controller(Config::DEFAULT), 120, 120);
+    assert_eq!(a, b);
+    // The run did something: several goals, maps and non-map points.
+    let last = a.last().unwrap();
+    assert!(last.status.goals >= 2, "{:?}", last.status);
+    assert!(last.status.scans == 120);
+    let mut c = controller(Config::DEFAULT);
+    run_room(&mut c, 120, 120);
+    assert!(c.lidar.grid.count(Cell::Free) > 5_000);
+    assert!(c.visual.grid.count(Cell::Free) > 500);
+}
+
+#[test]
+fn bad_scans_are_counted_and_change_nothing() {
+    let mut c = controller(Config::DEFAULT);
+    let world = room_world();
+    let (ranges, labels) = scan_of(&world, (5.0, 5.0, 0.0), 897);
+    c.tick(0, &Inputs { pose: Some(pose(5.0, 5.0, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), command: Some(Command::Start), ..Inputs::default() });
+    let before = c.lidar.grid.as_bytes().to_vec();
+    let bad = scan_input(&ranges, Some(&labels[..10]));
+    let o = c.tick(200_000, &Inputs { pose: Some(pose(5.0, 5.0, 0.0)), scan: Some(bad), ..Inputs::default() });
+    assert_eq!(o.status.scans_rejected, 1);
+    assert!(matches!(o.status.last_scan_error, Some(firmware::ScanError::LabelCountMismatch { .. })));
+    assert_eq!(c.lidar.grid.as_bytes(), &before[..]);
+    // A pose outside the search area is refused.
+    let o = c.tick(400_000, &Inputs { pose: Some(pose(-5.0, 5.0, 0.0)), ..Inputs::default() });
+    assert_eq!(o.status.poses_rejected, 1);
+    assert_eq!(c.pose(), Some(pose(5.0, 5.0, 0.0)));
+    let _ = BeamLabel::Map;
+}
+
+#[test]
+fn detection_ends_the_search_and_stops_the_robot() {
+    let mut c = controller(Config::DEFAULT);
+    let world = room_world();
+    let (ranges, labels) = scan_of(&world, (5.0, 5.0, 0.0), 897);
+    let i = Inputs { pose: Some(pose(5.0, 5.0, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), command: Some(Command::Start), ..Inputs::default() };
+    assert!(!c.tick(0, &i).stop);
+    let o = c.tick(200_000, &Inputs { detection: Some(firmware::Detection { position: None }), ..i });
+    assert!(o.stop && o.goal.is_none());
+    assert_eq!(o.status.mode, Some(Mode::TargetFound));
+}
