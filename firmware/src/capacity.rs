@@ -25,8 +25,10 @@ pub const MAX_FRONTIERS_PER_GRID: usize = 96;
 /// Work list for grouping frontier cells (8-connected flood fill).
 pub const FRONTIER_QUEUE: usize = 8192;
 
-/// Candidate viewpoints scored per planning step (4 per frontier centroid).
-pub const MAX_VIEWPOINTS: usize = 4 * 2 * MAX_FRONTIERS_PER_GRID;
+/// Non-map clusters (one per 0.8 m block holding points) that get a viewpoint of their own.
+pub const MAX_NONMAP_SITES: usize = 64;
+/// Candidate viewpoints scored per planning step (4 per frontier centroid, 1 per non-map cluster).
+pub const MAX_VIEWPOINTS: usize = 4 * 2 * MAX_FRONTIERS_PER_GRID + MAX_NONMAP_SITES;
 /// Open list of the path-distance search (Dijkstra); overflow is counted, never silent.
 pub const DIJKSTRA_HEAP: usize = 16384;
 /// Waypoints in a goal's path.

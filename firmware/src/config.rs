@@ -69,6 +69,11 @@ pub struct Config {
     /// Weight of non-map points inside a viewpoint's cone, per pooled point. Default 1.5.
     /// Ignored (zero) under [`PlannerKind::Multisensor`].
     pub w_nonmap_per_point: Weight,
+    /// `lives` also scores one viewpoint per cluster of non-map points (an addition to the
+    /// paper, whose candidates are frontier centroids only). Default true.
+    pub nonmap_viewpoints: bool,
+    /// How far from a non-map cluster its viewpoint stands (towards the robot). Default 1.5 m.
+    pub nonmap_standoff_m: Meters,
     /// "Near the path" for the frontier term: blocks of 8 × 8 cells around each path cell.
     /// Default 1 (the path's block and its 8 neighbours, 0.8–1.6 m).
     pub frontier_near_path_blocks: u8,
@@ -89,6 +94,9 @@ pub struct Config {
     /// A goal towards which the robot has not gained `progress_m` for this long is blacklisted.
     /// Default 15 s.
     pub goal_timeout_us: u64,
+    /// A goal the base reports blocked for this long is blacklisted (shorter blocks, such as a
+    /// person passing, are waited out). Default 3 s.
+    pub blocked_timeout_us: u64,
     /// Progress that resets the goal timeout. Default 0.25 m.
     pub progress_m: Meters,
     /// Candidate viewpoints within this distance of a blacklisted goal are dropped. Default 0.5 m.
@@ -127,6 +135,8 @@ impl Config {
         w_unknown_per_cell: w(20),
         w_frontier_per_cell: w(10),
         w_nonmap_per_point: w(1_500),
+        nonmap_viewpoints: true,
+        nonmap_standoff_m: m(1_500),
         frontier_near_path_blocks: 1,
         nonmap_pool_radius_m: m(200),
         nonmap_wall_clearance_m: m(250),
@@ -135,6 +145,7 @@ impl Config {
         goal_tolerance_m: m(300),
         goal_heading_tolerance: BinaryAngle::from_degrees(20),
         goal_timeout_us: 15_000_000,
+        blocked_timeout_us: 3_000_000,
         progress_m: m(250),
         blacklist_radius_m: m(500),
         viewpoint_snap_radius_m: m(1_000),

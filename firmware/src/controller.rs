@@ -17,7 +17,7 @@ use crate::config::Config;
 use crate::frontier::FrontierSet;
 use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
 use crate::nonmap::NonMapStore;
-use crate::planner::{Goal, Planner, HEADINGS};
+use crate::planner::{Goal, Planner, Site};
 use crate::scan::{BeamScan, ScanError, ScanInput};
 use fixed_point::{hypot, Meters, Pose2};
 
@@ -103,6 +103,8 @@ pub struct Status {
     pub goals: u32,
     /// Goals blacklisted (blocked or no progress).
     pub blacklisted: u32,
+    /// Reached LiDAR-frontier goals retired from further choice.
+    pub retired: u32,
     /// Times the watchdog fired.
     pub watchdog_trips: u32,
     /// Work per stage, last time each ran.
@@ -149,6 +151,7 @@ pub struct Controller {
     goal: Option<Goal>,
     goal_best_dist: Meters,
     goal_progress_us: u64,
+    blocked_since: Option<u64>,
     status: Status,
 }
 
@@ -172,6 +175,7 @@ impl Controller {
             goal: None,
             goal_best_dist: Meters::MAX,
             goal_progress_us: 0,
+            blocked_since: None,
             status: Status {
                 mode: Some(Mode::Idle),
                 ticks: 0,
@@ -182,6 +186,7 @@ impl Controller {
                 plans: 0,
                 goals: 0,
                 blacklisted: 0,
+                retired: 0,
                 watchdog_trips: 0,
                 cost: StageCost { lidar: 0, visual: 0, nonmap: 0, plan: 0 },
                 overruns: [0; 4],
@@ -329,19 +334,31 @@ impl Controller {
 
     /// Plans when due; returns true if a different goal was chosen.
     fn maybe_plan(&mut self, now_us: u64, pose: &Pose2, base_blocked: bool) -> bool {
+        // A block that clears (a person passing) is not the goal's fault; one that persists is.
+        self.blocked_since = if base_blocked { Some(self.blocked_since.unwrap_or(now_us)) } else { None };
         let mut force = self.goal.is_none() || self.last_plan_us.is_none();
         if let Some(g) = &self.goal {
             let d = hypot(g.pose.x - pose.x, g.pose.y - pose.y);
             let heading_err = (g.pose.theta - pose.theta).unsigned_abs();
             if d <= self.cfg.goal_tolerance_m && heading_err <= self.cfg.goal_heading_tolerance.unsigned_abs() {
-                // Reached: whatever it offered has been looked at.
+                // Reached: whatever it offered has been looked at. A LiDAR frontier still there
+                // once the robot stands on it is one the sensor cannot resolve (a shadow under
+                // furniture, a glass pane): retire the spot so it is not chosen again.
+                if g.viewpoint.source == Site::LidarFrontier || self.cfg.planner == crate::PlannerKind::Nearest {
+                    let cell = g.viewpoint.cell;
+                    self.planner.blacklist(cell);
+                    self.status.retired += 1;
+                }
                 self.goal = None;
                 force = true;
-            } else if base_blocked || now_us.saturating_sub(self.goal_progress_us) > self.cfg.goal_timeout_us {
+            } else if self.blocked_since.is_some_and(|t| now_us.saturating_sub(t) >= self.cfg.blocked_timeout_us)
+                || now_us.saturating_sub(self.goal_progress_us) > self.cfg.goal_timeout_us
+            {
                 let cell = g.viewpoint.cell;
                 self.planner.blacklist(cell);
                 self.status.blacklisted += 1;
                 self.goal = None;
+                self.blocked_since = None;
                 force = true;
             } else if d.saturating_add(self.cfg.progress_m) <= self.goal_best_dist {
                 self.goal_best_dist = d;
@@ -388,8 +405,4 @@ impl Controller {
         }
     }
 
-    /// The heading of viewpoint heading index `h`.
-    pub fn heading(h: u8) -> fixed_point::BinaryAngle {
-        HEADINGS[h as usize & 3]
-    }
 }

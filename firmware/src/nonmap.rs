@@ -103,6 +103,15 @@ impl NonMapStore {
         false
     }
 
+    /// True once the camera has looked at the point: its cell or one of its 8 neighbours is
+    /// camera-seen. (The camera's ray stops at the first occupied cell, which for a point on the
+    /// far side of an object's boundary cell is a neighbour; the planner's line-of-sight test
+    /// likewise ignores the point's 3 × 3 cells, so the two agree.)
+    #[inline]
+    pub fn inspected(visual: &VisualGrid, cx: i32, cy: i32) -> bool {
+        (-1..=1).any(|dy| (-1..=1).any(|dx| visual.seen(cx + dx, cy + dy)))
+    }
+
     /// Adds the labelled points of one scan taken at `pose`: map points go into the wall mask
     /// first, then each non-map point is filtered and pooled. Returns the work done.
     pub fn integrate(
@@ -146,8 +155,8 @@ impl NonMapStore {
             }
             let (x, y) = hit_point(pose, b, r);
             let (cx, cy) = geom.cell_of(x, y);
-            work += 1;
-            if visual.seen(cx, cy) {
+            work += 9;
+            if Self::inspected(visual, cx, cy) {
                 self.stats.dropped_seen += 1;
                 continue;
             }
@@ -200,8 +209,8 @@ impl NonMapStore {
         while i < self.points.len() {
             let p = self.points[i];
             let (cx, cy) = geom.cell_of(p.x, p.y);
-            work += 1;
-            let seen = visual.seen(cx, cy);
+            work += 9;
+            let seen = Self::inspected(visual, cx, cy);
             let drop = seen || {
                 work += 49;
                 self.near_wall(geom, p.x, p.y, wall_clearance)

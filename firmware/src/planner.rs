@@ -26,8 +26,8 @@
 //! frontiers once the LiDAR map has none), facing the direction of travel.
 
 use crate::capacity::{
-    BLOCKS, BLOCK_CELLS, DIJKSTRA_HEAP, GRID_AREA, GRID_CELLS, MAX_BLACKLIST, MAX_INFLATION_OFFSETS, MAX_NONMAP_POINTS, MAX_PATH_WAYPOINTS,
-    MAX_VIEWPOINTS,
+    BLOCKS, BLOCK_CELLS, DIJKSTRA_HEAP, GRID_AREA, GRID_CELLS, MAX_BLACKLIST, MAX_FRONTIERS_PER_GRID, MAX_INFLATION_OFFSETS, MAX_NONMAP_POINTS,
+    MAX_NONMAP_SITES, MAX_PATH_WAYPOINTS, MAX_VIEWPOINTS,
 };
 use crate::config::{Config, PlannerKind, Weight};
 use crate::frontier::{FrontierSet, FrontierSource};
@@ -42,21 +42,37 @@ pub const STEP_STRAIGHT: u16 = 5;
 pub const STEP_DIAGONAL: u16 = 7;
 /// Distance value of an unreachable cell.
 pub const UNREACHABLE: u16 = u16::MAX;
+/// Longest straight segment between two path waypoints, cells (3 m).
+pub const MAX_SEGMENT_CELLS: i32 = 30;
 /// Rays cast across the camera cone when scoring a viewpoint's unseen cells.
 pub const SCORE_RAYS: usize = 24;
 
 /// The four viewpoint headings.
 pub const HEADINGS: [BinaryAngle; 4] = [BinaryAngle::ZERO, BinaryAngle::QUARTER, BinaryAngle::HALF, BinaryAngle(-(1 << 30))];
 
+/// What produced a candidate viewpoint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Site {
+    /// A frontier of the LiDAR map (four headings).
+    LidarFrontier,
+    /// A frontier of the visual map (four headings).
+    VisualFrontier,
+    /// A cluster of non-map points, looked at from `nonmap_standoff_m` (`lives` only).
+    NonMapCluster,
+    /// The goal being pursued, re-scored for hysteresis (never a new goal itself).
+    Current,
+}
+
 /// A scored candidate viewpoint.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Viewpoint {
     /// Cell where the robot would stand.
     pub cell: (i32, i32),
-    /// Which of [`HEADINGS`] it faces.
-    pub heading: u8,
-    /// The map whose frontier produced it.
-    pub source: FrontierSource,
+    /// Which way the camera faces: one of [`HEADINGS`] at a frontier, the bearing of the
+    /// cluster at a non-map site.
+    pub heading: BinaryAngle,
+    /// What produced it.
+    pub source: Site,
     /// Utility, Q16.16 bits.
     pub utility: i64,
     /// Path distance in units of 0.02 m.
@@ -93,6 +109,8 @@ pub struct PlanStats {
     pub blacklisted: u32,
     /// Dijkstra pushes refused because the open list was full.
     pub heap_overflows: u32,
+    /// Candidates skipped because the robot already stands there facing that way.
+    pub already_there: u32,
     /// Cells reached by the path-distance search.
     pub reachable_cells: u32,
     /// Work units spent.
@@ -132,7 +150,7 @@ impl Planner {
             blacklist: heapless::Deque::new(),
             visible: heapless::Vec::new(),
             candidates: heapless::Vec::new(),
-            stats: PlanStats { candidates: 0, unreachable: 0, blacklisted: 0, heap_overflows: 0, reachable_cells: 0, work: 0 },
+            stats: PlanStats { candidates: 0, unreachable: 0, blacklisted: 0, heap_overflows: 0, already_there: 0, reachable_cells: 0, work: 0 },
             robot_cell: (0, 0),
         }
     }
@@ -375,8 +393,51 @@ impl Planner {
         work
     }
 
-    /// One planning step. `current` is the goal being pursued (cell and heading index), re-scored
-    /// with the same terms so the caller can apply hysteresis; returns `(best, current_utility)`.
+    /// Non-map clusters: points bucketed by block, as (centroid cell, points), at most
+    /// [`MAX_NONMAP_SITES`], blocks in raster order of first appearance.
+    fn nonmap_clusters(&self, lidar: &LidarGrid, nonmap: &NonMapStore) -> heapless::Vec<((i32, i32), u32), MAX_NONMAP_SITES> {
+        let mut sums: heapless::Vec<(u32, i64, i64, u32), MAX_NONMAP_SITES> = heapless::Vec::new();
+        for p in nonmap.points() {
+            let (x, y) = lidar.geom.cell_of(p.x, p.y);
+            if !PackedGrid::in_bounds(x, y) {
+                continue;
+            }
+            let block = (y as u32 / BLOCK_CELLS as u32) * BLOCKS as u32 + x as u32 / BLOCK_CELLS as u32;
+            match sums.iter_mut().find(|e| e.0 == block) {
+                Some(e) => {
+                    e.1 += x as i64;
+                    e.2 += y as i64;
+                    e.3 += 1;
+                }
+                None => {
+                    let _ = sums.push((block, x as i64, y as i64, 1));
+                }
+            }
+        }
+        sums.iter().map(|e| (((e.1 / e.3 as i64) as i32, (e.2 / e.3 as i64) as i32), e.3)).collect()
+    }
+
+    /// Where to stand to look at a non-map cluster at `p`: on the line from `p` towards the robot,
+    /// `standoff` cells from `p` (or at the robot if it is nearer), then snapped to a reachable
+    /// cell. Returns the cell and the exact bearing from it to `p`.
+    fn nonmap_viewpoint(&self, p: (i32, i32), standoff: i32, snap: i32) -> Option<((i32, i32), BinaryAngle)> {
+        let r = self.robot_cell;
+        let (dx, dy) = ((r.0 - p.0) as i64, (r.1 - p.1) as i64);
+        let d = fixed_point::isqrt_u64((dx * dx + dy * dy) as u64) as i64;
+        let v = if d <= standoff as i64 || d == 0 {
+            r
+        } else {
+            ((p.0 as i64 + dx * standoff as i64 / d) as i32, (p.1 as i64 + dy * standoff as i64 / d) as i32)
+        };
+        let v = self.reachable_near(v, snap)?;
+        if v == p {
+            return None;
+        }
+        Some((v, atan2(p.1 - v.1, p.0 - v.0)))
+    }
+
+    /// One planning step. `current` is the goal being pursued (cell and heading), re-scored with
+    /// the same terms so the caller can apply hysteresis; returns `(best, current_utility)`.
     #[allow(clippy::too_many_arguments)]
     pub fn plan(
         &mut self,
@@ -386,7 +447,7 @@ impl Planner {
         frontiers: &FrontierSet,
         nonmap: &NonMapStore,
         pose: &Pose2,
-        current: Option<((i32, i32), u8)>,
+        current: Option<((i32, i32), BinaryAngle)>,
     ) -> (Option<Goal>, Option<i64>) {
         self.stats = PlanStats::default();
         self.candidates.clear();
@@ -398,77 +459,83 @@ impl Planner {
         let bl = GridGeometry::cells(cfg.blacklist_radius_m);
         let range_cells = GridGeometry::cells(cfg.camera_range_m);
         let w_nonmap = cfg.effective_w_nonmap();
-        let half_fov = (cfg.camera_fov.0 as u32 / 2) as i32;
+        let nearest = cfg.planner == PlannerKind::Nearest;
+        let lidar_frontiers_reachable =
+            nearest && frontiers.frontiers().iter().any(|f| f.source == FrontierSource::Lidar && self.reachable_near(f.anchor, snap).is_some());
+
+        // Sites: frontier anchors; for `lives`, viewpoints aimed at non-map clusters; last, the
+        // current goal (re-scored for hysteresis, never a candidate itself).
+        let mut sites: heapless::Vec<((i32, i32), Site, Option<BinaryAngle>), { 2 * MAX_FRONTIERS_PER_GRID + MAX_NONMAP_SITES + 1 }> =
+            heapless::Vec::new();
+        for f in frontiers.frontiers() {
+            if nearest && lidar_frontiers_reachable && f.source != FrontierSource::Lidar {
+                continue;
+            }
+            work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
+            let Some(c) = self.reachable_near(f.anchor, snap) else {
+                self.stats.unreachable += 1;
+                continue;
+            };
+            let kind = if f.source == FrontierSource::Lidar { Site::LidarFrontier } else { Site::VisualFrontier };
+            let _ = sites.push((c, kind, None));
+        }
+        if cfg.planner == PlannerKind::Lives && cfg.nonmap_viewpoints {
+            let standoff = GridGeometry::cells(cfg.nonmap_standoff_m);
+            for (p, _) in self.nonmap_clusters(lidar, nonmap) {
+                work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
+                match self.nonmap_viewpoint(p, standoff, snap) {
+                    Some((c, h)) => {
+                        let _ = sites.push((c, Site::NonMapCluster, Some(h)));
+                    }
+                    None => self.stats.unreachable += 1,
+                }
+            }
+        }
+        if let Some((c, h)) = current {
+            if self.distance(c.0, c.1) != UNREACHABLE {
+                let _ = sites.push((c, Site::Current, Some(h)));
+            }
+        }
 
         let mut best: Option<Viewpoint> = None;
         let mut current_utility = None;
-        let nearest = cfg.planner == PlannerKind::Nearest;
-        let lidar_frontiers_reachable = nearest
-            && frontiers.frontiers().iter().any(|f| f.source == FrontierSource::Lidar && self.reachable_near(f.anchor, snap).is_some());
-
-        // Sites: every frontier anchor, then the current goal's cell (re-scored for hysteresis).
-        let n_frontiers = frontiers.frontiers().len();
-        for k in 0..=n_frontiers {
-            let (site, source, is_current) = if k < n_frontiers {
-                let f = frontiers.frontiers()[k];
-                if nearest && lidar_frontiers_reachable && f.source != FrontierSource::Lidar {
-                    continue;
-                }
-                let Some(c) = self.reachable_near(f.anchor, snap) else {
-                    self.stats.unreachable += 1;
-                    continue;
-                };
-                work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
-                if self.is_blacklisted(c, bl) {
-                    self.stats.blacklisted += 1;
-                    continue;
-                }
-                (c, f.source, false)
-            } else {
-                match current {
-                    Some((c, _)) if self.distance(c.0, c.1) != UNREACHABLE => (c, FrontierSource::Lidar, true),
-                    _ => break,
-                }
-            };
+        let here = GridGeometry::cells(cfg.goal_tolerance_m) as i64 * STEP_STRAIGHT as i64;
+        let already_there = |cell: (i32, i32), h: BinaryAngle, d: u16| {
+            cell == robot || (d as i64) <= here && (h - pose.theta).unsigned_abs() <= cfg.goal_heading_tolerance.unsigned_abs()
+        };
+        for &(site, kind, fixed_heading) in sites.iter() {
+            if kind != Site::Current && self.is_blacklisted(site, bl) {
+                self.stats.blacklisted += 1;
+                continue;
+            }
             let path_units = self.distance(site.0, site.1);
             let path_mm = path_units as i64 * (crate::capacity::CELL_MM / STEP_STRAIGHT as i64);
             let dist_term = (cfg.w_dist_per_m.to_bits() as i64 * path_mm) / 1000;
             if nearest {
-                let heading = self.travel_heading(site, pose);
-                let vp =
-                    Viewpoint { cell: site, heading, source, utility: -dist_term, path_units, unseen: 0, frontier_near_path: 0, nonmap: 0 };
-                if is_current {
-                    current_utility = Some(vp.utility);
-                } else {
-                    self.consider(vp, &mut best);
-                }
+                let heading = fixed_heading.unwrap_or_else(|| self.travel_heading(site, pose));
+                let vp = Viewpoint { cell: site, heading, source: kind, utility: -dist_term, path_units, unseen: 0, frontier_near_path: 0, nonmap: 0 };
+                let at = already_there(site, heading, path_units);
+                self.offer(vp, &mut best, &mut current_utility, at);
                 continue;
             }
             let (near, w) = self.frontier_near_path(frontiers, site.0, site.1, cfg.frontier_near_path_blocks as i32);
             work += w;
             work += if w_nonmap != Weight::ZERO { self.visible_nonmap(lidar, nonmap, site, range_cells) } else { 0 };
-            for (h, &heading) in HEADINGS.iter().enumerate() {
-                if is_current && current.map(|c| c.1) != Some(h as u8) {
-                    continue;
-                }
+            let headings: &[BinaryAngle] = match &fixed_heading {
+                Some(h) => core::slice::from_ref(h),
+                None => &HEADINGS,
+            };
+            for &heading in headings {
                 let (unseen, w) = visual.unseen_in_cone(lidar, site.0, site.1, heading, cfg.camera_fov, range_cells, SCORE_RAYS);
                 work += w;
-                let nm = if w_nonmap != Weight::ZERO {
-                    self.visible.iter().filter(|a| (**a - heading).0.unsigned_abs() <= half_fov as u32).count() as u32
-                } else {
-                    0
-                };
+                let nm = if w_nonmap != Weight::ZERO { self.in_cone(heading, cfg.camera_fov) } else { 0 };
                 let utility = -dist_term
                     + cfg.w_unknown_per_cell.to_bits() as i64 * unseen as i64
                     + cfg.w_frontier_per_cell.to_bits() as i64 * near as i64
                     + w_nonmap.to_bits() as i64 * nm as i64;
-                let vp =
-                    Viewpoint { cell: site, heading: h as u8, source, utility, path_units, unseen, frontier_near_path: near, nonmap: nm };
-                if is_current {
-                    current_utility = Some(utility);
-                } else {
-                    self.consider(vp, &mut best);
-                }
+                let vp = Viewpoint { cell: site, heading, source: kind, utility, path_units, unseen, frontier_near_path: near, nonmap: nm };
+                let at = already_there(site, heading, path_units);
+                self.offer(vp, &mut best, &mut current_utility, at);
             }
         }
         self.stats.work = work;
@@ -476,7 +543,22 @@ impl Planner {
         (goal, current_utility)
     }
 
-    fn consider(&mut self, vp: Viewpoint, best: &mut Option<Viewpoint>) {
+    /// Visible non-map points (from the last [`Planner::visible_nonmap`]) within the cone.
+    fn in_cone(&self, heading: BinaryAngle, fov: BinaryAngle) -> u32 {
+        let half = fov.0 as u32 / 2;
+        self.visible.iter().filter(|a| (**a - heading).unsigned_abs() <= half).count() as u32
+    }
+
+    fn offer(&mut self, vp: Viewpoint, best: &mut Option<Viewpoint>, current_utility: &mut Option<i64>, already_there: bool) {
+        if vp.source == Site::Current {
+            *current_utility = Some(vp.utility);
+            return;
+        }
+        if already_there {
+            // The robot stands there looking that way: the camera already shows what it offers.
+            self.stats.already_there += 1;
+            return;
+        }
         self.stats.candidates += 1;
         let _ = self.candidates.push(vp);
         if best.is_none_or(|b| vp.utility > b.utility) {
@@ -484,8 +566,8 @@ impl Planner {
         }
     }
 
-    /// For `nearest`: the heading index closest to the direction of travel into `site`.
-    fn travel_heading(&self, site: (i32, i32), pose: &Pose2) -> u8 {
+    /// For `nearest`: the quarter-turn heading closest to the direction of travel into `site`.
+    fn travel_heading(&self, site: (i32, i32), pose: &Pose2) -> BinaryAngle {
         let mut back = site;
         for _ in 0..5 {
             match self.descend(back.0, back.1) {
@@ -495,33 +577,42 @@ impl Planner {
         }
         let a = if back == site { pose.theta } else { atan2(site.1 - back.1, site.0 - back.0) };
         // Round to the nearest quarter turn.
-        ((((a.0 as u32).wrapping_add(1 << 29)) >> 30) & 3) as u8
+        HEADINGS[((((a.0 as u32).wrapping_add(1 << 29)) >> 30) & 3) as usize]
     }
 
+    /// True if every cell on the straight line between `a` and `b` is reachable.
+    fn line_clear(&self, a: (i32, i32), b: (i32, i32)) -> bool {
+        Line::new(a.0, a.1, b.0, b.1).all(|(x, y)| self.distance(x, y) != UNREACHABLE)
+    }
+
+    /// The goal for `vp`, with its path pulled taut: walking down the distance field from the
+    /// goal, a waypoint is emitted where the straight line from the previous waypoint would leave
+    /// reachable cells, or every [`MAX_SEGMENT_CELLS`], so the base can drive straight between
+    /// consecutive waypoints.
     fn goal_for(&self, lidar: &LidarGrid, vp: Viewpoint) -> Goal {
-        // Count the path's cells, then emit every `stride`-th one from the goal back to the robot.
-        let mut n = 0usize;
-        let mut cur = Some(vp.cell);
+        let mut rev: heapless::Vec<(i32, i32), MAX_PATH_WAYPOINTS> = heapless::Vec::new();
+        let _ = rev.push(vp.cell);
+        let mut anchor = vp.cell;
+        let mut prev = vp.cell;
+        let mut steps = 0usize;
+        let mut cur = self.descend(vp.cell.0, vp.cell.1);
         while let Some(c) = cur {
-            n += 1;
-            if n > GRID_AREA {
+            steps += 1;
+            if steps > GRID_AREA {
                 break;
             }
+            let long = (c.0 - anchor.0).abs().max((c.1 - anchor.1).abs()) > MAX_SEGMENT_CELLS;
+            if (long || !self.line_clear(anchor, c)) && prev != anchor {
+                if rev.push(prev).is_err() {
+                    break;
+                }
+                anchor = prev;
+            }
+            prev = c;
             cur = self.descend(c.0, c.1);
         }
-        let stride = n.div_ceil(MAX_PATH_WAYPOINTS - 1).max(5);
-        let mut rev: heapless::Vec<(i32, i32), MAX_PATH_WAYPOINTS> = heapless::Vec::new();
-        let mut cur = Some(vp.cell);
-        let mut i = 0usize;
-        while let Some(c) = cur {
-            if i.is_multiple_of(stride) && !rev.is_full() {
-                let _ = rev.push(c);
-            }
-            i += 1;
-            if i > n {
-                break;
-            }
-            cur = self.descend(c.0, c.1);
+        if prev != anchor {
+            let _ = rev.push(prev);
         }
         let mut path = heapless::Vec::new();
         for &(x, y) in rev.iter().rev() {
@@ -529,12 +620,7 @@ impl Planner {
         }
         let (gx, gy) = lidar.geom.center_of(vp.cell.0, vp.cell.1);
         let path_mm = vp.path_units as i64 * (crate::capacity::CELL_MM / STEP_STRAIGHT as i64);
-        Goal {
-            pose: Pose2::new(gx, gy, HEADINGS[vp.heading as usize & 3]),
-            viewpoint: vp,
-            path,
-            path_length_m: Meters::from_bits(((path_mm << 16) / 1000) as i32),
-        }
+        Goal { pose: Pose2::new(gx, gy, vp.heading), viewpoint: vp, path, path_length_m: Meters::from_bits(((path_mm << 16) / 1000) as i32) }
     }
 }
 

@@ -1,1 +1,9 @@
+//! `host`: the `lives` command-line program's library — the simulator, the in-process search loop,
+//! pictures and benchmarks. The controller itself is the `firmware` crate.
+
+pub mod bench;
+pub mod overrides;
+pub mod picture;
+pub mod render;
+pub mod search;
 pub mod sim;

@@ -1,1 +1,200 @@
-fn main() {}
+//! `lives` — LiDAR Informed Visual Search: simulate, run and measure the controller.
+
+use clap::{Parser, Subcommand};
+use host::search::{self, PlannerChoice, SearchSpec};
+use host::sim::{Scenario, World};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(name = "lives", version, about = "LiDAR Informed Visual Search: find a target in an unseen building, fast")]
+struct Cli {
+    #[command(subcommand)]
+    command: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Run one simulated search and report the result.
+    Search {
+        /// A built-in world (apartment, office, hallway), `random` (with --seed), or a world file (.toml).
+        #[arg(long, default_value = "apartment")]
+        world: String,
+        /// easy or hard (built-in worlds).
+        #[arg(long, default_value = "easy")]
+        scenario: Scenario,
+        /// lives, lives-gt, multisensor or nearest.
+        #[arg(long, default_value = "lives")]
+        planner: PlannerChoice,
+        /// Seed: start jitter, target placement, people, sensor noise (and the random world).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Write a picture of the run here.
+        #[arg(long)]
+        png: Option<PathBuf>,
+        /// Print one JSON object instead of the human-readable line.
+        #[arg(long)]
+        json: bool,
+        /// Print every goal the controller chooses, with its utility terms, to stderr.
+        #[arg(long)]
+        trace: bool,
+        /// Override a controller parameter, e.g. `--set w_dist_per_m=2` (repeatable; `lives params` lists them).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+    },
+    /// List the controller parameters `--set` accepts, with their defaults.
+    Params,
+    /// List the built-in worlds, or print one as a world file.
+    Worlds {
+        /// Print this built-in world (or `random`) as TOML.
+        #[arg(long)]
+        export: Option<String>,
+        #[arg(long, default_value = "easy")]
+        scenario: Scenario,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Time the core's stages on a realistic, partly explored 512 × 512 map (host wall clock).
+    Bench {
+        /// Repetitions per stage (the median is reported).
+        #[arg(long, default_value_t = 30)]
+        reps: usize,
+        /// Virtual seconds of search before measuring (how explored the map is).
+        #[arg(long, default_value_t = 40.0)]
+        explore_s: f64,
+        /// Also time whole simulated searches (apartment easy, seeds 1–5) against real time.
+        #[arg(long)]
+        searches: bool,
+    },
+}
+
+fn load_world(name: &str, scenario: Scenario, seed: u64) -> Result<(String, World), String> {
+    if name == "random" {
+        return Ok((format!("random-{seed}"), World::random(seed)));
+    }
+    if let Some(w) = World::builtin(name, scenario) {
+        return Ok((name.to_string(), w));
+    }
+    let path = std::path::Path::new(name);
+    if path.extension().is_some_and(|e| e == "toml") || path.exists() {
+        let w = World::load(path).map_err(|e| e.to_string())?;
+        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| name.to_string());
+        return Ok((stem, w));
+    }
+    Err(format!("unknown world `{name}`: expected one of {}, `random`, or a .toml world file", World::builtin_names().join(", ")))
+}
+
+fn progress_bar(len: u64) -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(len);
+    pb.set_style(ProgressStyle::with_template("{spinner} simulated {pos}/{len} s [{bar:40}] {elapsed}").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    pb
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<ExitCode, String> {
+    match cli.command {
+        Cmd::Search { world, scenario, planner, seed, png, json, trace, set } => {
+            let (name, w) = load_world(&world, scenario, seed)?;
+            let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
+            spec.trace = trace;
+            for a in &set {
+                host::overrides::apply(&mut spec.controller, a)?;
+            }
+            let pb = progress_bar(spec.world.time_limit_s as u64);
+            let t0 = Instant::now();
+            let run = search::run(&spec, |t| pb.set_position(t as u64));
+            let wall = t0.elapsed().as_secs_f64();
+            pb.finish_and_clear();
+            let r = &run.result;
+            if let Some(path) = &png {
+                let title = format!(
+                    "{} {} · {} · seed {} · {} · path {:.1} m",
+                    r.world,
+                    r.scenario,
+                    r.planner,
+                    r.seed,
+                    if r.found { format!("FOUND in {:.1} s", r.time_s) } else { format!("NOT FOUND ({}, limit {:.0} s)", r.outcome, r.time_limit_s) },
+                    r.path_m
+                );
+                host::picture::write_png(&run, path, &title).map_err(|e| format!("writing {}: {e}", path.display()))?;
+            }
+            if json {
+                println!("{}", serde_json::to_string(r).map_err(|e| e.to_string())?);
+            } else {
+                let sim_s = r.ticks as f64 * search::TICK_US as f64 / 1e6;
+                println!(
+                    "{} {} {} {} seed {}: {} in {:.1} s (limit {:.0} s), path {:.1} m, {} ticks, {} goals; {:.1} s simulated in {:.2} s ({:.0}x real time)",
+                    if r.found { "FOUND" } else { "NOT FOUND" },
+                    r.world,
+                    r.scenario,
+                    r.planner,
+                    r.seed,
+                    r.outcome,
+                    r.time_s,
+                    r.time_limit_s,
+                    r.path_m,
+                    r.ticks,
+                    r.goals,
+                    sim_s,
+                    wall,
+                    sim_s / wall.max(1e-9)
+                );
+                if planner == PlannerChoice::Lives {
+                    println!("note: `lives` runs on the simulator's ground-truth labels until the int8 classifier lands (same as lives-gt)");
+                }
+                if let Some(p) = &png {
+                    println!("picture: {}", p.display());
+                }
+            }
+            Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
+        }
+        Cmd::Worlds { export, scenario, seed } => {
+            match export {
+                Some(name) => {
+                    let (_, w) = load_world(&name, scenario, seed)?;
+                    print!("{}", w.to_toml_string());
+                }
+                None => {
+                    for n in World::builtin_names() {
+                        for s in [Scenario::Easy, Scenario::Hard] {
+                            if let Some(w) = World::builtin(n, s) {
+                                let [lo, hi] = w.bounds;
+                                println!("{n:10} {s:5} {:5.1} x {:5.1} m, time limit {:4.0} s, {} obstacles, {} people", hi[0] - lo[0], hi[1] - lo[1], w.time_limit_s, w.obstacles.len(), w.people.len());
+                            }
+                        }
+                    }
+                    println!("random     (any seed: --world random --seed N)");
+                }
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Params => {
+            println!("{:#?}", firmware::Config::DEFAULT);
+            println!();
+            for (name, what) in host::overrides::NAMES {
+                println!("  --set {name}=VALUE   {what}");
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Bench { reps, explore_s, searches } => {
+            host::bench::run(reps, explore_s, searches);
+            Ok(ExitCode::SUCCESS)
+        }
+    }
+}

@@ -1,1 +1,144 @@
-pub fn _x(){}
+//! The 2D indoor simulator: the "true world" the LIVES controller searches.
+//!
+//! This module owns the ground truth and nothing else: floor plans ([`World`]), the robot's
+//! sensors (a 360° 2D LiDAR, [`Sim::scan`], and a narrow camera with an oracle detector,
+//! [`Sim::detect`]), the mobile base ([`Sim::set_path`], [`Sim::step`]) and the people who walk
+//! through the building. It must not know anything about the controller: the controller sees the
+//! world only through scans, detections and the pose.
+//!
+//! Everything here is `f64`, metres, radians and seconds, in the world frame (REP-103: x forward /
+//! east, y left / north, yaw counter-clockwise from +x). Every random draw comes from a ChaCha RNG
+//! seeded from the user's seed, so the same seed gives bit-identical runs.
+//!
+//! * [`world`]: the [`World`] type, its TOML format (see `docs/world-format.md`) and validation.
+//! * [`builtin`]: the paper's worlds, `apartment`, `office`, `hallway`, each in an easy and a hard
+//!   [`Scenario`], authored as TOML in `sim/worlds/`.
+//! * [`generate`]: procedural buildings, [`World::random`].
+//! * [`geometry`]: shapes, ray casting and collision queries with a uniform-grid broad phase.
+//! * [`simulator`]: [`Sim`], [`SimConfig`], [`Scan`], [`BaseStatus`].
+//! * [`reach`]: coarse reachability (0.1 m grid, robot-radius inflation) used by tests and the
+//!   generator.
+
+pub mod builtin;
+pub mod generate;
+pub mod geometry;
+pub mod reach;
+pub mod simulator;
+pub mod world;
+
+use std::fmt;
+use std::str::FromStr;
+
+pub use simulator::{BaseStatus, Scan, Sim, SimConfig};
+pub use world::{Obstacle, Person, Start, Target, World, WorldError};
+
+/// A point or vector in the plane, `[x, y]` in metres.
+pub type P2 = [f64; 2];
+
+/// The outline of an obstacle or target. Angles in radians, lengths in metres.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    /// A rectangle of `size = [length along its x axis, width]`, rotated by `yaw` about `center`.
+    Rect { center: P2, size: P2, yaw: f64 },
+    /// A disc.
+    Circle { center: P2, radius: f64 },
+    /// A simple polygon (at least 3 points, either winding), implicitly closed.
+    Polygon { points: Vec<P2> },
+}
+
+/// Which of the paper's two difficulty settings a built-in world is loaded in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Scenario {
+    Easy,
+    Hard,
+}
+
+impl Scenario {
+    /// Both scenarios, easy first.
+    pub const ALL: [Scenario; 2] = [Scenario::Easy, Scenario::Hard];
+
+    /// `"easy"` or `"hard"`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Scenario::Easy => "easy",
+            Scenario::Hard => "hard",
+        }
+    }
+}
+
+impl fmt::Display for Scenario {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// The error of parsing a [`Scenario`] from anything but `easy` or `hard` (ASCII case ignored).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ParseScenarioError(pub String);
+
+impl fmt::Display for ParseScenarioError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "unknown scenario {:?}, expected \"easy\" or \"hard\"", self.0)
+    }
+}
+
+impl std::error::Error for ParseScenarioError {}
+
+impl FromStr for Scenario {
+    type Err = ParseScenarioError;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "easy" => Ok(Scenario::Easy),
+            "hard" => Ok(Scenario::Hard),
+            _ => Err(ParseScenarioError(s.to_string())),
+        }
+    }
+}
+
+/// What a LiDAR beam (or a line of sight) hit: the ground truth behind the map / non-map labels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum HitKind {
+    /// No usable return: nothing within the maximum range (range `+inf`), or a dropout or a
+    /// return below the minimum range (range NaN).
+    None,
+    /// Permanent structure, the only "map" class.
+    Wall,
+    /// Large movable objects: beds, sofas, tables, shelves, desks.
+    Furniture,
+    /// Small objects: boxes, chairs, bins.
+    Clutter,
+    /// A walking person.
+    Person,
+    /// The object being searched for.
+    Target,
+}
+
+impl HitKind {
+    /// True only for [`HitKind::Wall`]: the ground truth of the map / non-map split.
+    pub fn is_map(self) -> bool {
+        matches!(self, HitKind::Wall)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scenario_parses_and_displays() {
+        assert_eq!("easy".parse::<Scenario>(), Ok(Scenario::Easy));
+        assert_eq!("HARD".parse::<Scenario>(), Ok(Scenario::Hard));
+        assert!("medium".parse::<Scenario>().is_err());
+        for s in Scenario::ALL {
+            assert_eq!(s.to_string().parse::<Scenario>(), Ok(s));
+        }
+    }
+
+    #[test]
+    fn only_walls_are_map() {
+        assert!(HitKind::Wall.is_map());
+        for k in [HitKind::None, HitKind::Furniture, HitKind::Clutter, HitKind::Person, HitKind::Target] {
+            assert!(!k.is_map());
+        }
+    }
+}

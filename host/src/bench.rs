@@ -1,0 +1,89 @@
+//! `lives bench`: host wall-clock timings of the core's stages on a realistic map.
+//!
+//! The map comes from a real simulated search (office, hard scenario, `lives-gt`, seed 1) stopped
+//! after `explore_s` virtual seconds, so the grids, non-map points and frontiers are what the
+//! controller actually sees mid-search. Each stage is repeated and the median reported. These are
+//! measurements, not assertions: nothing here fails on a slow machine.
+
+use crate::search::{self, PlannerChoice, SearchSpec};
+use crate::sim::{Scenario, World};
+use firmware::grid::Cell;
+use std::time::Instant;
+
+fn median_ms(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2] * 1e3
+}
+
+fn time<F: FnMut()>(reps: usize, mut f: F) -> f64 {
+    let reps = reps.max(1);
+    let mut v = Vec::with_capacity(reps);
+    for _ in 0..reps {
+        let t = Instant::now();
+        f();
+        v.push(t.elapsed().as_secs_f64());
+    }
+    median_ms(v)
+}
+
+/// Runs the benchmark and prints a table.
+pub fn run(reps: usize, explore_s: f64, searches: bool) {
+    let mut world = World::builtin("office", Scenario::Hard).expect("built-in office world");
+    world.time_limit_s = explore_s;
+    let spec = SearchSpec::new("office", world, Scenario::Hard, PlannerChoice::LivesGt, 1);
+    let mut run = search::run(&spec, |_| {});
+    let ctrl = &mut run.controller;
+    let pose = ctrl.pose().expect("the search produced a pose");
+    let cfg = *ctrl.config();
+    let beams = ctrl.beams().clone();
+    let free = ctrl.lidar.grid.count(Cell::Free);
+    let occ = ctrl.lidar.grid.count(Cell::Occupied);
+    let seen = ctrl.visual.grid.count(Cell::Free) + ctrl.visual.grid.count(Cell::Occupied);
+
+    let mut lidar = Box::new(ctrl.lidar.clone());
+    let mut lidar_work = 0;
+    let t_lidar = time(reps, || lidar_work = lidar.integrate(&pose, &beams, cfg.lidar_max_range_m));
+    let mut visual = Box::new(ctrl.visual.clone());
+    let mut visual_work = 0;
+    let t_visual = time(reps, || visual_work = visual.integrate(&ctrl.lidar, &pose, cfg.camera_fov, cfg.camera_range_m));
+    let current = ctrl.goal().map(|g| (g.viewpoint.cell, g.viewpoint.heading));
+    let mut plan_work = 0;
+    let mut candidates = 0;
+    let c = &mut **ctrl;
+    let t_plan = time(reps, || {
+        plan_work = c.frontiers.compute(&c.lidar, &c.visual, cfg.min_frontier_cells);
+        let _ = c.planner.plan(&cfg, &c.lidar, &c.visual, &c.frontiers, &c.nonmap, &pose, current);
+        plan_work += c.planner.stats.work;
+        candidates = c.planner.stats.candidates;
+    });
+    let t_frontiers = time(reps, || {
+        c.frontiers.compute(&c.lidar, &c.visual, cfg.min_frontier_cells);
+    });
+
+    println!("map: office hard after {explore_s:.0} s of lives-gt search: {free} free, {occ} occupied LiDAR cells; {seen} camera-seen cells;");
+    println!("     {} non-map points, {} frontiers, {candidates} candidate viewpoints (512 x 512 grid, 0.10 m)", c.nonmap.points().len(), c.frontiers.frontiers().len());
+    println!("{:<36} {:>12} {:>14}", "stage (host, release)", "median ms", "work units");
+    println!("{:<36} {:>12.3} {:>14}", "LiDAR update (897 beams)", t_lidar, lidar_work);
+    println!("{:<36} {:>12.3} {:>14}", "visual update (camera cone)", t_visual, visual_work);
+    println!("{:<36} {:>12.3} {:>14}", "frontiers (both maps)", t_frontiers, "");
+    println!("{:<36} {:>12.3} {:>14}", "full planning step (frontiers+plan)", t_plan, plan_work);
+    println!("({reps} repetitions each; median)");
+
+    if searches {
+        println!();
+        println!("{:<28} {:>10} {:>10} {:>12}", "search (apartment easy)", "sim s", "wall s", "x real time");
+        let (mut sim_total, mut wall_total) = (0.0, 0.0);
+        for seed in 1..=5 {
+            let w = World::builtin("apartment", Scenario::Easy).expect("apartment");
+            let spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, seed);
+            let t = Instant::now();
+            let r = search::run(&spec, |_| {});
+            let wall = t.elapsed().as_secs_f64();
+            let sim_s = r.result.ticks as f64 * search::TICK_US as f64 / 1e6;
+            sim_total += sim_s;
+            wall_total += wall;
+            println!("{:<28} {:>10.1} {:>10.3} {:>12.0}", format!("lives-gt seed {seed}"), sim_s, wall, sim_s / wall);
+        }
+        println!("{:<28} {:>10.1} {:>10.3} {:>12.0}", "total", sim_total, wall_total, sim_total / wall_total);
+    }
+}

@@ -1,0 +1,118 @@
+//! `--set name=value`: override controller parameters from the command line, in user units
+//! (metres, degrees, seconds, utility weights as decimals).
+
+use firmware::config::Weight;
+use firmware::{BinaryAngle, Config};
+
+/// Parameters `--set` accepts, with their units.
+pub const NAMES: &[(&str, &str)] = &[
+    ("w_dist_per_m", "utility per metre of path"),
+    ("w_unknown_per_cell", "utility per camera-unseen cell in the cone"),
+    ("w_frontier_per_cell", "utility per frontier cell near the path"),
+    ("w_nonmap_per_point", "utility per non-map point in the cone"),
+    ("switch_margin", "utility a new goal must gain over the current one"),
+    ("replan_interval_s", "seconds between replans"),
+    ("goal_timeout_s", "seconds without progress before a goal is blacklisted"),
+    ("robot_radius_m", "clearance kept from occupied cells, metres"),
+    ("camera_range_m", "camera range, metres"),
+    ("camera_fov_deg", "camera field of view, degrees"),
+    ("min_frontier_cells", "smallest frontier kept, cells"),
+    ("nonmap_viewpoints", "true/false: viewpoints aimed at non-map clusters (lives)"),
+    ("nonmap_standoff_m", "distance of a non-map viewpoint from its cluster, metres"),
+    ("nonmap_pool_radius_m", "pooling radius of non-map points, metres"),
+    ("nonmap_wall_clearance_m", "non-map points nearer a wall point are dropped, metres"),
+];
+
+fn num(name: &str, v: &str) -> Result<f64, String> {
+    let x: f64 = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a number"))?;
+    if !x.is_finite() {
+        return Err(format!("`{name}`: `{v}` is not finite"));
+    }
+    Ok(x)
+}
+
+fn meters(name: &str, v: &str) -> Result<fixed_point::Meters, String> {
+    let x = num(name, v)?;
+    if x < 0.0 {
+        return Err(format!("`{name}`: must not be negative, got {x}"));
+    }
+    fixed_point::meters_from_f64(x).ok_or_else(|| format!("`{name}`: {x} m is out of range"))
+}
+
+fn weight(name: &str, v: &str) -> Result<Weight, String> {
+    let x = num(name, v)?;
+    if !(0.0..30_000.0).contains(&x) {
+        return Err(format!("`{name}`: expected a weight in [0, 30000), got {x}"));
+    }
+    Ok(Weight::from_num(x))
+}
+
+fn micros(name: &str, v: &str) -> Result<u64, String> {
+    let x = num(name, v)?;
+    if !(0.0..1e6).contains(&x) {
+        return Err(format!("`{name}`: expected seconds in [0, 1e6), got {x}"));
+    }
+    Ok((x * 1e6).round() as u64)
+}
+
+/// Applies one `name=value` to `cfg`.
+pub fn apply(cfg: &mut Config, assignment: &str) -> Result<(), String> {
+    let (name, v) = assignment.split_once('=').ok_or_else(|| format!("`--set {assignment}`: expected name=value"))?;
+    let (name, v) = (name.trim(), v.trim());
+    match name {
+        "w_dist_per_m" => cfg.w_dist_per_m = weight(name, v)?,
+        "w_unknown_per_cell" => cfg.w_unknown_per_cell = weight(name, v)?,
+        "w_frontier_per_cell" => cfg.w_frontier_per_cell = weight(name, v)?,
+        "w_nonmap_per_point" => cfg.w_nonmap_per_point = weight(name, v)?,
+        "switch_margin" => cfg.switch_margin = weight(name, v)?,
+        "replan_interval_s" => cfg.replan_interval_us = micros(name, v)?,
+        "goal_timeout_s" => cfg.goal_timeout_us = micros(name, v)?,
+        "robot_radius_m" => cfg.robot_radius_m = meters(name, v)?,
+        "camera_range_m" => cfg.camera_range_m = meters(name, v)?,
+        "camera_fov_deg" => {
+            let d = num(name, v)?;
+            if !(1.0..=359.0).contains(&d) {
+                return Err(format!("`{name}`: expected degrees in [1, 359], got {d}"));
+            }
+            cfg.camera_fov = BinaryAngle::from_radians(d.to_radians()).ok_or("bad angle")?;
+        }
+        "min_frontier_cells" => cfg.min_frontier_cells = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a cell count"))?,
+        "nonmap_viewpoints" => cfg.nonmap_viewpoints = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
+        "nonmap_standoff_m" => cfg.nonmap_standoff_m = meters(name, v)?,
+        "nonmap_pool_radius_m" => cfg.nonmap_pool_radius_m = meters(name, v)?,
+        "nonmap_wall_clearance_m" => cfg.nonmap_wall_clearance_m = meters(name, v)?,
+        _ => {
+            let known: Vec<&str> = NAMES.iter().map(|n| n.0).collect();
+            return Err(format!("unknown parameter `{name}`; known: {}", known.join(", ")));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn applies_known_and_rejects_bad() {
+        let mut c = Config::DEFAULT;
+        apply(&mut c, "w_dist_per_m=2.5").unwrap();
+        assert_eq!(c.w_dist_per_m, Weight::from_num(2.5));
+        apply(&mut c, "camera_fov_deg = 60").unwrap();
+        assert!((c.camera_fov.to_radians() - 60f64.to_radians()).abs() < 1e-6);
+        apply(&mut c, "nonmap_viewpoints=false").unwrap();
+        assert!(!c.nonmap_viewpoints);
+        for bad in ["w_dist_per_m", "w_dist_per_m=abc", "w_dist_per_m=NaN", "robot_radius_m=-1", "nope=1", "camera_fov_deg=0"] {
+            assert!(apply(&mut c, bad).is_err(), "{bad}");
+        }
+        for (name, _) in NAMES {
+            let value = match *name {
+                "nonmap_viewpoints" => "true",
+                "min_frontier_cells" => "5",
+                "camera_fov_deg" => "90",
+                _ => "1",
+            };
+            apply(&mut c, &format!("{name}={value}")).unwrap_or_else(|e| panic!("{name}: {e}"));
+        }
+    }
+}

@@ -1,0 +1,78 @@
+//! Turns a finished [`SearchRun`] into the renderer's plain-data input and writes the PNG.
+
+use crate::render::{render_png, GridView, RenderError, RenderInput};
+use crate::search::SearchRun;
+use crate::sim::Shape;
+use firmware::capacity::GRID_CELLS;
+use std::path::Path;
+
+/// The outline of a shape as a closed polygon.
+pub fn outline(shape: &Shape) -> Vec<[f64; 2]> {
+    match shape {
+        Shape::Rect { center, size, yaw } => {
+            let (s, c) = yaw.sin_cos();
+            [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]
+                .iter()
+                .map(|k| {
+                    let (dx, dy) = (k[0] * size[0] / 2.0, k[1] * size[1] / 2.0);
+                    [center[0] + c * dx - s * dy, center[1] + s * dx + c * dy]
+                })
+                .collect()
+        }
+        Shape::Circle { center, radius } => {
+            (0..24).map(|i| i as f64 * std::f64::consts::TAU / 24.0).map(|a| [center[0] + radius * a.cos(), center[1] + radius * a.sin()]).collect()
+        }
+        Shape::Polygon { points } => points.clone(),
+    }
+}
+
+/// Writes the picture of `run` to `path` with `title`.
+pub fn write_png(run: &SearchRun, path: &Path, title: &str) -> Result<(), RenderError> {
+    let ctrl = &run.controller;
+    let world = run.sim.world();
+    let geom = ctrl.lidar.geom;
+    let origin = [geom.origin_x.to_num::<f64>(), geom.origin_y.to_num::<f64>()];
+    let cell = 1.0 / firmware::capacity::CELLS_PER_METER as f64;
+    let centre = |x: i32, y: i32| [origin[0] + (x as f64 + 0.5) * cell, origin[1] + (y as f64 + 0.5) * cell];
+    let obstacles: Vec<Vec<[f64; 2]>> = world.obstacles.iter().map(|o| outline(&o.shape)).collect();
+    let targets: Vec<Vec<[f64; 2]>> = run.sim.target_shapes().iter().map(outline).collect();
+    let people: Vec<[f64; 2]> = run.sim.people().iter().map(|p| p.0).collect();
+    let nonmap: Vec<[f64; 2]> = ctrl.nonmap.points().iter().map(|p| [p.x.to_num::<f64>(), p.y.to_num::<f64>()]).collect();
+    let mut frontier_cells = Vec::new();
+    for y in 0..GRID_CELLS as i32 {
+        for x in 0..GRID_CELLS as i32 {
+            if firmware::FrontierSet::is_frontier(&ctrl.lidar.grid, x, y) || firmware::FrontierSet::is_frontier(&ctrl.visual.grid, x, y) {
+                frontier_cells.push(centre(x, y));
+            }
+        }
+    }
+    let viewpoints: Vec<([f64; 2], f64)> =
+        ctrl.planner.candidates.iter().map(|v| (centre(v.cell.0, v.cell.1), v.heading.to_radians())).collect();
+    let goal = ctrl.goal().map(|g| ([g.pose.x.to_num::<f64>(), g.pose.y.to_num::<f64>()], g.pose.theta.to_radians()));
+    let goal_path: Vec<[f64; 2]> = ctrl.goal().map(|g| g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect()).unwrap_or_default();
+    let pose = run.sim.pose();
+    let lidar = |x: usize, y: usize| ctrl.lidar.get(x as i32, y as i32).to_ros();
+    let seen = |x: usize, y: usize| ctrl.visual.seen(x as i32, y as i32);
+    let input = RenderInput {
+        title: title.to_string(),
+        bounds: world.bounds,
+        walls: &world.walls,
+        obstacles: &obstacles,
+        people: &people,
+        targets: &targets,
+        grid: GridView { origin, cell_m: cell, width: GRID_CELLS, height: GRID_CELLS, lidar: &lidar, seen: &seen },
+        nonmap_points: &nonmap,
+        frontier_cells: &frontier_cells,
+        viewpoints: &viewpoints,
+        trajectory: &run.trajectory,
+        start: ([run.start[0], run.start[1]], run.start[2]),
+        robot: ([pose[0], pose[1]], pose[2]),
+        goal,
+        goal_path: &goal_path,
+        found_at: run.found_at,
+        camera_fov_rad: run.sim.config().camera_fov_rad,
+        camera_range_m: run.sim.config().camera_range_m,
+    };
+    render_png(path, &input)
+}
+

@@ -1,0 +1,314 @@
+//! One simulated search: the simulator and the controller core in lockstep, in-process.
+//!
+//! Virtual time advances one controller period (200 ms, the LiDAR's 5 Hz) per tick: the simulator
+//! produces a scan, the pose and a detection; the core ticks; its goal path is handed to the base,
+//! which then moves for one period in four 50 ms steps. Nothing reads a wall clock, so the same
+//! world, planner and seed give the same run bit for bit.
+
+use crate::sim::{BaseStatus, HitKind, Scenario, Scan, Sim, SimConfig, World};
+use firmware::scan::{BeamLabel, RANGE_INVALID, RANGE_NO_RETURN};
+use firmware::{BinaryAngle, Command, Config, Controller, Detection, Inputs, Mode, PlannerKind, Pose2, ScanInput};
+use serde::Serialize;
+use std::fmt;
+use std::str::FromStr;
+
+/// Controller period and simulator step, microseconds.
+pub const TICK_US: u64 = 200_000;
+/// Base sub-steps per tick.
+const SUBSTEPS: u32 = 4;
+
+/// The planners a search can run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlannerChoice {
+    /// LIVES with the classifier's labels (ground-truth labels until the classifier lands).
+    Lives,
+    /// LIVES with the simulator's ground-truth labels (the paper's "ground truth" column).
+    LivesGt,
+    /// LIVES without the non-map term (the paper's multisensor frontier baseline).
+    Multisensor,
+    /// Yamauchi's nearest frontier.
+    Nearest,
+}
+
+impl PlannerChoice {
+    /// All of them.
+    pub const ALL: [PlannerChoice; 4] = [PlannerChoice::Lives, PlannerChoice::LivesGt, PlannerChoice::Multisensor, PlannerChoice::Nearest];
+
+    /// The core's planner kind.
+    pub fn kind(self) -> PlannerKind {
+        match self {
+            PlannerChoice::Lives | PlannerChoice::LivesGt => PlannerKind::Lives,
+            PlannerChoice::Multisensor => PlannerKind::Multisensor,
+            PlannerChoice::Nearest => PlannerKind::Nearest,
+        }
+    }
+
+    /// Where this planner's labels come from.
+    pub fn label_source(self) -> &'static str {
+        match self {
+            // The int8 classifier is a later issue; until it lands `lives` runs on simulator labels.
+            PlannerChoice::Lives | PlannerChoice::LivesGt => "ground-truth",
+            PlannerChoice::Multisensor | PlannerChoice::Nearest => "none",
+        }
+    }
+}
+
+impl fmt::Display for PlannerChoice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            PlannerChoice::Lives => "lives",
+            PlannerChoice::LivesGt => "lives-gt",
+            PlannerChoice::Multisensor => "multisensor",
+            PlannerChoice::Nearest => "nearest",
+        })
+    }
+}
+
+impl FromStr for PlannerChoice {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        PlannerChoice::ALL.into_iter().find(|p| p.to_string() == s).ok_or_else(|| format!("unknown planner `{s}` (expected lives, lives-gt, multisensor or nearest)"))
+    }
+}
+
+/// What a search needs.
+#[derive(Clone, Debug)]
+pub struct SearchSpec {
+    /// World name for reports (`apartment`, a file name, `random-7`).
+    pub world_name: String,
+    /// The world.
+    pub world: World,
+    /// Scenario for reports.
+    pub scenario: Scenario,
+    /// Planner.
+    pub planner: PlannerChoice,
+    /// Seed of the simulator (start jitter, target placement, people, noise).
+    pub seed: u64,
+    /// Simulator settings.
+    pub sim: SimConfig,
+    /// Controller settings (the planner kind and the grid origin are set by [`run`]).
+    pub controller: Config,
+    /// Print every new goal with its utility terms to stderr.
+    pub trace: bool,
+}
+
+impl SearchSpec {
+    /// Defaults for `world` / `scenario` / `planner` / `seed`.
+    pub fn new(world_name: &str, world: World, scenario: Scenario, planner: PlannerChoice, seed: u64) -> Self {
+        let sim = SimConfig { robot_radius_m: 0.25, ..SimConfig::default() };
+        SearchSpec { world_name: world_name.to_string(), world, scenario, planner, seed, sim, controller: Config::DEFAULT, trace: false }
+    }
+}
+
+/// The machine-readable result (`--json`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SearchResult {
+    /// World name.
+    pub world: String,
+    /// Scenario.
+    pub scenario: String,
+    /// Planner.
+    pub planner: String,
+    /// Seed.
+    pub seed: u64,
+    /// Whether the target was detected within the time limit.
+    pub found: bool,
+    /// Virtual time to detection, or the time limit on failure (as the paper counts failures).
+    pub time_s: f64,
+    /// Distance the base drove.
+    pub path_m: f64,
+    /// Controller ticks run.
+    pub ticks: u32,
+    /// The world's time limit.
+    pub time_limit_s: f64,
+    /// How the run ended: `found`, `time-limit`, `exhausted`.
+    pub outcome: String,
+    /// Goals the controller issued.
+    pub goals: u32,
+    /// Goals blacklisted (blocked or no progress).
+    pub blacklisted: u32,
+    /// Times the base reported it was blocked.
+    pub blocked: u32,
+    /// Where the planner's labels came from.
+    pub labels: String,
+    /// Where the target(s) were placed (this seed's draw).
+    pub targets: Vec<[f64; 2]>,
+}
+
+/// Everything a picture or a test may want after a run.
+pub struct SearchRun {
+    /// The result.
+    pub result: SearchResult,
+    /// The controller at the end (maps, points, frontiers, candidates).
+    pub controller: Box<Controller>,
+    /// The simulator at the end.
+    pub sim: Sim,
+    /// Robot positions, one per tick.
+    pub trajectory: Vec<[f64; 2]>,
+    /// Start pose.
+    pub start: [f64; 3],
+    /// Robot position when the target was detected.
+    pub found_at: Option<[f64; 2]>,
+    /// Every goal issued, in order (cell and heading index) — the run's decisions.
+    pub goals: Vec<((i32, i32), firmware::BinaryAngle)>,
+}
+
+/// Converts a simulated scan into the core's integer encoding (the host/core boundary):
+/// NaN or below the minimum range → invalid, +inf or beyond 65.5 m → no return.
+pub fn encode_ranges(scan: &Scan, min_range_m: f64) -> Vec<u16> {
+    scan.ranges_m.iter().map(|&r| encode_range(r as f64, min_range_m)).collect()
+}
+
+/// One range in metres to the core's millimetre encoding.
+pub fn encode_range(r: f64, min_range_m: f64) -> u16 {
+    if r.is_nan() || r < min_range_m {
+        RANGE_INVALID
+    } else if r.is_infinite() || r * 1000.0 >= RANGE_NO_RETURN as f64 - 0.5 {
+        RANGE_NO_RETURN
+    } else {
+        ((r * 1000.0).round() as u16).max(1)
+    }
+}
+
+/// The ground-truth label of what a beam hit.
+pub fn gt_label(h: HitKind) -> BeamLabel {
+    match h {
+        HitKind::None => BeamLabel::Unlabelled,
+        HitKind::Wall => BeamLabel::Map,
+        HitKind::Furniture | HitKind::Clutter | HitKind::Person | HitKind::Target => BeamLabel::NonMap,
+    }
+}
+
+/// The controller configuration for a world: the grid (51.2 m square) placed so the world's
+/// bounds sit inside it with a margin — the operator's "search area".
+pub fn controller_config(base: &Config, world: &World, planner: PlannerChoice) -> Config {
+    let [min, max] = world.bounds;
+    let centre = [(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0];
+    let half = firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64 / 2.0;
+    Config {
+        planner: planner.kind(),
+        origin_x_m: fixed_point::meters_from_f64((centre[0] - half).floor()).unwrap_or_default(),
+        origin_y_m: fixed_point::meters_from_f64((centre[1] - half).floor()).unwrap_or_default(),
+        ..*base
+    }
+}
+
+/// Runs one search to detection, exhaustion or the time limit. `progress` gets the virtual time.
+pub fn run(spec: &SearchSpec, mut progress: impl FnMut(f64)) -> SearchRun {
+    let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
+    let mut ctrl = Box::new(Controller::new(cfg));
+    let mut sim = Sim::new(spec.world.clone(), spec.sim.clone(), spec.seed);
+    let start = sim.pose();
+    let limit = spec.world.time_limit_s;
+    let use_labels = matches!(spec.planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
+    let increment = BinaryAngle::from_fraction(1, spec.sim.beams.max(1) as i64);
+    let mut trajectory = vec![[start[0], start[1]]];
+    let mut goals = Vec::new();
+    let (mut ticks, mut blocked_count) = (0u32, 0u32);
+    let mut base_blocked = false;
+    let mut found_at = None;
+    let mut outcome = "time-limit";
+    let mut status: firmware::Status;
+    loop {
+        let now_us = ticks as u64 * TICK_US;
+        let p = sim.pose();
+        let scan = sim.scan();
+        let ranges = encode_ranges(&scan, spec.sim.lidar_min_range_m);
+        let labels: Vec<BeamLabel> = scan.hits.iter().map(|&h| gt_label(h)).collect();
+        let detection = sim.detect().map(|_| Detection { position: None });
+        let inputs = Inputs {
+            pose: Pose2::from_f64(p[0], p[1], p[2]),
+            scan: Some(ScanInput {
+                angle_min: BinaryAngle::from_radians(scan.angle_min).unwrap_or(BinaryAngle::HALF),
+                angle_increment: BinaryAngle::from_radians(scan.angle_increment).unwrap_or(increment),
+                ranges_mm: &ranges,
+                labels: use_labels.then_some(&labels[..]),
+            }),
+            detection,
+            command: (ticks == 0).then_some(Command::Start),
+            base_blocked,
+        };
+        let out = ctrl.tick(now_us, &inputs);
+        ticks += 1;
+        status = out.status;
+        match out.status.mode {
+            Some(Mode::TargetFound) => {
+                outcome = "found";
+                found_at = Some([p[0], p[1]]);
+                break;
+            }
+            Some(Mode::Exhausted) => {
+                outcome = "exhausted";
+                break;
+            }
+            _ => {}
+        }
+        if out.stop {
+            sim.stop_base();
+        } else if let (true, Some(g)) = (out.new_goal, &out.goal) {
+            goals.push((g.viewpoint.cell, g.viewpoint.heading));
+            if spec.trace {
+                let v = &g.viewpoint;
+                eprintln!(
+                    "t={:6.1}s robot ({:5.1},{:5.1}) goal #{:<3} ({:5.1},{:5.1}) {:>4.0}° {:?} U={:7.2} path={:5.1}m unseen={:4} frontier={:4} nonmap={:3} cands={} {:?}",
+                    sim.time_s(),
+                    p[0],
+                    p[1],
+                    goals.len(),
+                    g.pose.x.to_num::<f64>(),
+                    g.pose.y.to_num::<f64>(),
+                    g.pose.theta.to_radians().to_degrees(),
+                    v.source,
+                    v.utility as f64 / 65536.0,
+                    g.path_length_m.to_num::<f64>(),
+                    v.unseen,
+                    v.frontier_near_path,
+                    v.nonmap,
+                    ctrl.planner.stats.candidates,
+                    ctrl.planner.stats
+                );
+            }
+            let path: Vec<[f64; 2]> = g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect();
+            sim.set_path(&path, Some(g.pose.theta.to_radians()));
+        }
+        base_blocked = false;
+        for _ in 0..SUBSTEPS {
+            if sim.step(TICK_US as f64 / 1e6 / SUBSTEPS as f64) == BaseStatus::Blocked {
+                base_blocked = true;
+            }
+        }
+        if base_blocked {
+            blocked_count += 1;
+        }
+        let q = sim.pose();
+        trajectory.push([q[0], q[1]]);
+        progress(sim.time_s());
+        if sim.time_s() >= limit {
+            break;
+        }
+    }
+    let found = outcome == "found";
+    let result = SearchResult {
+        world: spec.world_name.clone(),
+        scenario: spec.scenario.to_string(),
+        planner: spec.planner.to_string(),
+        seed: spec.seed,
+        found,
+        time_s: if found { round3(sim.time_s()) } else { limit },
+        path_m: round3(sim.path_length_m()),
+        ticks,
+        time_limit_s: limit,
+        outcome: outcome.to_string(),
+        goals: status.goals,
+        blacklisted: status.blacklisted,
+        blocked: blocked_count,
+        labels: spec.planner.label_source().to_string(),
+        targets: sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
+    };
+    SearchRun { result, controller: ctrl, sim, trajectory, start, found_at, goals }
+}
+
+fn round3(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0
+}

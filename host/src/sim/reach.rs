@@ -1,0 +1,163 @@
+//! Coarse reachability: which places a disc-shaped robot can drive to from the start.
+//!
+//! A 0.1 m grid over the world; a cell is free when a disc of the robot's radius at its centre
+//! touches no wall and no obstacle (targets and people are ignored: targets are what we want to
+//! reach, people move). Free cells are flooded 4-connected from the start. Used by the tests of
+//! the built-in worlds and by the procedural generator; it is a check, not a planner.
+
+use std::collections::VecDeque;
+
+use super::geometry::{dist, SceneBuilder};
+use super::{World, P2};
+
+/// Grid resolution of the reachability check.
+pub const REACH_RESOLUTION_M: f64 = 0.1;
+
+/// A target counts as reachable when the robot can stand (clear of it) within this distance of
+/// its centre.
+pub const REACH_STANDOFF_M: f64 = 1.0;
+
+/// The flood fill's result.
+pub struct ReachMap {
+    origin: P2,
+    nx: usize,
+    ny: usize,
+    reached: Vec<bool>,
+}
+
+impl ReachMap {
+    /// Flood the free cells of `world` from `from` for a robot of radius `robot_radius_m`.
+    pub fn new(world: &World, from: P2, robot_radius_m: f64) -> ReachMap {
+        let res = REACH_RESOLUTION_M;
+        let mut b = SceneBuilder::new();
+        for w in &world.walls {
+            b.wall(w[0], w[1]);
+        }
+        for (i, o) in world.obstacles.iter().enumerate() {
+            b.shape(&o.shape, o.kind, i as u32);
+        }
+        let scene = b.build(0.5);
+        let origin = [world.bounds[0][0] - 0.5, world.bounds[0][1] - 0.5];
+        let nx = (((world.bounds[1][0] - origin[0] + 0.5) / res).ceil() as usize).clamp(1, 2000);
+        let ny = (((world.bounds[1][1] - origin[1] + 0.5) / res).ceil() as usize).clamp(1, 2000);
+        let center = |x: usize, y: usize| [origin[0] + (x as f64 + 0.5) * res, origin[1] + (y as f64 + 0.5) * res];
+        let mut map = ReachMap { origin, nx, ny, reached: vec![false; nx * ny] };
+        let Some(s) = map.index(from) else {
+            return map;
+        };
+        // 0 unknown, 1 free, 2 blocked: free-ness is computed lazily, only for cells the flood
+        // touches.
+        let mut state = vec![0u8; nx * ny];
+        let free = |i: usize, state: &mut Vec<u8>| {
+            if state[i] == 0 {
+                let c = center(i % nx, i / nx);
+                state[i] = if scene.disc_collides(c, robot_radius_m) { 2 } else { 1 };
+            }
+            state[i] == 1
+        };
+        if !free(s, &mut state) {
+            return map;
+        }
+        let mut queue = VecDeque::new();
+        map.reached[s] = true;
+        queue.push_back(s);
+        while let Some(i) = queue.pop_front() {
+            let (x, y) = (i % nx, i / nx);
+            let mut visit = |j: usize, map: &mut ReachMap, state: &mut Vec<u8>| {
+                if !map.reached[j] && free(j, state) {
+                    map.reached[j] = true;
+                    queue.push_back(j);
+                }
+            };
+            if x > 0 {
+                visit(i - 1, &mut map, &mut state);
+            }
+            if x + 1 < nx {
+                visit(i + 1, &mut map, &mut state);
+            }
+            if y > 0 {
+                visit(i - nx, &mut map, &mut state);
+            }
+            if y + 1 < ny {
+                visit(i + nx, &mut map, &mut state);
+            }
+        }
+        map
+    }
+
+    fn index(&self, p: P2) -> Option<usize> {
+        let x = ((p[0] - self.origin[0]) / REACH_RESOLUTION_M).floor();
+        let y = ((p[1] - self.origin[1]) / REACH_RESOLUTION_M).floor();
+        if x >= 0.0 && y >= 0.0 && (x as usize) < self.nx && (y as usize) < self.ny {
+            Some(y as usize * self.nx + x as usize)
+        } else {
+            None
+        }
+    }
+
+    fn center(&self, i: usize) -> P2 {
+        [
+            self.origin[0] + ((i % self.nx) as f64 + 0.5) * REACH_RESOLUTION_M,
+            self.origin[1] + ((i / self.nx) as f64 + 0.5) * REACH_RESOLUTION_M,
+        ]
+    }
+
+    /// Was the cell containing `p` reached?
+    pub fn is_reached(&self, p: P2) -> bool {
+        self.index(p).is_some_and(|i| self.reached[i])
+    }
+
+    /// Centres of the reached cells within `radius` of `p`.
+    pub fn reached_near(&self, p: P2, radius: f64) -> Vec<P2> {
+        let mut out = Vec::new();
+        let r = (radius / REACH_RESOLUTION_M).ceil() as isize + 1;
+        let cx = ((p[0] - self.origin[0]) / REACH_RESOLUTION_M).floor() as isize;
+        let cy = ((p[1] - self.origin[1]) / REACH_RESOLUTION_M).floor() as isize;
+        for y in (cy - r).max(0)..=(cy + r).min(self.ny as isize - 1) {
+            for x in (cx - r).max(0)..=(cx + r).min(self.nx as isize - 1) {
+                let i = y as usize * self.nx + x as usize;
+                if self.reached[i] {
+                    let c = self.center(i);
+                    if dist(c, p) <= radius {
+                        out.push(c);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Number of reached cells.
+    pub fn reached_count(&self) -> usize {
+        self.reached.iter().filter(|&&r| r).count()
+    }
+
+    /// Is any cell inside the axis-aligned box `[min, max]` reached?
+    pub fn any_reached_in(&self, bb: [P2; 2]) -> bool {
+        let x0 = ((bb[0][0] - self.origin[0]) / REACH_RESOLUTION_M).floor().max(0.0) as usize;
+        let y0 = ((bb[0][1] - self.origin[1]) / REACH_RESOLUTION_M).floor().max(0.0) as usize;
+        let x1 = (((bb[1][0] - self.origin[0]) / REACH_RESOLUTION_M).floor().max(0.0) as usize).min(self.nx - 1);
+        let y1 = (((bb[1][1] - self.origin[1]) / REACH_RESOLUTION_M).floor().max(0.0) as usize).min(self.ny - 1);
+        (y0..=y1).any(|y| (x0..=x1).any(|x| self.reached[y * self.nx + x]))
+    }
+}
+
+impl World {
+    /// Target positions the robot cannot get near from the nominal start: `(target index,
+    /// position)` for each one where no reachable, target-clear spot lies within
+    /// [`REACH_STANDOFF_M`] of it. Empty means every target position is reachable.
+    pub fn unreachable_targets(&self, robot_radius_m: f64) -> Vec<(usize, P2)> {
+        let map = ReachMap::new(self, [self.start.pose[0], self.start.pose[1]], robot_radius_m);
+        let mut out = Vec::new();
+        for (i, t) in self.targets.iter().enumerate() {
+            for p in t.positions() {
+                let shape = t.shape_at(p);
+                let ok = map.reached_near(p, REACH_STANDOFF_M).into_iter().any(|c| shape.distance_to(c) >= robot_radius_m);
+                if !ok {
+                    out.push((i, p));
+                }
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,782 @@
+//! [`Sim`]: a [`World`] in motion — the robot's LiDAR, camera detector and base, and the people.
+//!
+//! Time is virtual and only advances in [`Sim::step`]. The seed given to [`Sim::new`] decides,
+//! each from its own ChaCha stream: the start jitter, which position each target is at, where
+//! along their loops the people start, and the LiDAR noise and dropouts. The same seed and the
+//! same calls give bit-identical results.
+//!
+//! The base follows a list of waypoints with a simple turn-then-drive law; it checks every
+//! motion sub-step (≤ 2 cm) against the true world and refuses to move rather than touch
+//! anything, reporting [`BaseStatus::Blocked`]. People walk their loops at constant speed, wait
+//! while the robot stands in their way and turn round after [`PERSON_PATIENCE_S`] of waiting, so
+//! a robot and a person meeting head-on in a corridor do not block each other for ever.
+
+use std::collections::VecDeque;
+use std::f64::consts::PI;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::geometry::{dist, norm, ray_circle, sub, wrap_angle, Scene, SceneBuilder, NO_OWNER, TARGET_OWNER_BASE};
+use super::{HitKind, Shape, World, P2};
+
+/// Sensor and base parameters. Units are in the names; defaults follow the paper's Spot setup.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimConfig {
+    /// LiDAR beams over 360° (the Velodyne Puck projected to 2D: 897).
+    pub beams: usize,
+    /// Returns beyond this are reported as no return (`f32::INFINITY`).
+    pub lidar_max_range_m: f64,
+    /// Returns closer than this are reported as no return.
+    pub lidar_min_range_m: f64,
+    /// Standard deviation of the Gaussian range noise.
+    pub range_noise_std_m: f64,
+    /// Probability that a beam returns nothing.
+    pub dropout_prob: f64,
+    /// Scan rate the controller is expected to use (the simulator does not enforce it).
+    pub scan_hz: f64,
+    /// Full horizontal field of view of the camera.
+    pub camera_fov_rad: f64,
+    /// The detector sees targets up to this far.
+    pub camera_range_m: f64,
+    /// Fraction of a target's outline sample points that must be visible for a detection.
+    pub detect_min_visible_fraction: f64,
+    /// Maximum forward speed of the base.
+    pub speed_mps: f64,
+    /// Maximum turn rate of the base.
+    pub turn_rate_rps: f64,
+    /// The robot is a disc of this radius for collisions.
+    pub robot_radius_m: f64,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig {
+            beams: 897,
+            lidar_max_range_m: 30.0,
+            lidar_min_range_m: 0.1,
+            range_noise_std_m: 0.01,
+            dropout_prob: 0.01,
+            scan_hz: 5.0,
+            camera_fov_rad: 90f64.to_radians(),
+            camera_range_m: 4.0,
+            detect_min_visible_fraction: 0.3,
+            speed_mps: 0.5,
+            turn_rate_rps: 1.0,
+            robot_radius_m: 0.3,
+        }
+    }
+}
+
+/// One LiDAR sweep in the robot frame (REP-103: x forward, y left, angles counter-clockwise).
+/// Beam `i` points at `angle_min + i · angle_increment`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scan {
+    /// −π: the first beam points backwards.
+    pub angle_min: f64,
+    /// 2π / beams.
+    pub angle_increment: f64,
+    /// Measured range per beam (ROS conventions): `f32::INFINITY` when nothing is within the
+    /// maximum range, `f32::NAN` for a dropout or a return below the minimum range.
+    pub ranges_m: Vec<f32>,
+    /// Ground truth per beam: what it hit; [`HitKind::None`] exactly where the range is infinite.
+    pub hits: Vec<HitKind>,
+}
+
+/// What the base is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BaseStatus {
+    /// No path (never given one, or stopped).
+    Idle,
+    /// Following the path.
+    Moving,
+    /// Reached the last waypoint (and turned to the final yaw, if one was given).
+    Arrived,
+    /// The next motion would touch something; the base did not move. It keeps the path and
+    /// tries again on the next step (a person may walk away).
+    Blocked,
+}
+
+/// Intermediate waypoints are passed when the robot is this close.
+pub const WAYPOINT_TOLERANCE_M: f64 = 0.15;
+/// The last waypoint is reached when the robot is this close (the same as the others).
+pub const GOAL_TOLERANCE_M: f64 = WAYPOINT_TOLERANCE_M;
+/// The final yaw is reached within this angle.
+pub const YAW_TOLERANCE_RAD: f64 = 1e-3;
+/// The base drives while turning only when the heading error is below this.
+pub const DRIVE_WHILE_TURNING_RAD: f64 = PI / 6.0;
+/// Longest motion sub-step.
+pub const MAX_SUBSTEP_S: f64 = 0.02;
+/// A person who has waited this long for the robot to get out of the way turns round.
+pub const PERSON_PATIENCE_S: f64 = 2.0;
+/// Outline sample points per target for the detector.
+pub const DETECT_SAMPLES: usize = 32;
+
+/// RNG streams derived from the user's seed.
+const STREAM_START: u64 = 1;
+const STREAM_TARGETS: u64 = 2;
+const STREAM_PEOPLE: u64 = 3;
+const STREAM_SENSOR: u64 = 4;
+
+fn rng_for(seed: u64, stream: u64) -> ChaCha8Rng {
+    let mut r = ChaCha8Rng::seed_from_u64(seed);
+    r.set_stream(stream);
+    r
+}
+
+/// A person on their loop.
+#[derive(Clone, Debug)]
+struct Walker {
+    path: Vec<P2>,
+    /// Cumulative length at each corner; `cum[n]` is the loop length.
+    cum: Vec<f64>,
+    speed: f64,
+    radius: f64,
+    /// Arc length along the loop.
+    s: f64,
+    /// +1 along the loop as written, −1 back.
+    dir: f64,
+    /// How long they have been waiting for the robot.
+    waited_s: f64,
+}
+
+impl Walker {
+    fn new(path: &[P2], speed: f64, radius: f64) -> Walker {
+        let n = path.len();
+        let mut cum = vec![0.0];
+        for i in 0..n {
+            let l = if n > 1 { dist(path[i], path[(i + 1) % n]) } else { 0.0 };
+            cum.push(cum[i] + l);
+        }
+        Walker { path: path.to_vec(), cum, speed, radius, s: 0.0, dir: 1.0, waited_s: 0.0 }
+    }
+
+    fn length(&self) -> f64 {
+        *self.cum.last().unwrap_or(&0.0)
+    }
+
+    fn position_at(&self, s: f64) -> P2 {
+        let n = self.path.len();
+        let len = self.length();
+        if n <= 1 || len.is_nan() || len <= 0.0 {
+            return self.path.first().copied().unwrap_or([0.0, 0.0]);
+        }
+        let s = s.rem_euclid(len);
+        let i = match self.cum.binary_search_by(|c| c.total_cmp(&s)) {
+            Ok(i) => i.min(n - 1),
+            Err(i) => i.saturating_sub(1).min(n - 1),
+        };
+        let (a, b) = (self.path[i], self.path[(i + 1) % n]);
+        let seg = self.cum[i + 1] - self.cum[i];
+        let t = if seg > 0.0 { ((s - self.cum[i]) / seg).clamp(0.0, 1.0) } else { 0.0 };
+        [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t]
+    }
+
+    fn position(&self) -> P2 {
+        self.position_at(self.s)
+    }
+}
+
+/// The simulation. See the module docs.
+pub struct Sim {
+    world: World,
+    config: SimConfig,
+    /// Walls, obstacles and the placed targets.
+    scene: Scene,
+    target_shapes: Vec<Shape>,
+    target_positions: Vec<P2>,
+    walkers: Vec<Walker>,
+    pose: [f64; 3],
+    time_s: f64,
+    path: VecDeque<P2>,
+    final_yaw: Option<f64>,
+    status: BaseStatus,
+    driven_m: f64,
+    sensor_rng: ChaCha8Rng,
+}
+
+impl Sim {
+    /// A simulation of `world`. `seed` picks the start jitter, each target's position, the
+    /// people's phases and the sensor noise stream.
+    pub fn new(world: World, config: SimConfig, seed: u64) -> Sim {
+        // Targets.
+        let mut trng = rng_for(seed, STREAM_TARGETS);
+        let mut target_shapes = Vec::new();
+        let mut target_positions = Vec::new();
+        for t in &world.targets {
+            let options = t.positions();
+            let p = options[trng.gen_range(0..options.len())];
+            target_shapes.push(t.shape_at(p));
+            target_positions.push(p);
+        }
+        let mut b = SceneBuilder::new();
+        for w in &world.walls {
+            b.wall(w[0], w[1]);
+        }
+        for (i, o) in world.obstacles.iter().enumerate() {
+            b.shape(&o.shape, o.kind, i as u32);
+        }
+        for (i, s) in target_shapes.iter().enumerate() {
+            b.shape(s, HitKind::Target, TARGET_OWNER_BASE + i as u32);
+        }
+        let scene = b.build(0.5);
+        let r = if config.robot_radius_m.is_finite() { config.robot_radius_m.max(0.0) } else { 0.0 };
+
+        // Start: jitter, rejecting poses that touch anything.
+        let mut srng = rng_for(seed, STREAM_START);
+        let s = world.start.pose;
+        let mut pose = s;
+        for _ in 0..100 {
+            let dx = srng.gen_range(-1.0..=1.0) * world.start.jitter_m;
+            let dy = srng.gen_range(-1.0..=1.0) * world.start.jitter_m;
+            let dyaw = srng.gen_range(-1.0..=1.0) * world.start.jitter_yaw_rad;
+            let p = [s[0] + dx, s[1] + dy];
+            if !scene.disc_collides(p, r) {
+                pose = [p[0], p[1], wrap_angle(s[2] + dyaw)];
+                break;
+            }
+        }
+
+        // People: a random phase each, away from the robot.
+        let mut prng = rng_for(seed, STREAM_PEOPLE);
+        let mut walkers = Vec::new();
+        for p in &world.people {
+            let mut w = Walker::new(&p.path, p.speed_mps, p.radius_m);
+            let len = w.length();
+            for _ in 0..50 {
+                w.s = if len > 0.0 { prng.gen_range(0.0..len) } else { 0.0 };
+                if dist(w.position(), [pose[0], pose[1]]) >= w.radius + r + 0.5 {
+                    break;
+                }
+            }
+            walkers.push(w);
+        }
+
+        Sim {
+            world,
+            config,
+            scene,
+            target_shapes,
+            target_positions,
+            walkers,
+            pose,
+            time_s: 0.0,
+            path: VecDeque::new(),
+            final_yaw: None,
+            status: BaseStatus::Idle,
+            driven_m: 0.0,
+            sensor_rng: rng_for(seed, STREAM_SENSOR),
+        }
+    }
+
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    pub fn config(&self) -> &SimConfig {
+        &self.config
+    }
+
+    /// Simulated seconds since the start.
+    pub fn time_s(&self) -> f64 {
+        self.time_s
+    }
+
+    /// True pose `[x, y, yaw]` in the world frame (metres, radians in (−π, π]).
+    pub fn pose(&self) -> [f64; 3] {
+        self.pose
+    }
+
+    /// Where the targets actually are (centre of each, in world order).
+    pub fn target_positions(&self) -> Vec<P2> {
+        self.target_positions.clone()
+    }
+
+    /// The placed targets' outlines.
+    pub fn target_shapes(&self) -> &[Shape] {
+        &self.target_shapes
+    }
+
+    /// Current centres and radii of the people.
+    pub fn people(&self) -> Vec<(P2, f64)> {
+        self.walkers.iter().map(|w| (w.position(), w.radius)).collect()
+    }
+
+    /// The base's current status.
+    pub fn base_status(&self) -> BaseStatus {
+        self.status
+    }
+
+    /// First hit of a ray against the scene and the people, within `max_t`.
+    fn cast(&self, o: P2, d: P2, max_t: f64, ignore_owner: u32) -> Option<(f64, HitKind)> {
+        let mut best = self.scene.raycast(o, d, max_t, ignore_owner).map(|h| (h.t, h.kind));
+        for w in &self.walkers {
+            if let Some(t) = ray_circle(o, d, w.position(), w.radius) {
+                if t <= max_t && best.is_none_or(|(bt, _)| t < bt) {
+                    best = Some((t, HitKind::Person));
+                }
+            }
+        }
+        best
+    }
+
+    /// One LiDAR sweep from the current pose with people where they are now. Each beam draws one
+    /// dropout uniform and one Gaussian from the sensor stream, hit or not, so the stream does
+    /// not depend on the scene.
+    pub fn scan(&mut self) -> Scan {
+        let c = &self.config;
+        let n = c.beams;
+        let inc = if n > 0 { 2.0 * PI / n as f64 } else { 0.0 };
+        let angle_min = -PI;
+        let mut ranges_m = Vec::with_capacity(n);
+        let mut hits = Vec::with_capacity(n);
+        let o = [self.pose[0], self.pose[1]];
+        let max_r = c.lidar_max_range_m;
+        let (noise_std, dropout, min_r) = (c.range_noise_std_m, c.dropout_prob, c.lidar_min_range_m);
+        // Generous cast limit so that noise cannot pull a return from beyond the max range.
+        let cast_max = max_r + 6.0 * noise_std.abs().min(1.0);
+        let people: Vec<(P2, f64)> = self.people();
+        for i in 0..n {
+            let a = self.pose[2] + angle_min + i as f64 * inc;
+            let d = [a.cos(), a.sin()];
+            let u: f64 = self.sensor_rng.gen();
+            let g = gaussian(&mut self.sensor_rng);
+            let mut best = self.scene.raycast(o, d, cast_max, NO_OWNER).map(|h| (h.t, h.kind));
+            for &(pc, pr) in &people {
+                if let Some(t) = ray_circle(o, d, pc, pr) {
+                    if t <= cast_max && best.is_none_or(|(bt, _)| t < bt) {
+                        best = Some((t, HitKind::Person));
+                    }
+                }
+            }
+            let measured = best.map(|(t, k)| (t + noise_std * g, k));
+            // ROS LaserScan conventions: a dropout or a reading below the minimum range is NaN
+            // (no usable reading: it must not clear anything), nothing within range is +inf.
+            match measured {
+                _ if u < dropout => {
+                    ranges_m.push(f32::NAN);
+                    hits.push(HitKind::None);
+                }
+                Some((r, k)) if r >= min_r && r <= max_r => {
+                    ranges_m.push(r as f32);
+                    hits.push(k);
+                }
+                Some((r, _)) if r < min_r => {
+                    ranges_m.push(f32::NAN);
+                    hits.push(HitKind::None);
+                }
+                _ => {
+                    ranges_m.push(f32::INFINITY);
+                    hits.push(HitKind::None);
+                }
+            }
+        }
+        Scan { angle_min, angle_increment: inc, ranges_m, hits }
+    }
+
+    /// Fraction of target `i`'s outline samples the camera sees now (0 when out of the cone).
+    pub fn visible_fraction(&self, i: usize) -> f64 {
+        let Some(shape) = self.target_shapes.get(i) else {
+            return 0.0;
+        };
+        let c = &self.config;
+        let o = [self.pose[0], self.pose[1]];
+        let samples = shape.outline_samples(DETECT_SAMPLES);
+        let owner = TARGET_OWNER_BASE + i as u32;
+        let mut visible = 0usize;
+        for p in &samples {
+            let v = sub(*p, o);
+            let r = norm(v);
+            if r.is_nan() || r > c.camera_range_m {
+                continue;
+            }
+            if r > 1e-9 {
+                let bearing = wrap_angle(v[1].atan2(v[0]) - self.pose[2]);
+                if bearing.abs() > c.camera_fov_rad / 2.0 {
+                    continue;
+                }
+                let d = [v[0] / r, v[1] / r];
+                if self.cast(o, d, r - 1e-6, owner).is_some() {
+                    continue;
+                }
+            }
+            visible += 1;
+        }
+        visible as f64 / samples.len().max(1) as f64
+    }
+
+    /// The target the camera sees now: inside the cone (field of view, range) along the robot's
+    /// heading, with at least `detect_min_visible_fraction` of its outline sample points in
+    /// line of sight (walls, obstacles, other targets and people block; the target itself does
+    /// not). The best-visible target wins; `None` if none qualifies.
+    pub fn detect(&self) -> Option<usize> {
+        let mut best: Option<(usize, f64)> = None;
+        for i in 0..self.target_shapes.len() {
+            let f = self.visible_fraction(i);
+            if f > 0.0 && f >= self.config.detect_min_visible_fraction && best.is_none_or(|(_, bf)| f > bf) {
+                best = Some((i, f));
+            }
+        }
+        best.map(|(i, _)| i)
+    }
+
+    /// Replace the path. Non-finite waypoints are dropped; a non-finite final yaw is ignored.
+    pub fn set_path(&mut self, waypoints: &[P2], final_yaw: Option<f64>) {
+        self.path = waypoints.iter().copied().filter(|p| p[0].is_finite() && p[1].is_finite()).collect();
+        self.final_yaw = final_yaw.filter(|y| y.is_finite()).map(wrap_angle);
+        self.status = if self.path.is_empty() && self.final_yaw.is_none() { BaseStatus::Arrived } else { BaseStatus::Moving };
+    }
+
+    /// Drop the path and stand still.
+    pub fn stop_base(&mut self) {
+        self.path.clear();
+        self.final_yaw = None;
+        self.status = BaseStatus::Idle;
+    }
+
+    /// Distance the base has driven.
+    pub fn path_length_m(&self) -> f64 {
+        self.driven_m
+    }
+
+    /// Does the robot disc at `p` touch a wall, obstacle, target or person (as they are now)?
+    pub fn collides(&self, p: P2) -> bool {
+        let r = self.config.robot_radius_m;
+        self.scene.disc_collides(p, r) || self.walkers.iter().any(|w| dist(w.position(), p) < w.radius + r)
+    }
+
+    /// Advance virtual time by `dt_s` in sub-steps of at most [`MAX_SUBSTEP_S`]: people walk, the
+    /// base follows its path. Returns the base status after the last sub-step. A non-positive or
+    /// non-finite `dt_s` changes nothing.
+    pub fn step(&mut self, dt_s: f64) -> BaseStatus {
+        if !dt_s.is_finite() || dt_s <= 0.0 {
+            return self.status;
+        }
+        let n = ((dt_s / MAX_SUBSTEP_S).ceil() as usize).clamp(1, 10_000_000);
+        let h = dt_s / n as f64;
+        for _ in 0..n {
+            self.walk_people(h);
+            if matches!(self.status, BaseStatus::Moving | BaseStatus::Blocked) {
+                self.drive(h);
+            }
+        }
+        self.time_s += dt_s;
+        self.status
+    }
+
+    fn walk_people(&mut self, h: f64) {
+        let robot = [self.pose[0], self.pose[1]];
+        let r = self.config.robot_radius_m;
+        for w in &mut self.walkers {
+            let len = w.length();
+            if len.is_nan() || len <= 0.0 || w.speed == 0.0 {
+                continue;
+            }
+            let next = (w.s + w.dir * w.speed * h).rem_euclid(len);
+            let (now_d, next_d) = (dist(w.position(), robot), dist(w.position_at(next), robot));
+            // Wait rather than walk into the robot (always allowed to move away); after
+            // PERSON_PATIENCE_S of waiting, turn round.
+            if next_d < w.radius + r && next_d < now_d {
+                w.waited_s += h;
+                if w.waited_s >= PERSON_PATIENCE_S {
+                    w.dir = -w.dir;
+                    w.waited_s = 0.0;
+                }
+                continue;
+            }
+            w.waited_s = 0.0;
+            w.s = next;
+        }
+    }
+
+    /// Would the robot disc at `to` (coming from `from`) touch anything? People only block
+    /// motion that brings the robot closer to them.
+    fn motion_blocked(&self, from: P2, to: P2) -> bool {
+        let r = self.config.robot_radius_m;
+        self.scene.disc_collides(to, r)
+            || self.walkers.iter().any(|w| {
+                let c = w.position();
+                dist(c, to) < w.radius + r && dist(c, to) < dist(c, from)
+            })
+    }
+
+    fn drive(&mut self, h: f64) {
+        let c = &self.config;
+        let (speed, turn) = (c.speed_mps.max(0.0), c.turn_rate_rps.max(0.0));
+        let p = [self.pose[0], self.pose[1]];
+        while let Some(w) = self.path.front() {
+            let tol = if self.path.len() > 1 { WAYPOINT_TOLERANCE_M } else { GOAL_TOLERANCE_M };
+            if dist(*w, p) < tol {
+                self.path.pop_front();
+            } else {
+                break;
+            }
+        }
+        if let Some(&w) = self.path.front() {
+            let v = sub(w, p);
+            let d = norm(v);
+            let e = wrap_angle(v[1].atan2(v[0]) - self.pose[2]);
+            let dyaw = e.clamp(-turn * h, turn * h);
+            let yaw = wrap_angle(self.pose[2] + dyaw);
+            let e_after = e - dyaw;
+            let step = if e_after.abs() < DRIVE_WHILE_TURNING_RAD { (speed * e_after.cos() * h).min(d) } else { 0.0 };
+            let to = [p[0] + step * yaw.cos(), p[1] + step * yaw.sin()];
+            if step > 0.0 && self.motion_blocked(p, to) {
+                self.status = BaseStatus::Blocked;
+                return;
+            }
+            self.pose = [to[0], to[1], yaw];
+            self.driven_m += step;
+            self.status = BaseStatus::Moving;
+        } else if let Some(fy) = self.final_yaw {
+            let e = wrap_angle(fy - self.pose[2]);
+            if e.abs() <= YAW_TOLERANCE_RAD {
+                self.pose[2] = fy;
+                self.final_yaw = None;
+                self.status = BaseStatus::Arrived;
+            } else {
+                self.pose[2] = wrap_angle(self.pose[2] + e.clamp(-turn * h, turn * h));
+                self.status = BaseStatus::Moving;
+            }
+        } else {
+            self.status = BaseStatus::Arrived;
+        }
+    }
+}
+
+/// A standard normal draw (Box–Muller, one of the pair).
+fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
+    let u1: f64 = 1.0 - rng.gen::<f64>(); // (0, 1]
+    let u2: f64 = rng.gen();
+    (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::Scenario;
+
+    /// A 10 × 4 m room split by a wall at x = 5 (no door), a suitcase behind the wall.
+    fn walled_world(target_x: f64) -> World {
+        let text = format!(
+            r#"name = "wall test"
+time_limit_s = 60
+[start]
+position = [2.0, 2.0]
+[[walls]]
+points = [[0, 0], [10, 0], [10, 4], [0, 4]]
+closed = true
+[[walls]]
+points = [[5, 0], [5, 4]]
+[[targets]]
+rect = {{ center = [{target_x}, 2.0], size = [0.5, 0.35] }}
+"#
+        );
+        World::from_toml_str(&text, "wall.toml").unwrap()
+    }
+
+    #[test]
+    fn detector_does_not_see_through_walls() {
+        // Target 2 m ahead behind a wall: unseen.
+        let sim = Sim::new(walled_world(6.0), SimConfig::default(), 1);
+        assert_eq!(sim.visible_fraction(0), 0.0);
+        assert_eq!(sim.detect(), None);
+        // Same distance, same side: seen.
+        let sim = Sim::new(walled_world(4.0), SimConfig::default(), 1);
+        assert_eq!(sim.detect(), Some(0));
+        assert!(sim.visible_fraction(0) >= 0.3);
+    }
+
+    #[test]
+    fn detector_needs_cone_and_range() {
+        let mut w = walled_world(4.0);
+        w.start.pose[2] = PI; // facing away
+        let sim = Sim::new(w, SimConfig::default(), 1);
+        assert_eq!(sim.detect(), None);
+        let cfg = SimConfig { camera_range_m: 1.5, ..SimConfig::default() };
+        let sim = Sim::new(walled_world(4.0), cfg, 1);
+        assert_eq!(sim.detect(), None);
+    }
+
+    #[test]
+    fn detector_is_blocked_by_obstacles_and_people() {
+        let mut w = walled_world(4.5);
+        w.obstacles.push(crate::sim::Obstacle {
+            shape: Shape::Rect { center: [3.0, 2.0], size: [0.3, 1.5], yaw: 0.0 },
+            kind: HitKind::Furniture,
+            label: "shelf".into(),
+        });
+        let sim = Sim::new(w, SimConfig::default(), 1);
+        assert_eq!(sim.detect(), None);
+        let mut w = walled_world(4.5);
+        w.people.push(crate::sim::Person { path: vec![[3.0, 2.0]], speed_mps: 0.0, radius_m: 0.5 });
+        let sim = Sim::new(w, SimConfig::default(), 1);
+        assert_eq!(sim.detect(), None);
+    }
+
+    #[test]
+    fn base_never_enters_a_wall() {
+        let mut sim = Sim::new(walled_world(8.0), SimConfig::default(), 3);
+        sim.set_path(&[[4.0, 2.0], [8.0, 2.0]], None);
+        let mut blocked = false;
+        for _ in 0..200 {
+            let s = sim.step(0.1);
+            let p = sim.pose();
+            assert!(!sim.collides([p[0], p[1]]), "collides at {p:?}");
+            assert!(p[0] < 5.0 - 0.3, "crossed the wall: {p:?}");
+            if s == BaseStatus::Blocked {
+                blocked = true;
+            }
+        }
+        assert!(blocked);
+        assert_eq!(sim.step(0.1), BaseStatus::Blocked);
+        assert!(sim.pose()[0] > 4.6, "drove up to the wall: {:?}", sim.pose());
+        sim.stop_base();
+        assert_eq!(sim.step(0.1), BaseStatus::Idle);
+    }
+
+    #[test]
+    fn base_follows_path_and_turns_to_final_yaw() {
+        let mut sim = Sim::new(walled_world(8.0), SimConfig::default(), 3);
+        let p0 = sim.pose();
+        sim.set_path(&[[3.0, 1.0], [4.0, 3.0]], Some(PI));
+        let mut status = BaseStatus::Moving;
+        for _ in 0..300 {
+            status = sim.step(0.1);
+            if status == BaseStatus::Arrived {
+                break;
+            }
+        }
+        assert_eq!(status, BaseStatus::Arrived);
+        let p = sim.pose();
+        assert!(dist([p[0], p[1]], [4.0, 3.0]) < GOAL_TOLERANCE_M);
+        assert!((wrap_angle(p[2] - PI)).abs() < 1e-9);
+        let straight = dist([p0[0], p0[1]], [3.0, 1.0]) + dist([3.0, 1.0], [4.0, 3.0]);
+        assert!((sim.path_length_m() - straight).abs() < 2.0 * WAYPOINT_TOLERANCE_M + 0.1, "{} vs {straight}", sim.path_length_m());
+        // Speed limit respected: driving ~3.5 m at 0.5 m/s takes ≥ 7 s.
+        assert!(sim.time_s() >= sim.path_length_m() / 0.5);
+    }
+
+    #[test]
+    fn same_seed_same_scans() {
+        let w = World::builtin("office", Scenario::Hard).unwrap();
+        let mut a = Sim::new(w.clone(), SimConfig::default(), 42);
+        let mut b = Sim::new(w.clone(), SimConfig::default(), 42);
+        let mut c = Sim::new(w, SimConfig::default(), 43);
+        for _ in 0..5 {
+            let (sa, sb, sc) = (a.scan(), b.scan(), c.scan());
+            assert_eq!(sa.hits, sb.hits);
+            let bits = |s: &Scan| s.ranges_m.iter().map(|r| r.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&sa), bits(&sb));
+            assert_ne!(bits(&sa), bits(&sc));
+            a.step(0.2);
+            b.step(0.2);
+            c.step(0.2);
+        }
+        assert_eq!(a.pose(), b.pose());
+        assert_eq!(a.people(), b.people());
+        assert_eq!(a.target_positions(), b.target_positions());
+    }
+
+    #[test]
+    fn scan_shape_and_ground_truth() {
+        let mut sim = Sim::new(walled_world(8.0), SimConfig::default(), 5);
+        let s = sim.scan();
+        assert_eq!(s.ranges_m.len(), 897);
+        assert_eq!(s.hits.len(), 897);
+        assert_eq!(s.angle_min, -PI);
+        assert!((s.angle_increment * 897.0 - 2.0 * PI).abs() < 1e-12);
+        for (r, h) in s.ranges_m.iter().zip(&s.hits) {
+            assert_eq!(r.is_infinite(), *h == HitKind::None);
+        }
+        // Beam pointing forward (+x, yaw 0): the dividing wall 3 m away.
+        let i = ((0.0 - s.angle_min) / s.angle_increment).round() as usize;
+        if s.hits[i] != HitKind::None {
+            assert_eq!(s.hits[i], HitKind::Wall);
+            assert!((s.ranges_m[i] - 3.0).abs() < 0.06, "{}", s.ranges_m[i]);
+        }
+        // Dropouts happen at roughly the configured rate.
+        let none = s.hits.iter().filter(|h| **h == HitKind::None).count();
+        assert!(none < 40, "{none}");
+        // No noise, no dropout: exact geometry.
+        let cfg = SimConfig { range_noise_std_m: 0.0, dropout_prob: 0.0, ..SimConfig::default() };
+        let mut sim = Sim::new(walled_world(8.0), cfg, 5);
+        let p = sim.pose();
+        let s = sim.scan();
+        for (i, r) in s.ranges_m.iter().enumerate() {
+            let a = p[2] + s.angle_min + i as f64 * s.angle_increment;
+            let (c, sn) = (a.cos(), a.sin());
+            // Expected distance to the box [0,5]×[0,4].
+            let tx = if c > 0.0 {
+                (5.0 - p[0]) / c
+            } else if c < 0.0 {
+                -p[0] / c
+            } else {
+                f64::INFINITY
+            };
+            let ty = if sn > 0.0 {
+                (4.0 - p[1]) / sn
+            } else if sn < 0.0 {
+                -p[1] / sn
+            } else {
+                f64::INFINITY
+            };
+            assert!((*r as f64 - tx.min(ty)).abs() < 1e-4, "beam {i}");
+            assert_eq!(s.hits[i], HitKind::Wall);
+        }
+    }
+
+    #[test]
+    fn people_walk_and_are_seen() {
+        let mut w = walled_world(8.0);
+        w.people.push(crate::sim::Person { path: vec![[1.0, 0.7], [4.0, 0.7]], speed_mps: 1.0, radius_m: 0.25 });
+        let mut sim = Sim::new(w, SimConfig::default(), 9);
+        let before = sim.people()[0].0;
+        sim.step(1.0);
+        let after = sim.people()[0].0;
+        assert!(dist(before, after) > 0.1);
+        let mut seen = false;
+        for _ in 0..20 {
+            seen |= sim.scan().hits.contains(&HitKind::Person);
+            sim.step(0.5);
+        }
+        assert!(seen);
+    }
+
+    #[test]
+    fn base_never_touches_anything_among_people() {
+        // Apartment, hard: from the living room down the hallway (where a person walks up and
+        // down) into bedroom 1, for several seeds (different people phases and jitter).
+        let w = World::builtin("apartment", Scenario::Hard).unwrap();
+        let path = [[6.5, 24.0], [9.0, 24.0], [10.0, 22.0], [10.0, 4.0], [8.0, 4.0], [6.0, 5.0]];
+        for seed in 0..4 {
+            let mut sim = Sim::new(w.clone(), SimConfig::default(), seed);
+            sim.set_path(&path, Some(0.0));
+            let mut status = BaseStatus::Moving;
+            for _ in 0..3000 {
+                status = sim.step(0.1);
+                let p = sim.pose();
+                assert!(!sim.collides([p[0], p[1]]), "seed {seed}: collides at {p:?}");
+                if status == BaseStatus::Arrived {
+                    break;
+                }
+            }
+            assert_eq!(status, BaseStatus::Arrived, "seed {seed}: {:?} at t = {}", sim.pose(), sim.time_s());
+        }
+    }
+
+    #[test]
+    fn start_jitter_is_collision_free_and_seeded() {
+        for name in World::builtin_names() {
+            for sc in Scenario::ALL {
+                let w = World::builtin(name, sc).unwrap();
+                for seed in 0..50 {
+                    let sim = Sim::new(w.clone(), SimConfig::default(), seed);
+                    let p = sim.pose();
+                    assert!(!sim.collides([p[0], p[1]]), "{name} {sc} seed {seed}");
+                    assert!((p[0] - w.start.pose[0]).abs() <= w.start.jitter_m + 1e-12);
+                }
+            }
+        }
+    }
+}
