@@ -64,6 +64,11 @@ pub struct Config {
     pub w_dist_per_m: Weight,
     /// Weight of camera-unseen cells inside a viewpoint's cone, per cell. Default 0.02.
     pub w_unknown_per_cell: Weight,
+    /// Weight of unseen surfaces in a viewpoint's cone: per ray (of 24 across the field of view)
+    /// that ends on a LiDAR-occupied cell the camera has not seen. The target stands on the
+    /// floor, so the LiDAR sees it as an occupied cell: surfaces are where it can be. An
+    /// addition to the paper's unseen-cells term; 0 (off) by default, which is the paper's utility.
+    pub w_surface_per_ray: Weight,
     /// Weight of frontier cells near the path to a viewpoint, per cell. Default 0.01.
     pub w_frontier_per_cell: Weight,
     /// Weight of non-map points inside a viewpoint's cone, per pooled point. Default 1.5.
@@ -85,7 +90,7 @@ pub struct Config {
     /// Replan at least this often while exploring. Default 1.0 s.
     pub replan_interval_us: u64,
     /// A new best viewpoint replaces the current goal only if it beats the current goal's
-    /// re-scored utility by this much (hysteresis against goal oscillation). Default 2.0.
+    /// re-scored utility by this much (hysteresis against goal oscillation). Default 6.0.
     pub switch_margin: Weight,
     /// The goal counts as reached within this distance. Default 0.30 m.
     pub goal_tolerance_m: Meters,
@@ -133,6 +138,7 @@ impl Config {
         min_frontier_cells: 8,
         w_dist_per_m: w(1_000),
         w_unknown_per_cell: w(20),
+        w_surface_per_ray: w(0),
         w_frontier_per_cell: w(10),
         w_nonmap_per_point: w(1_500),
         nonmap_viewpoints: true,
@@ -141,7 +147,7 @@ impl Config {
         nonmap_pool_radius_m: m(200),
         nonmap_wall_clearance_m: m(250),
         replan_interval_us: 1_000_000,
-        switch_margin: w(2_000),
+        switch_margin: w(6_000),
         goal_tolerance_m: m(300),
         goal_heading_tolerance: BinaryAngle::from_degrees(20),
         goal_timeout_us: 15_000_000,

@@ -404,5 +404,4 @@ impl Controller {
             }
         }
     }
-
 }

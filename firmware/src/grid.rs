@@ -339,6 +339,17 @@ pub fn camera_rays(fov: BinaryAngle, range_cells: i32) -> usize {
     (rays as usize).min(MAX_CAMERA_RAYS)
 }
 
+/// What a camera at a candidate viewpoint would see (see [`VisualGrid::unseen_in_cone`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ConeView {
+    /// Estimated camera-unseen cells in the cone.
+    pub unseen_cells: u32,
+    /// Rays that end on a camera-unseen LiDAR-occupied cell.
+    pub unseen_surface_rays: u32,
+    /// Cells visited.
+    pub work: u32,
+}
+
 /// The visual search map: cells the camera has looked at. `Free` = seen and free, `Occupied` = an
 /// occupied cell the camera has looked at, `Unknown` = never seen by the camera.
 #[derive(Clone)]
@@ -395,7 +406,8 @@ impl VisualGrid {
     /// Estimated number of cells not yet seen by the camera that a camera at cell `(cx, cy)`
     /// looking along `heading` would see: `rays` rays across `fov`, occluded by LiDAR-occupied
     /// cells; a cell at step `d` along a ray stands for `d·Δθ` cells of the cone's area.
-    /// Returns `(cells, work)`.
+    /// Also counts the rays that end on a LiDAR-occupied cell the camera has not seen: unseen
+    /// surfaces, where an object (the target) can be.
     #[allow(clippy::too_many_arguments)]
     pub fn unseen_in_cone(
         &self,
@@ -406,8 +418,9 @@ impl VisualGrid {
         fov: BinaryAngle,
         range_cells: i32,
         rays: usize,
-    ) -> (u32, u32) {
+    ) -> ConeView {
         let rays = rays.max(2);
+        let mut surface_rays = 0u32;
         let start = heading - BinaryAngle((fov.0 as u32 / 2) as i32);
         let mut weighted: u64 = 0;
         let mut work = 0u32;
@@ -425,13 +438,16 @@ impl VisualGrid {
                     weighted += d as u64;
                 }
                 if lidar.get(x, y) == Cell::Occupied {
+                    if !self.seen(x, y) {
+                        surface_rays += 1;
+                    }
                     break;
                 }
             }
         }
         // Δθ = fov / rays in radians (Q16): fov_units · 2π / 2³² / rays.
         let dtheta_q16 = ((fov.0 as u32 as u64 * 411_775) >> 32) / rays as u64;
-        (((weighted * dtheta_q16) >> 16) as u32, work)
+        ConeView { unseen_cells: ((weighted * dtheta_q16) >> 16) as u32, unseen_surface_rays: surface_rays, work }
     }
 }
 

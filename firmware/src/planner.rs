@@ -26,8 +26,8 @@
 //! frontiers once the LiDAR map has none), facing the direction of travel.
 
 use crate::capacity::{
-    BLOCKS, BLOCK_CELLS, DIJKSTRA_HEAP, GRID_AREA, GRID_CELLS, MAX_BLACKLIST, MAX_FRONTIERS_PER_GRID, MAX_INFLATION_OFFSETS, MAX_NONMAP_POINTS,
-    MAX_NONMAP_SITES, MAX_PATH_WAYPOINTS, MAX_VIEWPOINTS,
+    BLOCKS, BLOCK_CELLS, DIJKSTRA_HEAP, GRID_AREA, GRID_CELLS, MAX_BLACKLIST, MAX_FRONTIERS_PER_GRID, MAX_INFLATION_OFFSETS,
+    MAX_NONMAP_POINTS, MAX_NONMAP_SITES, MAX_PATH_WAYPOINTS, MAX_VIEWPOINTS,
 };
 use crate::config::{Config, PlannerKind, Weight};
 use crate::frontier::{FrontierSet, FrontierSource};
@@ -79,6 +79,8 @@ pub struct Viewpoint {
     pub path_units: u16,
     /// Estimated camera-unseen cells in its cone.
     pub unseen: u32,
+    /// Rays of its cone ending on an unseen surface (LiDAR-occupied, camera-unseen).
+    pub surface: u32,
     /// Frontier cells near the path.
     pub frontier_near_path: u32,
     /// Non-map points in its cone.
@@ -150,7 +152,15 @@ impl Planner {
             blacklist: heapless::Deque::new(),
             visible: heapless::Vec::new(),
             candidates: heapless::Vec::new(),
-            stats: PlanStats { candidates: 0, unreachable: 0, blacklisted: 0, heap_overflows: 0, already_there: 0, reachable_cells: 0, work: 0 },
+            stats: PlanStats {
+                candidates: 0,
+                unreachable: 0,
+                blacklisted: 0,
+                heap_overflows: 0,
+                already_there: 0,
+                reachable_cells: 0,
+                work: 0,
+            },
             robot_cell: (0, 0),
         }
     }
@@ -460,8 +470,8 @@ impl Planner {
         let range_cells = GridGeometry::cells(cfg.camera_range_m);
         let w_nonmap = cfg.effective_w_nonmap();
         let nearest = cfg.planner == PlannerKind::Nearest;
-        let lidar_frontiers_reachable =
-            nearest && frontiers.frontiers().iter().any(|f| f.source == FrontierSource::Lidar && self.reachable_near(f.anchor, snap).is_some());
+        let lidar_frontiers_reachable = nearest
+            && frontiers.frontiers().iter().any(|f| f.source == FrontierSource::Lidar && self.reachable_near(f.anchor, snap).is_some());
 
         // Sites: frontier anchors; for `lives`, viewpoints aimed at non-map clusters; last, the
         // current goal (re-scored for hysteresis, never a candidate itself).
@@ -513,7 +523,17 @@ impl Planner {
             let dist_term = (cfg.w_dist_per_m.to_bits() as i64 * path_mm) / 1000;
             if nearest {
                 let heading = fixed_heading.unwrap_or_else(|| self.travel_heading(site, pose));
-                let vp = Viewpoint { cell: site, heading, source: kind, utility: -dist_term, path_units, unseen: 0, frontier_near_path: 0, nonmap: 0 };
+                let vp = Viewpoint {
+                    cell: site,
+                    heading,
+                    source: kind,
+                    utility: -dist_term,
+                    path_units,
+                    unseen: 0,
+                    surface: 0,
+                    frontier_near_path: 0,
+                    nonmap: 0,
+                };
                 let at = already_there(site, heading, path_units);
                 self.offer(vp, &mut best, &mut current_utility, at);
                 continue;
@@ -526,14 +546,26 @@ impl Planner {
                 None => &HEADINGS,
             };
             for &heading in headings {
-                let (unseen, w) = visual.unseen_in_cone(lidar, site.0, site.1, heading, cfg.camera_fov, range_cells, SCORE_RAYS);
-                work += w;
+                let view = visual.unseen_in_cone(lidar, site.0, site.1, heading, cfg.camera_fov, range_cells, SCORE_RAYS);
+                work += view.work;
+                let unseen = view.unseen_cells;
                 let nm = if w_nonmap != Weight::ZERO { self.in_cone(heading, cfg.camera_fov) } else { 0 };
                 let utility = -dist_term
                     + cfg.w_unknown_per_cell.to_bits() as i64 * unseen as i64
+                    + cfg.w_surface_per_ray.to_bits() as i64 * view.unseen_surface_rays as i64
                     + cfg.w_frontier_per_cell.to_bits() as i64 * near as i64
                     + w_nonmap.to_bits() as i64 * nm as i64;
-                let vp = Viewpoint { cell: site, heading, source: kind, utility, path_units, unseen, frontier_near_path: near, nonmap: nm };
+                let vp = Viewpoint {
+                    cell: site,
+                    heading,
+                    source: kind,
+                    utility,
+                    path_units,
+                    unseen,
+                    surface: view.unseen_surface_rays,
+                    frontier_near_path: near,
+                    nonmap: nm,
+                };
                 let at = already_there(site, heading, path_units);
                 self.offer(vp, &mut best, &mut current_utility, at);
             }
@@ -620,7 +652,12 @@ impl Planner {
         }
         let (gx, gy) = lidar.geom.center_of(vp.cell.0, vp.cell.1);
         let path_mm = vp.path_units as i64 * (crate::capacity::CELL_MM / STEP_STRAIGHT as i64);
-        Goal { pose: Pose2::new(gx, gy, vp.heading), viewpoint: vp, path, path_length_m: Meters::from_bits(((path_mm << 16) / 1000) as i32) }
+        Goal {
+            pose: Pose2::new(gx, gy, vp.heading),
+            viewpoint: vp,
+            path,
+            path_length_m: Meters::from_bits(((path_mm << 16) / 1000) as i32),
+        }
     }
 }
 

@@ -55,8 +55,13 @@ fn a_beam_clears_the_cells_it_crosses_and_marks_its_hit() {
     // A hit seen again later by a grazing beam of the same scan stays occupied.
     let mut s2 = BeamScan::new();
     let ranges = [3000u16, 2950];
-    s2.resample(&firmware::ScanInput { angle_min: BinaryAngle::ZERO, angle_increment: BinaryAngle::from_fraction(1, 897), ranges_mm: &ranges, labels: None })
-        .unwrap();
+    s2.resample(&firmware::ScanInput {
+        angle_min: BinaryAngle::ZERO,
+        angle_increment: BinaryAngle::from_fraction(1, 897),
+        ranges_mm: &ranges,
+        labels: None,
+    })
+    .unwrap();
     g.integrate(&p, &s2, Config::DEFAULT.lidar_max_range_m);
     assert_eq!(g.get(130, 100), Cell::Occupied);
 }
@@ -147,6 +152,8 @@ fn score_headings(kind: PlannerKind, with_points: bool) -> [i64; 4] {
         planner: kind,
         w_unknown_per_cell: Config::weight_milli(0),
         w_frontier_per_cell: Config::weight_milli(0),
+        // Only frontier viewpoints here: the test compares the four headings of one site.
+        nonmap_viewpoints: false,
         ..Config::DEFAULT
     };
     if with_points {
@@ -165,7 +172,8 @@ fn score_headings(kind: PlannerKind, with_points: bool) -> [i64; 4] {
     let anchor = f.frontiers().iter().find(|fr| fr.source == FrontierSource::Lidar).unwrap().anchor;
     let mut out = [i64::MIN; 4];
     for vp in planner.candidates.iter().filter(|v| v.cell == anchor) {
-        out[vp.heading as usize] = vp.utility;
+        let h = firmware::planner::HEADINGS.iter().position(|&h| h == vp.heading).expect("a frontier viewpoint faces one of the four headings");
+        out[h] = vp.utility;
     }
     assert!(out.iter().all(|&u| u != i64::MIN), "all four viewpoints scored: {out:?}");
     out
@@ -287,7 +295,10 @@ fn the_watchdog_stops_the_robot_and_fresh_data_resumes() {
     // Data flows again: the search resumes.
     let world = room_world();
     let (ranges, labels) = scan_of(&world, (5.0, 5.0, 0.0), 897);
-    let o = c.tick(30 * 200_000, &Inputs { pose: Some(pose(5.0, 5.0, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), ..Inputs::default() });
+    let o = c.tick(
+        30 * 200_000,
+        &Inputs { pose: Some(pose(5.0, 5.0, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), ..Inputs::default() },
+    );
     assert_eq!(o.status.mode, Some(Mode::Exploring));
     assert!(!o.stop && o.goal.is_some());
 }
@@ -312,7 +323,15 @@ fn bad_scans_are_counted_and_change_nothing() {
     let mut c = controller(Config::DEFAULT);
     let world = room_world();
     let (ranges, labels) = scan_of(&world, (5.0, 5.0, 0.0), 897);
-    c.tick(0, &Inputs { pose: Some(pose(5.0, 5.0, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), command: Some(Command::Start), ..Inputs::default() });
+    c.tick(
+        0,
+        &Inputs {
+            pose: Some(pose(5.0, 5.0, 0.0)),
+            scan: Some(scan_input(&ranges, Some(&labels))),
+            command: Some(Command::Start),
+            ..Inputs::default()
+        },
+    );
     let before = c.lidar.grid.as_bytes().to_vec();
     let bad = scan_input(&ranges, Some(&labels[..10]));
     let o = c.tick(200_000, &Inputs { pose: Some(pose(5.0, 5.0, 0.0)), scan: Some(bad), ..Inputs::default() });
@@ -331,7 +350,12 @@ fn detection_ends_the_search_and_stops_the_robot() {
     let mut c = controller(Config::DEFAULT);
     let world = room_world();
     let (ranges, labels) = scan_of(&world, (5.0, 5.0, 0.0), 897);
-    let i = Inputs { pose: Some(pose(5.0, 5.0, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), command: Some(Command::Start), ..Inputs::default() };
+    let i = Inputs {
+        pose: Some(pose(5.0, 5.0, 0.0)),
+        scan: Some(scan_input(&ranges, Some(&labels))),
+        command: Some(Command::Start),
+        ..Inputs::default()
+    };
     assert!(!c.tick(0, &i).stop);
     let o = c.tick(200_000, &Inputs { detection: Some(firmware::Detection { position: None }), ..i });
     assert!(o.stop && o.goal.is_none());

@@ -60,8 +60,14 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
         c.frontiers.compute(&c.lidar, &c.visual, cfg.min_frontier_cells);
     });
 
-    println!("map: office hard after {explore_s:.0} s of lives-gt search: {free} free, {occ} occupied LiDAR cells; {seen} camera-seen cells;");
-    println!("     {} non-map points, {} frontiers, {candidates} candidate viewpoints (512 x 512 grid, 0.10 m)", c.nonmap.points().len(), c.frontiers.frontiers().len());
+    println!(
+        "map: office hard after {explore_s:.0} s of lives-gt search: {free} free, {occ} occupied LiDAR cells; {seen} camera-seen cells;"
+    );
+    println!(
+        "     {} non-map points, {} frontiers, {candidates} candidate viewpoints (512 x 512 grid, 0.10 m)",
+        c.nonmap.points().len(),
+        c.frontiers.frontiers().len()
+    );
     println!("{:<36} {:>12} {:>14}", "stage (host, release)", "median ms", "work units");
     println!("{:<36} {:>12.3} {:>14}", "LiDAR update (897 beams)", t_lidar, lidar_work);
     println!("{:<36} {:>12.3} {:>14}", "visual update (camera cone)", t_visual, visual_work);

@@ -71,6 +71,14 @@ enum Cmd {
     },
 }
 
+/// `println!` that does not panic when stdout is closed early (`lives search | head -1`).
+macro_rules! say {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
 fn load_world(name: &str, scenario: Scenario, seed: u64) -> Result<(String, World), String> {
     if name == "random" {
         return Ok((format!("random-{seed}"), World::random(seed)));
@@ -92,7 +100,10 @@ fn progress_bar(len: u64) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let pb = ProgressBar::new(len);
-    pb.set_style(ProgressStyle::with_template("{spinner} simulated {pos}/{len} s [{bar:40}] {elapsed}").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} simulated {pos}/{len} s [{bar:40}] {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
     pb
 }
 
@@ -129,16 +140,20 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                     r.scenario,
                     r.planner,
                     r.seed,
-                    if r.found { format!("FOUND in {:.1} s", r.time_s) } else { format!("NOT FOUND ({}, limit {:.0} s)", r.outcome, r.time_limit_s) },
+                    if r.found {
+                        format!("FOUND in {:.1} s", r.time_s)
+                    } else {
+                        format!("NOT FOUND ({}, limit {:.0} s)", r.outcome, r.time_limit_s)
+                    },
                     r.path_m
                 );
                 host::picture::write_png(&run, path, &title).map_err(|e| format!("writing {}: {e}", path.display()))?;
             }
             if json {
-                println!("{}", serde_json::to_string(r).map_err(|e| e.to_string())?);
+                say!("{}", serde_json::to_string(r).map_err(|e| e.to_string())?);
             } else {
                 let sim_s = r.ticks as f64 * search::TICK_US as f64 / 1e6;
-                println!(
+                say!(
                     "{} {} {} {} seed {}: {} in {:.1} s (limit {:.0} s), path {:.1} m, {} ticks, {} goals; {:.1} s simulated in {:.2} s ({:.0}x real time)",
                     if r.found { "FOUND" } else { "NOT FOUND" },
                     r.world,
@@ -156,10 +171,10 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                     sim_s / wall.max(1e-9)
                 );
                 if planner == PlannerChoice::Lives {
-                    println!("note: `lives` runs on the simulator's ground-truth labels until the int8 classifier lands (same as lives-gt)");
+                    say!("note: `lives` runs on the simulator's ground-truth labels until the int8 classifier lands (same as lives-gt)");
                 }
                 if let Some(p) = &png {
-                    println!("picture: {}", p.display());
+                    say!("picture: {}", p.display());
                 }
             }
             Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
@@ -168,27 +183,34 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             match export {
                 Some(name) => {
                     let (_, w) = load_world(&name, scenario, seed)?;
-                    print!("{}", w.to_toml_string());
+                    say!("{}", w.to_toml_string().trim_end());
                 }
                 None => {
                     for n in World::builtin_names() {
                         for s in [Scenario::Easy, Scenario::Hard] {
                             if let Some(w) = World::builtin(n, s) {
                                 let [lo, hi] = w.bounds;
-                                println!("{n:10} {s:5} {:5.1} x {:5.1} m, time limit {:4.0} s, {} obstacles, {} people", hi[0] - lo[0], hi[1] - lo[1], w.time_limit_s, w.obstacles.len(), w.people.len());
+                                say!(
+                                    "{n:10} {s:5} {:5.1} x {:5.1} m, time limit {:4.0} s, {} obstacles, {} people",
+                                    hi[0] - lo[0],
+                                    hi[1] - lo[1],
+                                    w.time_limit_s,
+                                    w.obstacles.len(),
+                                    w.people.len()
+                                );
                             }
                         }
                     }
-                    println!("random     (any seed: --world random --seed N)");
+                    say!("random     (any seed: --world random --seed N)");
                 }
             }
             Ok(ExitCode::SUCCESS)
         }
         Cmd::Params => {
-            println!("{:#?}", firmware::Config::DEFAULT);
-            println!();
+            say!("{:#?}", firmware::Config::DEFAULT);
+            say!();
             for (name, what) in host::overrides::NAMES {
-                println!("  --set {name}=VALUE   {what}");
+                say!("  --set {name}=VALUE   {what}");
             }
             Ok(ExitCode::SUCCESS)
         }

@@ -8,6 +8,7 @@ use firmware::{BinaryAngle, Config};
 pub const NAMES: &[(&str, &str)] = &[
     ("w_dist_per_m", "utility per metre of path"),
     ("w_unknown_per_cell", "utility per camera-unseen cell in the cone"),
+    ("w_surface_per_ray", "utility per cone ray ending on an unseen surface"),
     ("w_frontier_per_cell", "utility per frontier cell near the path"),
     ("w_nonmap_per_point", "utility per non-map point in the cone"),
     ("switch_margin", "utility a new goal must gain over the current one"),
@@ -62,6 +63,7 @@ pub fn apply(cfg: &mut Config, assignment: &str) -> Result<(), String> {
     match name {
         "w_dist_per_m" => cfg.w_dist_per_m = weight(name, v)?,
         "w_unknown_per_cell" => cfg.w_unknown_per_cell = weight(name, v)?,
+        "w_surface_per_ray" => cfg.w_surface_per_ray = weight(name, v)?,
         "w_frontier_per_cell" => cfg.w_frontier_per_cell = weight(name, v)?,
         "w_nonmap_per_point" => cfg.w_nonmap_per_point = weight(name, v)?,
         "switch_margin" => cfg.switch_margin = weight(name, v)?,

@@ -19,9 +19,10 @@ pub fn outline(shape: &Shape) -> Vec<[f64; 2]> {
                 })
                 .collect()
         }
-        Shape::Circle { center, radius } => {
-            (0..24).map(|i| i as f64 * std::f64::consts::TAU / 24.0).map(|a| [center[0] + radius * a.cos(), center[1] + radius * a.sin()]).collect()
-        }
+        Shape::Circle { center, radius } => (0..24)
+            .map(|i| i as f64 * std::f64::consts::TAU / 24.0)
+            .map(|a| [center[0] + radius * a.cos(), center[1] + radius * a.sin()])
+            .collect(),
         Shape::Polygon { points } => points.clone(),
     }
 }
@@ -46,10 +47,14 @@ pub fn write_png(run: &SearchRun, path: &Path, title: &str) -> Result<(), Render
             }
         }
     }
-    let viewpoints: Vec<([f64; 2], f64)> =
-        ctrl.planner.candidates.iter().map(|v| (centre(v.cell.0, v.cell.1), v.heading.to_radians())).collect();
+    // The twelve best candidates of the last planning step: enough to show the choice, few
+    // enough to keep the map readable.
+    let mut ranked: Vec<_> = ctrl.planner.candidates.iter().collect();
+    ranked.sort_by_key(|v| std::cmp::Reverse(v.utility));
+    let viewpoints: Vec<([f64; 2], f64)> = ranked.iter().take(12).map(|v| (centre(v.cell.0, v.cell.1), v.heading.to_radians())).collect();
     let goal = ctrl.goal().map(|g| ([g.pose.x.to_num::<f64>(), g.pose.y.to_num::<f64>()], g.pose.theta.to_radians()));
-    let goal_path: Vec<[f64; 2]> = ctrl.goal().map(|g| g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect()).unwrap_or_default();
+    let goal_path: Vec<[f64; 2]> =
+        ctrl.goal().map(|g| g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect()).unwrap_or_default();
     let pose = run.sim.pose();
     let lidar = |x: usize, y: usize| ctrl.lidar.get(x as i32, y as i32).to_ros();
     let seen = |x: usize, y: usize| ctrl.visual.seen(x as i32, y as i32);
@@ -75,4 +80,3 @@ pub fn write_png(run: &SearchRun, path: &Path, title: &str) -> Result<(), Render
     };
     render_png(path, &input)
 }
-

@@ -173,7 +173,7 @@ pub mod palette {
     /// Start pose.
     pub const START: [u8; 3] = [0, 165, 60];
     /// Final camera cone outline.
-    pub const CONE: [u8; 3] = [0, 140, 150];
+    pub const CONE: [u8; 3] = [0, 110, 125];
     /// Goal pose and planned path.
     pub const GOAL: [u8; 3] = [130, 20, 170];
     /// Found marker.
@@ -364,7 +364,7 @@ pub fn layout(input: &RenderInput) -> Layout {
     let cell = grid_cell_m(&input.grid).unwrap_or(FALLBACK_CELL_M);
     let mut px_per_m = DEFAULT_PX_PER_CELL / cell;
     let longest = span[0].max(span[1]) * px_per_m;
-    if !(longest <= MAX_MAP_PX) {
+    if longest.is_nan() || longest > MAX_MAP_PX {
         px_per_m = MAX_MAP_PX / span[0].max(span[1]);
     }
     // Round down the tiny float noise before ceil (10 m * 20 px/m = 200 px,
@@ -857,6 +857,22 @@ impl<'b, 'a> Canvas<'b, 'a> {
             }
         }
 
+        // Where the target was detected.
+        if let Some(fp) = input.found_at {
+            if let Some(q) = self.px(fp) {
+                if self.near_map(q, 10.0) {
+                    self.star_px(q, 10.0, palette::FOUND, [120, 0, 0])?;
+                    let (x, y) = ipt(q);
+                    let pos = (x + 11, y - 16);
+                    for (dx, dy) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
+                        let halo = (pos.0 + dx, pos.1 + dy);
+                        self.text("found", halo, LEGEND_FONT_PX + 1.0, palette::BACKGROUND);
+                    }
+                    self.text("found", pos, LEGEND_FONT_PX + 1.0, palette::FOUND);
+                }
+            }
+        }
+
         // Goal pose.
         if let Some((gp, gh)) = input.goal {
             if let Some(q) = self.px(gp) {
@@ -880,17 +896,6 @@ impl<'b, 'a> Canvas<'b, 'a> {
             }
         }
 
-        // Where the target was detected.
-        if let Some(fp) = input.found_at {
-            if let Some(q) = self.px(fp) {
-                if self.near_map(q, 10.0) {
-                    self.star_px(q, 10.0, palette::FOUND, [120, 0, 0])?;
-                    let (x, y) = ipt(q);
-                    self.text("found", (x + 11, y - 16), LEGEND_FONT_PX + 1.0, palette::FOUND);
-                }
-            }
-        }
-
         // Frame around the map.
         let l = self.lay;
         self.be
@@ -910,6 +915,9 @@ impl<'b, 'a> Canvas<'b, 'a> {
 
     fn legend(&mut self, input: &RenderInput) -> DResult {
         let l = self.lay;
+        // The legend is outside the map area: clip to the whole image.
+        self.lo = [0.0, 0.0];
+        self.hi = [l.width as f64, l.height as f64];
         let x0 = (l.map_x0 + l.map_w + LEGEND_PAD) as i32;
         let mut y = (l.map_y0 + LEGEND_PAD) as i32;
         let sw = 26; // swatch width
@@ -1008,6 +1016,15 @@ mod tests {
         std::env::temp_dir().join(format!("lives-render-{}-{name}.png", std::process::id()))
     }
 
+    /// Set LIVES_KEEP_RENDER=1 to keep the test pictures for a look.
+    fn keep_or_remove(path: &Path) {
+        if std::env::var_os("LIVES_KEEP_RENDER").is_none() {
+            std::fs::remove_file(path).ok();
+        } else {
+            eprintln!("kept {}", path.display());
+        }
+    }
+
     fn png_size(bytes: &[u8]) -> (u32, u32) {
         assert!(bytes.len() > 33, "PNG too short");
         assert_eq!(&bytes[..8], &[0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a], "PNG signature");
@@ -1103,7 +1120,7 @@ mod tests {
         let path = tmp("synthetic");
         render_png(&path, &inp).expect("render");
         let bytes = std::fs::read(&path).unwrap();
-        std::fs::remove_file(&path).ok();
+        keep_or_remove(&path);
         assert_eq!(png_size(&bytes), (lay.width, lay.height));
 
         let img = render_rgb(&inp).unwrap();
@@ -1117,7 +1134,7 @@ mod tests {
         assert_eq!(at([2.0, 5.0]), palette::NONMAP, "non-map point");
         assert_eq!(at([3.95, 2.05]), palette::FRONTIER, "frontier cell");
         assert!(has_colour_near(&img, lay.pixel_of([2.0, 1.0]).unwrap(), 1, palette::TRAJECTORY));
-        assert!(has_colour_near(&img, lay.pixel_of([3.0, 2.5]).unwrap(), 2, palette::FOUND));
+        assert!(has_colour_near(&img, lay.pixel_of([3.0, 2.5]).unwrap(), 7, palette::FOUND));
         assert!(has_colour_near(&img, lay.pixel_of([7.25, 1.0]).unwrap(), 1, palette::TARGET));
         assert!(has_colour_near(&img, lay.pixel_of([4.0, 0.0]).unwrap(), 1, palette::WALL));
         assert!(has_colour_near(&img, lay.pixel_of([1.0, 1.0]).unwrap(), 2, palette::START));
@@ -1246,15 +1263,15 @@ mod tests {
     fn full_size_grid_renders() {
         // 512 x 512 cells, 51.2 m square world, walls every 5 m.
         let lid = |x: usize, y: usize| -> i8 {
-            if x % 50 == 0 || y % 50 == 0 {
+            if x.is_multiple_of(50) || y.is_multiple_of(50) {
                 100
-            } else if (x + y) % 7 == 0 || x > 400 {
+            } else if (x + y).is_multiple_of(7) || x > 400 {
                 -1
             } else {
                 0
             }
         };
-        let sn = |x: usize, y: usize| (x / 30 + y / 30) % 2 == 0;
+        let sn = |x: usize, y: usize| (x / 30 + y / 30).is_multiple_of(2);
         let walls: Vec<[P2; 2]> = (0..=10)
             .flat_map(|k| {
                 let v = k as f64 * 5.0;
@@ -1294,11 +1311,7 @@ mod tests {
         render_png(&path, &inp).expect("render");
         let dt = t.elapsed();
         let bytes = std::fs::read(&path).unwrap();
-        if std::env::var_os("LIVES_KEEP_RENDER").is_none() {
-            std::fs::remove_file(&path).ok();
-        } else {
-            eprintln!("kept {}", path.display());
-        }
+        keep_or_remove(&path);
         let lay = layout(&inp);
         assert_eq!((lay.map_w, lay.map_h), (1064, 1064));
         assert_eq!(png_size(&bytes), (lay.width, lay.height));

@@ -5,7 +5,7 @@
 //! which then moves for one period in four 50 ms steps. Nothing reads a wall clock, so the same
 //! world, planner and seed give the same run bit for bit.
 
-use crate::sim::{BaseStatus, HitKind, Scenario, Scan, Sim, SimConfig, World};
+use crate::sim::{BaseStatus, HitKind, Scan, Scenario, Sim, SimConfig, World};
 use firmware::scan::{BeamLabel, RANGE_INVALID, RANGE_NO_RETURN};
 use firmware::{BinaryAngle, Command, Config, Controller, Detection, Inputs, Mode, PlannerKind, Pose2, ScanInput};
 use serde::Serialize;
@@ -68,7 +68,10 @@ impl fmt::Display for PlannerChoice {
 impl FromStr for PlannerChoice {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        PlannerChoice::ALL.into_iter().find(|p| p.to_string() == s).ok_or_else(|| format!("unknown planner `{s}` (expected lives, lives-gt, multisensor or nearest)"))
+        PlannerChoice::ALL
+            .into_iter()
+            .find(|p| p.to_string() == s)
+            .ok_or_else(|| format!("unknown planner `{s}` (expected lives, lives-gt, multisensor or nearest)"))
     }
 }
 
@@ -130,6 +133,8 @@ pub struct SearchResult {
     pub blacklisted: u32,
     /// Times the base reported it was blocked.
     pub blocked: u32,
+    /// Ticks at whose end the robot overlapped an obstacle, wall or person (must stay 0).
+    pub collisions: u32,
     /// Where the planner's labels came from.
     pub labels: String,
     /// Where the target(s) were placed (this seed's draw).
@@ -205,7 +210,7 @@ pub fn run(spec: &SearchSpec, mut progress: impl FnMut(f64)) -> SearchRun {
     let increment = BinaryAngle::from_fraction(1, spec.sim.beams.max(1) as i64);
     let mut trajectory = vec![[start[0], start[1]]];
     let mut goals = Vec::new();
-    let (mut ticks, mut blocked_count) = (0u32, 0u32);
+    let (mut ticks, mut blocked_count, mut collisions) = (0u32, 0u32, 0u32);
     let mut base_blocked = false;
     let mut found_at = None;
     let mut outcome = "time-limit";
@@ -251,7 +256,7 @@ pub fn run(spec: &SearchSpec, mut progress: impl FnMut(f64)) -> SearchRun {
             if spec.trace {
                 let v = &g.viewpoint;
                 eprintln!(
-                    "t={:6.1}s robot ({:5.1},{:5.1}) goal #{:<3} ({:5.1},{:5.1}) {:>4.0}° {:?} U={:7.2} path={:5.1}m unseen={:4} frontier={:4} nonmap={:3} cands={} {:?}",
+                    "t={:6.1}s robot ({:5.1},{:5.1}) goal #{:<3} ({:5.1},{:5.1}) {:>4.0}° {:?} U={:7.2} path={:5.1}m unseen={:4} surface={:2} frontier={:4} nonmap={:3} cands={} {:?}",
                     sim.time_s(),
                     p[0],
                     p[1],
@@ -263,6 +268,7 @@ pub fn run(spec: &SearchSpec, mut progress: impl FnMut(f64)) -> SearchRun {
                     v.utility as f64 / 65536.0,
                     g.path_length_m.to_num::<f64>(),
                     v.unseen,
+                    v.surface,
                     v.frontier_near_path,
                     v.nonmap,
                     ctrl.planner.stats.candidates,
@@ -283,6 +289,9 @@ pub fn run(spec: &SearchSpec, mut progress: impl FnMut(f64)) -> SearchRun {
         }
         let q = sim.pose();
         trajectory.push([q[0], q[1]]);
+        if sim.collides([q[0], q[1]]) {
+            collisions += 1;
+        }
         progress(sim.time_s());
         if sim.time_s() >= limit {
             break;
@@ -303,6 +312,7 @@ pub fn run(spec: &SearchSpec, mut progress: impl FnMut(f64)) -> SearchRun {
         goals: status.goals,
         blacklisted: status.blacklisted,
         blocked: blocked_count,
+        collisions,
         labels: spec.planner.label_source().to_string(),
         targets: sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
     };

@@ -686,8 +686,10 @@ rect = {{ center = [{target_x}, 2.0], size = [0.5, 0.35] }}
         assert_eq!(s.hits.len(), 897);
         assert_eq!(s.angle_min, -PI);
         assert!((s.angle_increment * 897.0 - 2.0 * PI).abs() < 1e-12);
+        // A beam without a return is +inf (nothing in range) or NaN (dropout, too close), and only
+        // such beams have no ground-truth hit.
         for (r, h) in s.ranges_m.iter().zip(&s.hits) {
-            assert_eq!(r.is_infinite(), *h == HitKind::None);
+            assert_eq!(!r.is_finite(), *h == HitKind::None);
         }
         // Beam pointing forward (+x, yaw 0): the dividing wall 3 m away.
         let i = ((0.0 - s.angle_min) / s.angle_increment).round() as usize;

@@ -1,0 +1,101 @@
+//! The `lives` command line, as a user runs it.
+
+use std::process::Command;
+
+fn lives() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_lives"))
+}
+
+#[test]
+fn search_json_is_identical_for_the_same_seed() {
+    let run = || {
+        let out = lives()
+            .args(["search", "--world", "apartment", "--scenario", "easy", "--planner", "lives-gt", "--seed", "1", "--json"])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let a = run();
+    assert_eq!(a, run());
+    let v: serde_json::Value = serde_json::from_str(a.trim()).expect("one JSON object");
+    for key in ["world", "scenario", "planner", "seed", "found", "time_s", "path_m", "ticks"] {
+        assert!(v.get(key).is_some(), "missing `{key}` in {a}");
+    }
+    assert_eq!(v["found"], true);
+    assert_eq!(v["world"], "apartment");
+    assert_eq!(v["planner"], "lives-gt");
+}
+
+#[test]
+fn search_writes_a_png() {
+    let dir = std::env::temp_dir().join(format!("lives-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("run.png");
+    let out = lives().args(["search", "--planner", "lives-gt", "--seed", "1", "--png"]).arg(&png).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.starts_with("FOUND apartment easy lives-gt seed 1"), "{stdout}");
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    assert!(bytes.len() > 10_000);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_malformed_world_file_gives_a_clear_error_not_a_panic() {
+    let dir = std::env::temp_dir().join(format!("lives-cli-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cases = [
+        ("syntax.toml", "name = \"x\"\ntime_limit_s = 60\n[start\nposition = [1, 1]\n", "syntax.toml:3"),
+        (
+            "negative.toml",
+            "name = \"x\"\ntime_limit_s = 60\n\n[[obstacles]]\nkind = \"furniture\"\nrect = { center = [2.0, 2.0], size = [-1.0, 2.0] }\n",
+            "negative.toml:",
+        ),
+    ];
+    // A complete world whose time limit is NaN, and one whose first obstacle has a negative size:
+    // the error names the exact line.
+    let good = String::from_utf8(lives().args(["worlds", "--export", "apartment"]).output().unwrap().stdout).unwrap();
+    let limit_line = good.lines().position(|l| l.starts_with("time_limit_s")).expect("time_limit_s line") + 1;
+    let nan = good.replacen(good.lines().nth(limit_line - 1).unwrap(), "time_limit_s = nan", 1);
+    let nan_want = format!("nan.toml:{limit_line}");
+    let cases: Vec<(&str, String, &str)> =
+        cases.iter().map(|(f, t, w)| (*f, t.to_string(), *w)).chain([("nan.toml", nan, nan_want.as_str())]).collect();
+    for (file, text, want) in cases {
+        let path = dir.join(file);
+        std::fs::write(&path, text).unwrap();
+        let out = lives().args(["search", "--world"]).arg(&path).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{file}: {stderr}");
+        assert!(stderr.starts_with("error: "), "{file}: {stderr}");
+        assert!(stderr.contains(want), "{file}: expected `{want}` in: {stderr}");
+        assert!(!stderr.contains("panicked"), "{file}: {stderr}");
+    }
+    let out = lives().args(["search", "--world", "no-such-world"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown world `no-such-world`"));
+    let out = lives().args(["search", "--set", "w_dist_per_m=banana"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn worlds_lists_every_built_in_world_and_exports_a_loadable_file() {
+    let out = lives().arg("worlds").output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    for w in ["apartment", "office", "hallway"] {
+        assert_eq!(text.lines().filter(|l| l.starts_with(w)).count(), 2, "{text}");
+    }
+    let out = lives().args(["worlds", "--export", "office", "--scenario", "hard"]).output().unwrap();
+    assert!(out.status.success());
+    let dir = std::env::temp_dir().join(format!("lives-cli-export-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("office-hard.toml");
+    std::fs::write(&path, &out.stdout).unwrap();
+    let out = lives().args(["search", "--planner", "nearest", "--json", "--world"]).arg(&path).output().unwrap();
+    assert!(out.status.code() == Some(0) || out.status.code() == Some(1), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["world"], "office-hard");
+    let _ = std::fs::remove_dir_all(&dir);
+}

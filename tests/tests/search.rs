@@ -1,0 +1,72 @@
+//! End-to-end: the simulator and the controller core in lockstep (issue 3's acceptance tests).
+
+use host::search::{self, PlannerChoice, SearchSpec};
+use host::sim::{Scenario, World};
+
+fn spec(world: &str, scenario: Scenario, planner: PlannerChoice, seed: u64) -> SearchSpec {
+    SearchSpec::new(world, World::builtin(world, scenario).expect("built-in world"), scenario, planner, seed)
+}
+
+#[test]
+fn lives_gt_finds_the_target_in_apartment_easy_seed_1() {
+    let run = search::run(&spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1), |_| {});
+    let r = &run.result;
+    assert!(r.found, "{r:?}");
+    assert!(r.time_s <= r.time_limit_s);
+    assert_eq!(r.outcome, "found");
+    // The detection happened within camera range of the target.
+    let at = run.found_at.expect("found_at");
+    let t = r.targets[0];
+    assert!((at[0] - t[0]).hypot(at[1] - t[1]) <= 4.5, "found at {at:?}, target {t:?}");
+}
+
+#[test]
+fn the_same_seed_gives_the_same_result_and_decisions() {
+    for planner in [PlannerChoice::Lives, PlannerChoice::Nearest] {
+        let a = search::run(&spec("apartment", Scenario::Easy, planner, 3), |_| {});
+        let b = search::run(&spec("apartment", Scenario::Easy, planner, 3), |_| {});
+        assert_eq!(serde_json::to_string(&a.result).unwrap(), serde_json::to_string(&b.result).unwrap());
+        assert_eq!(a.goals, b.goals, "{planner}: the goal sequence differs");
+        assert_eq!(a.trajectory, b.trajectory);
+        assert!(a.goals.len() >= 2, "{planner}: the run made decisions");
+    }
+    // A different seed gives a different run (the seed is really used).
+    let c = search::run(&spec("apartment", Scenario::Easy, PlannerChoice::Lives, 4), |_| {});
+    let a = search::run(&spec("apartment", Scenario::Easy, PlannerChoice::Lives, 3), |_| {});
+    assert_ne!(a.trajectory, c.trajectory);
+}
+
+#[test]
+fn the_base_never_enters_an_obstacle_during_a_search() {
+    for (world, scenario, planner, seed) in
+        [("apartment", Scenario::Hard, PlannerChoice::Multisensor, 2), ("office", Scenario::Easy, PlannerChoice::Nearest, 5)]
+    {
+        // `collisions` counts the ticks at whose end the robot disc overlapped a wall, an
+        // obstacle or a person, checked against the true world at that moment.
+        let run = search::run(&spec(world, scenario, planner, seed), |_| {});
+        assert!(run.trajectory.len() > 50);
+        assert!(run.result.path_m > 5.0, "{world}: the robot moved");
+        assert_eq!(run.result.collisions, 0, "{world} {planner}: {:?}", run.result);
+        // Static geometry, along the whole trajectory after the fact.
+        for p in &run.trajectory {
+            assert!(
+                run.sim.world().disc_is_clear(*p, run.sim.config().robot_radius_m),
+                "{world} {planner}: robot inside an obstacle at {p:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn every_built_in_world_runs_with_every_planner() {
+    for &world in World::builtin_names() {
+        for scenario in [Scenario::Easy, Scenario::Hard] {
+            let mut s = spec(world, scenario, PlannerChoice::Multisensor, 1);
+            // A short search: the point is that every world loads and the loop runs.
+            s.world.time_limit_s = 10.0;
+            let run = search::run(&s, |_| {});
+            assert!(run.result.ticks >= 2, "{world} {scenario}");
+            assert!(run.controller.lidar.grid.count(firmware::Cell::Free) > 1000, "{world} {scenario}: the LiDAR map grew");
+        }
+    }
+}
