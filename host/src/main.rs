@@ -63,7 +63,7 @@ enum Cmd {
         #[arg(long, default_value_t = 30)]
         reps: usize,
         /// Virtual seconds of search before measuring (how explored the map is).
-        #[arg(long, default_value_t = 40.0)]
+        #[arg(long, default_value_t = 120.0)]
         explore_s: f64,
         /// Also time whole simulated searches (apartment easy, seeds 1–5) against real time.
         #[arg(long)]
