@@ -74,6 +74,9 @@ pub struct Config {
     /// Weight of non-map points inside a viewpoint's cone, per pooled point. Default 1.5.
     /// Ignored (zero) under [`PlannerKind::Multisensor`].
     pub w_nonmap_per_point: Weight,
+    /// At most this many non-map points count per 0.8 m block in the non-map term (0 = no cap,
+    /// the paper's plain count). Default 0.
+    pub nonmap_block_cap: u8,
     /// `lives` also scores one viewpoint per cluster of non-map points (an addition to the
     /// paper, whose candidates are frontier centroids only). Default true.
     pub nonmap_viewpoints: bool,
@@ -141,6 +144,7 @@ impl Config {
         w_surface_per_ray: w(0),
         w_frontier_per_cell: w(10),
         w_nonmap_per_point: w(1_500),
+        nonmap_block_cap: 0,
         nonmap_viewpoints: true,
         nonmap_standoff_m: m(1_500),
         frontier_near_path_blocks: 1,

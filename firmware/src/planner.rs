@@ -127,7 +127,7 @@ pub struct Planner {
     block_stamp: [u16; BLOCKS * BLOCKS],
     stamp: u16,
     blacklist: heapless::Deque<(i32, i32), MAX_BLACKLIST>,
-    visible: heapless::Vec<BinaryAngle, MAX_NONMAP_POINTS>,
+    visible: heapless::Vec<(BinaryAngle, u32), MAX_NONMAP_POINTS>,
     /// The candidates scored in the last step (for logs and pictures).
     pub candidates: heapless::Vec<Viewpoint, MAX_VIEWPOINTS>,
     /// Counters of the last step.
@@ -397,7 +397,8 @@ impl Planner {
                 }
             }
             if clear {
-                let _ = self.visible.push(atan2(dy as i32, dx as i32));
+                let block = (py as u32 / BLOCK_CELLS as u32) * BLOCKS as u32 + px as u32 / BLOCK_CELLS as u32;
+                let _ = self.visible.push((atan2(dy as i32, dx as i32), block));
             }
         }
         work
@@ -549,7 +550,7 @@ impl Planner {
                 let view = visual.unseen_in_cone(lidar, site.0, site.1, heading, cfg.camera_fov, range_cells, SCORE_RAYS);
                 work += view.work;
                 let unseen = view.unseen_cells;
-                let nm = if w_nonmap != Weight::ZERO { self.in_cone(heading, cfg.camera_fov) } else { 0 };
+                let nm = if w_nonmap != Weight::ZERO { self.in_cone(heading, cfg.camera_fov, cfg.nonmap_block_cap) } else { 0 };
                 let utility = -dist_term
                     + cfg.w_unknown_per_cell.to_bits() as i64 * unseen as i64
                     + cfg.w_surface_per_ray.to_bits() as i64 * view.unseen_surface_rays as i64
@@ -576,9 +577,31 @@ impl Planner {
     }
 
     /// Visible non-map points (from the last [`Planner::visible_nonmap`]) within the cone.
-    fn in_cone(&self, heading: BinaryAngle, fov: BinaryAngle) -> u32 {
+    /// With `cap > 0`, at most `cap` points count per 0.8 m block (a scaled count: several
+    /// distinct objects outweigh one large piece of furniture).
+    fn in_cone(&self, heading: BinaryAngle, fov: BinaryAngle, cap: u8) -> u32 {
         let half = fov.0 as u32 / 2;
-        self.visible.iter().filter(|a| (**a - heading).unsigned_abs() <= half).count() as u32
+        let in_view = self.visible.iter().filter(|(a, _)| (*a - heading).unsigned_abs() <= half);
+        if cap == 0 {
+            return in_view.count() as u32;
+        }
+        let mut per_block: heapless::Vec<(u32, u8), MAX_NONMAP_SITES> = heapless::Vec::new();
+        let mut total = 0;
+        for &(_, block) in in_view {
+            match per_block.iter_mut().find(|e| e.0 == block) {
+                Some(e) if e.1 >= cap => {}
+                Some(e) => {
+                    e.1 += 1;
+                    total += 1;
+                }
+                None => {
+                    // Blocks beyond the scratch capacity still count their first point.
+                    let _ = per_block.push((block, 1));
+                    total += 1;
+                }
+            }
+        }
+        total
     }
 
     fn offer(&mut self, vp: Viewpoint, best: &mut Option<Viewpoint>, current_utility: &mut Option<i64>, already_there: bool) {

@@ -172,7 +172,8 @@ fn score_headings(kind: PlannerKind, with_points: bool) -> [i64; 4] {
     let anchor = f.frontiers().iter().find(|fr| fr.source == FrontierSource::Lidar).unwrap().anchor;
     let mut out = [i64::MIN; 4];
     for vp in planner.candidates.iter().filter(|v| v.cell == anchor) {
-        let h = firmware::planner::HEADINGS.iter().position(|&h| h == vp.heading).expect("a frontier viewpoint faces one of the four headings");
+        let h =
+            firmware::planner::HEADINGS.iter().position(|&h| h == vp.heading).expect("a frontier viewpoint faces one of the four headings");
         out[h] = vp.utility;
     }
     assert!(out.iter().all(|&u| u != i64::MIN), "all four viewpoints scored: {out:?}");
@@ -360,4 +361,59 @@ fn detection_ends_the_search_and_stops_the_robot() {
     let o = c.tick(200_000, &Inputs { detection: Some(firmware::Detection { position: None }), ..i });
     assert!(o.stop && o.goal.is_none());
     assert_eq!(o.status.mode, Some(Mode::TargetFound));
+}
+
+#[test]
+fn a_stage_over_its_budget_is_counted() {
+    let tight = firmware::config::StageBudgets { lidar_cells: 10, visual_cells: 1_000_000, nonmap_ops: 1_000_000, plan_ops: 10 };
+    let mut c = controller(Config { budgets: tight, ..Config::DEFAULT });
+    let out = run_room(&mut c, 5, 5);
+    let last = out.last().unwrap();
+    assert_eq!(last.status.overruns[0], 5, "every LiDAR update exceeded 10 cells");
+    assert_eq!(last.status.overruns[1], 0);
+    assert!(last.status.overruns[3] >= 1, "the planning step exceeded 10 work units");
+    assert!(last.status.cost.lidar > 10 && last.status.cost.plan > 10);
+    // The stages still ran to completion: a goal exists.
+    assert!(last.goal.is_some());
+}
+
+#[test]
+fn a_goal_blocked_for_too_long_is_blacklisted_and_replaced() {
+    let mut c = controller(Config::DEFAULT);
+    let world = room_world();
+    let p = (5.0, 5.0, 0.0);
+    let (ranges, labels) = scan_of(&world, p, 897);
+    let tick = |c: &mut firmware::Controller, t: u64, blocked: bool| {
+        c.tick(
+            t * 200_000,
+            &Inputs {
+                pose: Some(pose(p.0, p.1, p.2)),
+                scan: Some(scan_input(&ranges, Some(&labels))),
+                command: (t == 0).then_some(Command::Start),
+                base_blocked: blocked,
+                ..Inputs::default()
+            },
+        )
+    };
+    let first = tick(&mut c, 0, false).goal.expect("a first goal").viewpoint.cell;
+    // Blocked for 2 s: waited out (a person passing), same goal.
+    for t in 1..=10 {
+        let o = tick(&mut c, t, true);
+        assert_eq!(o.status.blacklisted, 0, "tick {t}");
+    }
+    // Blocked past 3 s: the goal is blacklisted and a different one chosen.
+    let mut replaced = None;
+    for t in 11..=20 {
+        let o = tick(&mut c, t, true);
+        if o.status.blacklisted > 0 {
+            replaced = Some(o);
+            break;
+        }
+    }
+    let o = replaced.expect("blacklisted within 4 s of blocking");
+    assert!(c.planner.blacklisted().any(|&b| b == first));
+    if let Some(g) = o.goal {
+        let (dx, dy) = (g.viewpoint.cell.0 - first.0, g.viewpoint.cell.1 - first.1);
+        assert!(dx * dx + dy * dy > 25, "the new goal is outside the blacklist radius");
+    }
 }

@@ -18,6 +18,7 @@ pub const NAMES: &[(&str, &str)] = &[
     ("camera_range_m", "camera range, metres"),
     ("camera_fov_deg", "camera field of view, degrees"),
     ("min_frontier_cells", "smallest frontier kept, cells"),
+    ("nonmap_block_cap", "non-map points counted per 0.8 m block (0 = all)"),
     ("nonmap_viewpoints", "true/false: viewpoints aimed at non-map clusters (lives)"),
     ("nonmap_standoff_m", "distance of a non-map viewpoint from its cluster, metres"),
     ("nonmap_pool_radius_m", "pooling radius of non-map points, metres"),
@@ -79,6 +80,7 @@ pub fn apply(cfg: &mut Config, assignment: &str) -> Result<(), String> {
             cfg.camera_fov = BinaryAngle::from_radians(d.to_radians()).ok_or("bad angle")?;
         }
         "min_frontier_cells" => cfg.min_frontier_cells = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a cell count"))?,
+        "nonmap_block_cap" => cfg.nonmap_block_cap = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a count (0-255)"))?,
         "nonmap_viewpoints" => cfg.nonmap_viewpoints = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
         "nonmap_standoff_m" => cfg.nonmap_standoff_m = meters(name, v)?,
         "nonmap_pool_radius_m" => cfg.nonmap_pool_radius_m = meters(name, v)?,
@@ -109,8 +111,9 @@ mod tests {
         }
         for (name, _) in NAMES {
             let value = match *name {
+                "nonmap_block_cap" => cfg.nonmap_block_cap = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a count (0-255)"))?,
                 "nonmap_viewpoints" => "true",
-                "min_frontier_cells" => "5",
+                "min_frontier_cells" | "nonmap_block_cap" => "5",
                 "camera_fov_deg" => "90",
                 _ => "1",
             };

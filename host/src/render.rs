@@ -686,16 +686,30 @@ impl<'b, 'a> Canvas<'b, 'a> {
                     // Absurdly long: draw it solid (clipped) instead of dashing.
                     self.path_px(&[a, q], style)?;
                 } else {
+                    // Bounded: every iteration ends a dash or a gap (steps of at least 1e-6 px,
+                    // and the phase snaps to the boundary it reached, so rounding cannot stall).
                     let mut s = 0.0;
-                    while s < len {
+                    let max_iter = 2 * (len / period.max(1e-6)).ceil() as usize + 4;
+                    for _ in 0..max_iter {
+                        if s >= len {
+                            break;
+                        }
                         let in_on = phase < on;
-                        let step = if in_on { on - phase } else { period - phase };
+                        let step = (if in_on { on - phase } else { period - phase }).max(1e-6);
                         let e = (s + step).min(len);
                         if in_on {
                             let at = |t: f64| [a[0] + (q[0] - a[0]) * t / len, a[1] + (q[1] - a[1]) * t / len];
                             self.path_px(&[at(s), at(e)], style)?;
                         }
-                        phase = (phase + (e - s)) % period;
+                        phase = if e - s >= step {
+                            if in_on {
+                                on
+                            } else {
+                                0.0
+                            }
+                        } else {
+                            (phase + (e - s)) % period
+                        };
                         s = e;
                     }
                 }

@@ -193,8 +193,9 @@ pub fn controller_config(base: &Config, world: &World, planner: PlannerChoice) -
     let half = firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64 / 2.0;
     Config {
         planner: planner.kind(),
-        origin_x_m: fixed_point::meters_from_f64((centre[0] - half).floor()).unwrap_or_default(),
-        origin_y_m: fixed_point::meters_from_f64((centre[1] - half).floor()).unwrap_or_default(),
+        // Centred on the world, on the 0.1 m lattice (a world up to 51 m across fits).
+        origin_x_m: fixed_point::meters_from_f64(((centre[0] - half) * 10.0).round() / 10.0).unwrap_or_default(),
+        origin_y_m: fixed_point::meters_from_f64(((centre[1] - half) * 10.0).round() / 10.0).unwrap_or_default(),
         ..*base
     }
 }

@@ -70,3 +70,18 @@ fn every_built_in_world_runs_with_every_planner() {
         }
     }
 }
+
+#[test]
+fn pictures_render_for_every_planner() {
+    // Regression: the dashed goal path of this run once stalled the renderer on float rounding.
+    let dir = std::env::temp_dir().join(format!("lives-pictures-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for planner in [PlannerChoice::Multisensor, PlannerChoice::Lives, PlannerChoice::Nearest] {
+        let run = search::run(&spec("apartment", Scenario::Easy, planner, 1), |_| {});
+        let path = dir.join(format!("{planner}.png"));
+        host::picture::write_png(&run, &path, "test").unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        assert_eq!(&bytes[..4], b"\x89PNG");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
