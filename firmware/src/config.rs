@@ -90,7 +90,7 @@ pub struct Config {
     /// Non-map points closer than this to a map (wall) point are dropped (localisation drift).
     /// Default 0.25 m.
     pub nonmap_wall_clearance_m: Meters,
-    /// Replan at least this often while exploring. Default 1.0 s.
+    /// Replan at least this often while exploring. Default 3.0 s.
     pub replan_interval_us: u64,
     /// A new best viewpoint replaces the current goal only if it beats the current goal's
     /// re-scored utility by this much (hysteresis against goal oscillation). Default 6.0.
@@ -150,7 +150,7 @@ impl Config {
         frontier_near_path_blocks: 1,
         nonmap_pool_radius_m: m(200),
         nonmap_wall_clearance_m: m(250),
-        replan_interval_us: 1_000_000,
+        replan_interval_us: 3_000_000,
         switch_margin: w(6_000),
         goal_tolerance_m: m(300),
         goal_heading_tolerance: BinaryAngle::from_degrees(20),

@@ -111,7 +111,6 @@ mod tests {
         }
         for (name, _) in NAMES {
             let value = match *name {
-                "nonmap_block_cap" => cfg.nonmap_block_cap = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a count (0-255)"))?,
                 "nonmap_viewpoints" => "true",
                 "min_frontier_cells" | "nonmap_block_cap" => "5",
                 "camera_fov_deg" => "90",
