@@ -35,6 +35,8 @@ pub struct StageBudgets {
     pub nonmap_ops: u32,
     /// One planning step (inflation, frontiers, path distance, utilities), cells and points.
     pub plan_ops: u32,
+    /// One scan classification, multiply-accumulates.
+    pub classify_macs: u32,
 }
 
 /// The controller's configuration. Distances in metres ([`Meters`], Q16.16), angles as
@@ -64,6 +66,10 @@ pub struct Config {
     pub w_dist_per_m: Weight,
     /// Weight of camera-unseen cells inside a viewpoint's cone, per cell. Default 0.02.
     pub w_unknown_per_cell: Weight,
+    /// In the unseen-cells term, a cell the LiDAR has not seen either counts this many eighths of
+    /// a cell (8 = every camera-unseen cell alike, the paper's count; lower values favour looking
+    /// at what the LiDAR has found over looking into the unknown). Default 8.
+    pub unseen_unknown_eighths: u8,
     /// Weight of unseen surfaces in a viewpoint's cone: per ray (of 24 across the field of view)
     /// that ends on a LiDAR-occupied cell the camera has not seen. The target stands on the
     /// floor, so the LiDAR sees it as an occupied cell: surfaces are where it can be. An
@@ -141,6 +147,7 @@ impl Config {
         min_frontier_cells: 8,
         w_dist_per_m: w(1_000),
         w_unknown_per_cell: w(20),
+        unseen_unknown_eighths: 8,
         w_surface_per_ray: w(0),
         w_frontier_per_cell: w(10),
         w_nonmap_per_point: w(1_500),
@@ -160,7 +167,13 @@ impl Config {
         blacklist_radius_m: m(500),
         viewpoint_snap_radius_m: m(1_000),
         watchdog_us: 1_000_000,
-        budgets: StageBudgets { lidar_cells: 400_000, visual_cells: 40_000, nonmap_ops: 100_000, plan_ops: 12_000_000 },
+        budgets: StageBudgets {
+            lidar_cells: 400_000,
+            visual_cells: 40_000,
+            nonmap_ops: 100_000,
+            plan_ops: 12_000_000,
+            classify_macs: 2_000_000,
+        },
     };
 
     /// Metres from whole millimetres (for building configs in `const` context and tests).

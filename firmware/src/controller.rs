@@ -13,6 +13,7 @@
 //!
 //! The controller never reads a clock or a random source: time is `now_us`.
 
+use crate::classifier::{Classifier, ClassifierConfig, LabelFeedback, ModelError, ModelView};
 use crate::config::Config;
 use crate::frontier::FrontierSet;
 use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
@@ -69,9 +70,12 @@ pub struct Inputs<'a> {
     pub base_blocked: bool,
 }
 
-/// Work per stage in the last tick that ran it (work units: cells or points touched).
+/// Work per stage in the last tick that ran it (work units: cells or points touched;
+/// multiply-accumulates for the classifier).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct StageCost {
+    /// Scan classification (int8 network).
+    pub classify: u32,
     /// LiDAR-map update.
     pub lidar: u32,
     /// Visual-map update.
@@ -109,8 +113,8 @@ pub struct Status {
     pub watchdog_trips: u32,
     /// Work per stage, last time each ran.
     pub cost: StageCost,
-    /// Stage runs above budget: lidar, visual, nonmap, plan.
-    pub overruns: [u32; 4],
+    /// Stage runs above budget: lidar, visual, nonmap, plan, classify.
+    pub overruns: [u32; 5],
     /// Dijkstra open-list overflows, cumulative.
     pub heap_overflows: u32,
 }
@@ -142,6 +146,9 @@ pub struct Controller {
     pub frontiers: FrontierSet,
     /// The planner.
     pub planner: Planner,
+    /// The map-free scan classifier: labels scans that arrive without labels (once a model is
+    /// installed with [`Controller::set_model`]).
+    pub classifier: Classifier<'static>,
     beams: BeamScan,
     mode: Mode,
     pose: Option<Pose2>,
@@ -166,6 +173,7 @@ impl Controller {
             nonmap: NonMapStore::new(),
             frontiers: FrontierSet::new(),
             planner: Planner::new(),
+            classifier: Classifier::new(ClassifierConfig { feedback: LabelFeedback::Raw }),
             beams: BeamScan::new(),
             mode: Mode::Idle,
             pose: None,
@@ -188,8 +196,8 @@ impl Controller {
                 blacklisted: 0,
                 retired: 0,
                 watchdog_trips: 0,
-                cost: StageCost { lidar: 0, visual: 0, nonmap: 0, plan: 0 },
-                overruns: [0; 4],
+                cost: StageCost { classify: 0, lidar: 0, visual: 0, nonmap: 0, plan: 0 },
+                overruns: [0; 5],
                 heap_overflows: 0,
             },
         }
@@ -220,8 +228,17 @@ impl Controller {
         &self.beams
     }
 
-    /// Forgets everything but the configuration; idle.
+    /// Installs the classifier's int8 model blob after validating it (magic, version, shapes,
+    /// checksum). The bytes are read in place (flash on the MCU); a blob that fails validation is
+    /// refused and the previous model, if any, stays.
+    pub fn set_model(&mut self, blob: &'static [u8]) -> Result<(), ModelError> {
+        self.classifier.set_model(ModelView::parse(blob)?);
+        Ok(())
+    }
+
+    /// Forgets everything but the configuration and the model; idle.
     pub fn reset(&mut self) {
+        self.classifier.reset();
         self.lidar.grid.clear();
         self.visual.grid.clear();
         self.nonmap.clear();
@@ -236,7 +253,7 @@ impl Controller {
 
     fn budget_check(&mut self, stage: usize, work: u32) {
         let b = &self.cfg.budgets;
-        let budget = [b.lidar_cells, b.visual_cells, b.nonmap_ops, b.plan_ops][stage];
+        let budget = [b.lidar_cells, b.visual_cells, b.nonmap_ops, b.plan_ops, b.classify_macs][stage];
         if work > budget {
             self.status.overruns[stage] += 1;
         }
@@ -275,6 +292,13 @@ impl Controller {
                 Ok(_) => {
                     self.last_scan_us = Some(now_us);
                     self.status.scans += 1;
+                    if scan.labels.is_none() {
+                        // No labels from upstream: the int8 network labels the scan (every beam
+                        // stays unlabelled until a model is installed).
+                        let w = self.classifier.label_scan(&pose, &mut self.beams);
+                        self.status.cost.classify = w;
+                        self.budget_check(4, w);
+                    }
                     let w = self.lidar.integrate(&pose, &self.beams, self.cfg.lidar_max_range_m);
                     self.status.cost.lidar = w;
                     self.budget_check(0, w);

@@ -407,7 +407,8 @@ impl VisualGrid {
     /// looking along `heading` would see: `rays` rays across `fov`, occluded by LiDAR-occupied
     /// cells; a cell at step `d` along a ray stands for `d·Δθ` cells of the cone's area.
     /// Also counts the rays that end on a LiDAR-occupied cell the camera has not seen: unseen
-    /// surfaces, where an object (the target) can be.
+    /// surfaces, where an object (the target) can be. A cell unknown to the LiDAR as well counts
+    /// `unknown_eighths / 8` of a cell (8: all unseen cells alike, as in the paper).
     #[allow(clippy::too_many_arguments)]
     pub fn unseen_in_cone(
         &self,
@@ -418,6 +419,7 @@ impl VisualGrid {
         fov: BinaryAngle,
         range_cells: i32,
         rays: usize,
+        unknown_eighths: u8,
     ) -> ConeView {
         let rays = rays.max(2);
         let mut surface_rays = 0u32;
@@ -434,10 +436,12 @@ impl VisualGrid {
                     break;
                 }
                 work += 1;
+                let l = lidar.get(x, y);
                 if !self.seen(x, y) {
-                    weighted += d as u64;
+                    // Cells the LiDAR has not seen either count `unknown_eighths`/8 of a cell.
+                    weighted += if l == Cell::Unknown { d as u64 * unknown_eighths as u64 } else { d as u64 * 8 };
                 }
-                if lidar.get(x, y) == Cell::Occupied {
+                if l == Cell::Occupied {
                     if !self.seen(x, y) {
                         surface_rays += 1;
                     }
@@ -447,7 +451,7 @@ impl VisualGrid {
         }
         // Δθ = fov / rays in radians (Q16): fov_units · 2π / 2³² / rays.
         let dtheta_q16 = ((fov.0 as u32 as u64 * 411_775) >> 32) / rays as u64;
-        ConeView { unseen_cells: ((weighted * dtheta_q16) >> 16) as u32, unseen_surface_rays: surface_rays, work }
+        ConeView { unseen_cells: ((weighted * dtheta_q16) >> 19) as u32, unseen_surface_rays: surface_rays, work }
     }
 }
 

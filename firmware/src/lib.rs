@@ -11,6 +11,7 @@
 //! | step | module | what it owns |
 //! |---|---|---|
 //! | scan in, resampled to the 897-beam grid | [`scan`] | [`BeamScan`], input validation |
+//! | label each point map / non-map (int8 network) | [`classifier`] | [`classifier::Classifier`], the model blob view |
 //! | LiDAR and visual search maps | [`grid`] | [`LidarGrid`], [`VisualGrid`], ray traversal |
 //! | non-map points, pooled and filtered | [`nonmap`] | [`NonMapStore`] |
 //! | frontiers of both maps | [`frontier`] | [`FrontierSet`] |
@@ -24,6 +25,7 @@
 #![warn(missing_docs)]
 
 pub mod capacity;
+pub mod classifier;
 pub mod config;
 pub mod controller;
 pub mod frontier;

@@ -547,7 +547,16 @@ impl Planner {
                 None => &HEADINGS,
             };
             for &heading in headings {
-                let view = visual.unseen_in_cone(lidar, site.0, site.1, heading, cfg.camera_fov, range_cells, SCORE_RAYS);
+                let view = visual.unseen_in_cone(
+                    lidar,
+                    site.0,
+                    site.1,
+                    heading,
+                    cfg.camera_fov,
+                    range_cells,
+                    SCORE_RAYS,
+                    cfg.unseen_unknown_eighths,
+                );
                 work += view.work;
                 let unseen = view.unseen_cells;
                 let nm = if w_nonmap != Weight::ZERO { self.in_cone(heading, cfg.camera_fov, cfg.nonmap_block_cap) } else { 0 };

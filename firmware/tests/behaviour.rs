@@ -365,7 +365,8 @@ fn detection_ends_the_search_and_stops_the_robot() {
 
 #[test]
 fn a_stage_over_its_budget_is_counted() {
-    let tight = firmware::config::StageBudgets { lidar_cells: 10, visual_cells: 1_000_000, nonmap_ops: 1_000_000, plan_ops: 10 };
+    let tight =
+        firmware::config::StageBudgets { lidar_cells: 10, visual_cells: 1_000_000, nonmap_ops: 1_000_000, plan_ops: 10, classify_macs: 0 };
     let mut c = controller(Config { budgets: tight, ..Config::DEFAULT });
     let out = run_room(&mut c, 5, 5);
     let last = out.last().unwrap();

@@ -15,6 +15,7 @@ fn static_memory_matches_the_documented_budget() {
         ("FrontierSet", size_of::<FrontierSet>()),
         ("Planner", size_of::<Planner>()),
         ("BeamScan", size_of::<BeamScan>()),
+        ("Classifier", size_of::<firmware::classifier::Classifier<'static>>()),
         ("Controller", size_of::<Controller>()),
     ];
     for (name, bytes) in sizes {

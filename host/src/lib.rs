@@ -2,6 +2,7 @@
 //! pictures and benchmarks. The controller itself is the `firmware` crate.
 
 pub mod bench;
+pub mod model;
 pub mod overrides;
 pub mod picture;
 pub mod render;

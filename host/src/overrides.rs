@@ -18,6 +18,7 @@ pub const NAMES: &[(&str, &str)] = &[
     ("camera_range_m", "camera range, metres"),
     ("camera_fov_deg", "camera field of view, degrees"),
     ("min_frontier_cells", "smallest frontier kept, cells"),
+    ("unseen_unknown_eighths", "weight of LiDAR-unknown cells in the unseen term, eighths (8 = paper)"),
     ("nonmap_block_cap", "non-map points counted per 0.8 m block (0 = all)"),
     ("nonmap_viewpoints", "true/false: viewpoints aimed at non-map clusters (lives)"),
     ("nonmap_standoff_m", "distance of a non-map viewpoint from its cluster, metres"),
@@ -80,6 +81,10 @@ pub fn apply(cfg: &mut Config, assignment: &str) -> Result<(), String> {
             cfg.camera_fov = BinaryAngle::from_radians(d.to_radians()).ok_or("bad angle")?;
         }
         "min_frontier_cells" => cfg.min_frontier_cells = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a cell count"))?,
+        "unseen_unknown_eighths" => {
+            cfg.unseen_unknown_eighths =
+                v.parse().ok().filter(|e| *e <= 8).ok_or_else(|| format!("`{name}`: expected 0 to 8, got `{v}`"))?
+        }
         "nonmap_block_cap" => cfg.nonmap_block_cap = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a count (0-255)"))?,
         "nonmap_viewpoints" => cfg.nonmap_viewpoints = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
         "nonmap_standoff_m" => cfg.nonmap_standoff_m = meters(name, v)?,
@@ -112,7 +117,7 @@ mod tests {
         for (name, _) in NAMES {
             let value = match *name {
                 "nonmap_viewpoints" => "true",
-                "min_frontier_cells" | "nonmap_block_cap" => "5",
+                "min_frontier_cells" | "nonmap_block_cap" | "unseen_unknown_eighths" => "5",
                 "camera_fov_deg" => "90",
                 _ => "1",
             };
