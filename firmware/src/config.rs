@@ -83,6 +83,9 @@ pub struct Config {
     /// At most this many non-map points count per 0.8 m block in the non-map term (0 = no cap,
     /// the paper's plain count). Default 0.
     pub nonmap_block_cap: u8,
+    /// `lives` and `multisensor` also score the four headings at the robot's own cell (turning in
+    /// place to look is an action). Default false (the paper's candidates).
+    pub look_around_here: bool,
     /// `lives` also scores one viewpoint per cluster of non-map points (an addition to the
     /// paper, whose candidates are frontier centroids only). Default true.
     pub nonmap_viewpoints: bool,
@@ -151,6 +154,7 @@ impl Config {
         w_surface_per_ray: w(0),
         w_frontier_per_cell: w(10),
         w_nonmap_per_point: w(1_500),
+        look_around_here: false,
         nonmap_block_cap: 0,
         nonmap_viewpoints: true,
         nonmap_standoff_m: m(1_500),

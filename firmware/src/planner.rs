@@ -59,6 +59,8 @@ pub enum Site {
     VisualFrontier,
     /// A cluster of non-map points, looked at from `nonmap_standoff_m` (`lives` only).
     NonMapCluster,
+    /// The robot's own cell: turning in place to look (`look_around_here`).
+    Here,
     /// The goal being pursued, re-scored for hysteresis (never a new goal itself).
     Current,
 }
@@ -502,6 +504,10 @@ impl Planner {
                 }
             }
         }
+        if !nearest && cfg.look_around_here && PackedGrid::in_bounds(robot.0, robot.1) {
+            // Turning in place is an action too: the four headings at the robot's own cell.
+            let _ = sites.push((robot, Site::Here, None));
+        }
         if let Some((c, h)) = current {
             if self.distance(c.0, c.1) != UNREACHABLE {
                 let _ = sites.push((c, Site::Current, Some(h)));
@@ -512,7 +518,7 @@ impl Planner {
         let mut current_utility = None;
         let here = GridGeometry::cells(cfg.goal_tolerance_m) as i64 * STEP_STRAIGHT as i64;
         let already_there = |cell: (i32, i32), h: BinaryAngle, d: u16| {
-            cell == robot || (d as i64) <= here && (h - pose.theta).unsigned_abs() <= cfg.goal_heading_tolerance.unsigned_abs()
+            (cell == robot || (d as i64) <= here) && (h - pose.theta).unsigned_abs() <= cfg.goal_heading_tolerance.unsigned_abs()
         };
         for &(site, kind, fixed_heading) in sites.iter() {
             if kind != Site::Current && self.is_blacklisted(site, bl) {

@@ -2,6 +2,8 @@
 //! pictures and benchmarks. The controller itself is the `firmware` crate.
 
 pub mod bench;
+pub mod dataset;
+pub mod labeller;
 pub mod model;
 pub mod overrides;
 pub mod picture;

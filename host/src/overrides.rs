@@ -20,6 +20,7 @@ pub const NAMES: &[(&str, &str)] = &[
     ("min_frontier_cells", "smallest frontier kept, cells"),
     ("unseen_unknown_eighths", "weight of LiDAR-unknown cells in the unseen term, eighths (8 = paper)"),
     ("nonmap_block_cap", "non-map points counted per 0.8 m block (0 = all)"),
+    ("look_around_here", "true/false: score turning in place at the robot's cell"),
     ("nonmap_viewpoints", "true/false: viewpoints aimed at non-map clusters (lives)"),
     ("nonmap_standoff_m", "distance of a non-map viewpoint from its cluster, metres"),
     ("nonmap_pool_radius_m", "pooling radius of non-map points, metres"),
@@ -86,6 +87,7 @@ pub fn apply(cfg: &mut Config, assignment: &str) -> Result<(), String> {
                 v.parse().ok().filter(|e| *e <= 8).ok_or_else(|| format!("`{name}`: expected 0 to 8, got `{v}`"))?
         }
         "nonmap_block_cap" => cfg.nonmap_block_cap = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a count (0-255)"))?,
+        "look_around_here" => cfg.look_around_here = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
         "nonmap_viewpoints" => cfg.nonmap_viewpoints = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
         "nonmap_standoff_m" => cfg.nonmap_standoff_m = meters(name, v)?,
         "nonmap_pool_radius_m" => cfg.nonmap_pool_radius_m = meters(name, v)?,
@@ -116,7 +118,7 @@ mod tests {
         }
         for (name, _) in NAMES {
             let value = match *name {
-                "nonmap_viewpoints" => "true",
+                "nonmap_viewpoints" | "look_around_here" => "true",
                 "min_frontier_cells" | "nonmap_block_cap" | "unseen_unknown_eighths" => "5",
                 "camera_fov_deg" => "90",
                 _ => "1",
