@@ -39,6 +39,8 @@ pub struct NonMapStats {
     pub dropped_seen: u32,
     /// Points refused because the store was full.
     pub dropped_full: u32,
+    /// Points outside the search area (the grid).
+    pub dropped_outside: u32,
 }
 
 /// The fixed-capacity set of non-map points, with a hash index over pooling cells.
@@ -58,7 +60,7 @@ impl NonMapStore {
             points: heapless::Vec::new(),
             index: FnvIndexMap::new(),
             walls: BitGrid::new(),
-            stats: NonMapStats { inserted: 0, pooled: 0, dropped_near_wall: 0, dropped_seen: 0, dropped_full: 0 },
+            stats: NonMapStats { inserted: 0, pooled: 0, dropped_near_wall: 0, dropped_seen: 0, dropped_full: 0, dropped_outside: 0 },
         }
     }
 
@@ -155,6 +157,11 @@ impl NonMapStore {
             }
             let (x, y) = hit_point(pose, b, r);
             let (cx, cy) = geom.cell_of(x, y);
+            if !crate::grid::PackedGrid::in_bounds(cx, cy) {
+                // Outside the search area: nothing there can be looked at.
+                self.stats.dropped_outside += 1;
+                continue;
+            }
             work += 9;
             if Self::inspected(visual, cx, cy) {
                 self.stats.dropped_seen += 1;

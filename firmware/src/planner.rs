@@ -383,6 +383,9 @@ impl Planner {
         for p in nonmap.points() {
             work += 1;
             let (px, py) = lidar.geom.cell_of(p.x, p.y);
+            if !PackedGrid::in_bounds(px, py) {
+                continue;
+            }
             let (dx, dy) = ((px - c.0) as i64, (py - c.1) as i64);
             if dx * dx + dy * dy > r2 {
                 continue;

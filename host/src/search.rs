@@ -323,3 +323,21 @@ pub fn run(spec: &SearchSpec, mut progress: impl FnMut(f64)) -> SearchRun {
 fn round3(v: f64) -> f64 {
     (v * 1000.0).round() / 1000.0
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_cross_the_float_boundary_by_the_ros_conventions() {
+        let min = 0.1;
+        assert_eq!(encode_range(f64::NAN, min), RANGE_INVALID);
+        assert_eq!(encode_range(-1.0, min), RANGE_INVALID);
+        assert_eq!(encode_range(0.05, min), RANGE_INVALID, "below the minimum range");
+        assert_eq!(encode_range(f64::INFINITY, min), RANGE_NO_RETURN);
+        assert_eq!(encode_range(f64::NEG_INFINITY, min), RANGE_INVALID);
+        assert_eq!(encode_range(1e9, min), RANGE_NO_RETURN, "beyond what u16 millimetres hold");
+        assert_eq!(encode_range(1.2344, min), 1234);
+        assert_eq!(encode_range(65.534, min), 65_534);
+    }
+}
