@@ -32,6 +32,7 @@ pub mod frontier;
 pub mod grid;
 pub mod nonmap;
 pub mod planner;
+pub mod protocol;
 pub mod scan;
 
 pub use config::{Config, PlannerKind};
