@@ -41,6 +41,10 @@ enum Cmd {
         /// Print every goal the controller chooses, with its utility terms, to stderr.
         #[arg(long)]
         trace: bool,
+        /// The int8 classifier blob for `lives` (see docs/model-format.md); without it `lives`
+        /// runs on the simulator's ground-truth labels.
+        #[arg(long)]
+        model: Option<PathBuf>,
         /// Override a controller parameter, e.g. `--set w_dist_per_m=2` (repeatable; `lives params` lists them).
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
@@ -147,7 +151,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<ExitCode, String> {
     match cli.command {
-        Cmd::Search { world, scenario, planner, seed, png, json, trace, set } => {
+        Cmd::Search { world, scenario, planner, seed, png, json, trace, model, set } => {
             let (name, w) = load_world(&world, scenario, seed)?;
             let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
             spec.trace = trace;
@@ -156,7 +160,13 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             }
             let pb = progress_bar(spec.world.time_limit_s as u64);
             let t0 = Instant::now();
-            let run = search::run(&spec, |t| pb.set_position(t as u64));
+            if let Some(path) = &model {
+                let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+                spec.model = Some(Box::leak(bytes.into_boxed_slice()));
+            }
+            let run = search::try_run(&spec, |t| pb.set_position(t as u64)).map_err(|e| {
+                format!("{}: the model does not validate: {e:?}", model.as_ref().map(|p| p.display().to_string()).unwrap_or_default())
+            })?;
             let wall = t0.elapsed().as_secs_f64();
             pb.finish_and_clear();
             let r = &run.result;
@@ -197,8 +207,8 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                     wall,
                     sim_s / wall.max(1e-9)
                 );
-                if planner == PlannerChoice::Lives {
-                    say!("note: `lives` runs on the simulator's ground-truth labels until the int8 classifier lands (same as lives-gt)");
+                if planner == PlannerChoice::Lives && r.labels == "ground-truth" {
+                    say!("note: no --model given, so `lives` runs on the simulator's ground-truth labels (same as lives-gt)");
                 }
                 if let Some(p) = &png {
                     say!("picture: {}", p.display());

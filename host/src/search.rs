@@ -44,10 +44,11 @@ impl PlannerChoice {
         }
     }
 
-    /// Where this planner's labels come from.
-    pub fn label_source(self) -> &'static str {
+    /// Where this planner's labels come from, given whether a classifier model is installed.
+    pub fn label_source(self, model: bool) -> &'static str {
         match self {
-            // The int8 classifier is a later issue; until it lands `lives` runs on simulator labels.
+            PlannerChoice::Lives if model => "int8-classifier",
+            // Without a model `lives` runs on simulator labels, like `lives-gt`.
             PlannerChoice::Lives | PlannerChoice::LivesGt => "ground-truth",
             PlannerChoice::Multisensor | PlannerChoice::Nearest => "none",
         }
@@ -94,13 +95,26 @@ pub struct SearchSpec {
     pub controller: Config,
     /// Print every new goal with its utility terms to stderr.
     pub trace: bool,
+    /// The int8 classifier blob for `lives` (validated when the search starts). Without one,
+    /// `lives` runs on the simulator's ground-truth labels.
+    pub model: Option<&'static [u8]>,
 }
 
 impl SearchSpec {
     /// Defaults for `world` / `scenario` / `planner` / `seed`.
     pub fn new(world_name: &str, world: World, scenario: Scenario, planner: PlannerChoice, seed: u64) -> Self {
         let sim = SimConfig { robot_radius_m: 0.25, ..SimConfig::default() };
-        SearchSpec { world_name: world_name.to_string(), world, scenario, planner, seed, sim, controller: Config::DEFAULT, trace: false }
+        SearchSpec {
+            world_name: world_name.to_string(),
+            world,
+            scenario,
+            planner,
+            seed,
+            sim,
+            controller: Config::DEFAULT,
+            trace: false,
+            model: None,
+        }
     }
 }
 
@@ -201,13 +215,30 @@ pub fn controller_config(base: &Config, world: &World, planner: PlannerChoice) -
 }
 
 /// Runs one search to detection, exhaustion or the time limit. `progress` gets the virtual time.
-pub fn run(spec: &SearchSpec, mut progress: impl FnMut(f64)) -> SearchRun {
+/// Fails only if the spec's model blob does not validate.
+pub fn try_run(spec: &SearchSpec, progress: impl FnMut(f64)) -> Result<SearchRun, firmware::classifier::ModelError> {
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
     let mut ctrl = Box::new(Controller::new(cfg));
+    let classifier = spec.planner == PlannerChoice::Lives && spec.model.is_some();
+    if let (true, Some(blob)) = (classifier, spec.model) {
+        ctrl.set_model(blob)?;
+    }
+    Ok(run_with(spec, ctrl, classifier, progress))
+}
+
+/// [`try_run`] for specs without a model (ground-truth or no labels): cannot fail.
+pub fn run(spec: &SearchSpec, progress: impl FnMut(f64)) -> SearchRun {
+    let spec = SearchSpec { model: None, ..spec.clone() };
+    let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
+    run_with(&spec, Box::new(Controller::new(cfg)), false, progress)
+}
+
+fn run_with(spec: &SearchSpec, mut ctrl: Box<Controller>, classifier: bool, mut progress: impl FnMut(f64)) -> SearchRun {
     let mut sim = Sim::new(spec.world.clone(), spec.sim.clone(), spec.seed);
     let start = sim.pose();
     let limit = spec.world.time_limit_s;
-    let use_labels = matches!(spec.planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
+    // Ground-truth labels for lives-gt, and for lives until a classifier model is installed.
+    let use_labels = !classifier && matches!(spec.planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
     let increment = BinaryAngle::from_fraction(1, spec.sim.beams.max(1) as i64);
     let mut trajectory = vec![[start[0], start[1]]];
     let mut goals = Vec::new();
@@ -314,7 +345,7 @@ pub fn run(spec: &SearchSpec, mut progress: impl FnMut(f64)) -> SearchRun {
         blacklisted: status.blacklisted,
         blocked: blocked_count,
         collisions,
-        labels: spec.planner.label_source().to_string(),
+        labels: spec.planner.label_source(classifier).to_string(),
         targets: sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
     };
     SearchRun { result, controller: ctrl, sim, trajectory, start, found_at, goals }

@@ -99,3 +99,17 @@ fn worlds_lists_every_built_in_world_and_exports_a_loadable_file() {
     assert_eq!(v["world"], "office-hard");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_corrupt_model_blob_is_refused_with_a_clear_error() {
+    let dir = std::env::temp_dir().join(format!("lives-cli-model-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("bad.bin");
+    std::fs::write(&path, b"LIVM but not really a model").unwrap();
+    let out = lives().args(["search", "--planner", "lives", "--model"]).arg(&path).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("the model does not validate"), "{stderr}");
+    assert!(!stderr.contains("panicked"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
