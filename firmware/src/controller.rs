@@ -236,6 +236,18 @@ impl Controller {
         Ok(())
     }
 
+    /// Applies a new configuration from the next tick on. If the grid origin changes, the maps,
+    /// points, blacklist and goal no longer line up with the world: they are forgotten as by
+    /// [`Controller::reset`] (idle). Otherwise everything learnt so far is kept.
+    pub fn set_config(&mut self, cfg: Config) {
+        let moved = cfg.origin_x_m != self.cfg.origin_x_m || cfg.origin_y_m != self.cfg.origin_y_m;
+        self.cfg = cfg;
+        if moved {
+            self.lidar.geom = GridGeometry { origin_x: cfg.origin_x_m, origin_y: cfg.origin_y_m };
+            self.reset();
+        }
+    }
+
     /// Forgets everything but the configuration and the model; idle.
     pub fn reset(&mut self) {
         self.classifier.reset();

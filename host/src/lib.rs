@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod dataset;
 pub mod labeller;
+pub mod link;
 pub mod model;
 pub mod overrides;
 pub mod picture;

@@ -76,6 +76,58 @@ enum Cmd {
         #[arg(long, default_value_t = 1)]
         threads: usize,
     },
+    /// The controller core as a process on a serial device (the deployment on the onboard
+    /// computer, or a workstation for testing): sensor frames in, goals out.
+    Node {
+        /// Serial device (/dev/ttyUSB0, /dev/ttyACM0, a pseudo-terminal); waited for if absent.
+        #[arg(long)]
+        port: PathBuf,
+        /// Baud rate (a real UART only; USB CDC and ptys ignore it).
+        #[arg(long, default_value_t = 921_600)]
+        baud: u32,
+        /// Tick when the host's batch for time t is complete, at t (simulation, tests) instead of
+        /// every 200 ms on this process's clock.
+        #[arg(long)]
+        lockstep: bool,
+        /// Stop after this many seconds and print the node's counters as JSON (default: run
+        /// until killed).
+        #[arg(long)]
+        seconds: Option<f64>,
+    },
+    /// The host bridge: feeds a source's poses, scans and detections to `lives node` over a
+    /// serial device, drives the base with the goals that come back, reports link health.
+    Bridge {
+        /// Serial device; waited for if absent, reopened if it disappears.
+        #[arg(long)]
+        port: PathBuf,
+        /// Baud rate (a real UART only).
+        #[arg(long, default_value_t = 921_600)]
+        baud: u32,
+        /// Where the data comes from: `sim` (the simulator; sensors and logs come later).
+        #[arg(long, default_value = "sim")]
+        source: String,
+        /// A built-in world, `random` (with --seed), or a world file (.toml).
+        #[arg(long, default_value = "apartment")]
+        world: String,
+        /// easy or hard (built-in worlds).
+        #[arg(long, default_value = "easy")]
+        scenario: Scenario,
+        /// lives, lives-gt, multisensor or nearest.
+        #[arg(long, default_value = "lives")]
+        planner: PlannerChoice,
+        /// Simulator seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Override a controller parameter sent to the node, e.g. `--set w_dist_per_m=2`.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+        /// The simulator waits for the node each tick (the node must run with --lockstep too).
+        #[arg(long)]
+        lockstep: bool,
+        /// Print one JSON object (result and link health).
+        #[arg(long)]
+        json: bool,
+    },
     /// List the controller parameters `--set` accepts, with their defaults.
     Params,
     /// List the built-in worlds, or print one as a world file.
@@ -290,6 +342,116 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 a.non_map_recall() * 100.0
             );
             Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Node { port, baud, lockstep, seconds } => {
+            use host::link::{run_node, NodeOptions, SerialLink, TimeMode};
+            use std::sync::atomic::{AtomicBool, Ordering};
+            let mode = if lockstep { TimeMode::Lockstep } else { TimeMode::RealTime };
+            let mut link = SerialLink::open(&port, baud).unwrap_or_else(|e| {
+                eprintln!("waiting for {} ({e})", port.display());
+                SerialLink::by_path(&port, baud)
+            });
+            let stop = AtomicBool::new(false);
+            let report = std::thread::scope(|s| {
+                if let Some(secs) = seconds {
+                    let stop = &stop;
+                    s.spawn(move || {
+                        std::thread::sleep(std::time::Duration::from_secs_f64(secs.max(0.0)));
+                        stop.store(true, Ordering::Relaxed);
+                    });
+                }
+                run_node(&mut link, firmware::Config::DEFAULT, NodeOptions::new(mode), &stop)
+            })
+            .map_err(|e| format!("the classifier model: {e:?}"))?;
+            let c = &report.counters;
+            say!(
+                "{}",
+                serde_json::json!({
+                    "mode": format!("{:?}", report.mode),
+                    "ticks": c.ticks,
+                    "frames_in": report.link.frames_ok,
+                    "rejected": report.link.dropped(),
+                    "link": report.link,
+                    "frames_sent": c.frames_sent,
+                    "bytes_sent": c.bytes_sent,
+                    "bytes_received": c.bytes_received,
+                    "goals_sent": c.goals_sent,
+                    "configs_applied": c.configs_applied,
+                    "lockstep_incomplete": c.lockstep_incomplete,
+                    "lockstep_repeats": c.lockstep_repeats,
+                    "tick_us": report.tick_us,
+                    "overruns": report.overruns,
+                    "io_errors": report.io_errors,
+                    "reconnects": report.reconnects,
+                    "wall_s": report.wall_s,
+                })
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Bridge { port, baud, source, world, scenario, planner, seed, set, lockstep, json } => {
+            use host::link::{run_bridge, BridgeOptions, SerialLink, Source, TimeMode};
+            if source != "sim" {
+                return Err(format!("unknown source `{source}` (only `sim` for now)"));
+            }
+            let (name, w) = load_world(&world, scenario, seed)?;
+            let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
+            for a in &set {
+                host::overrides::apply(&mut spec.controller, a)?;
+            }
+            let mode = if lockstep { TimeMode::Lockstep } else { TimeMode::RealTime };
+            let mut link = SerialLink::open(&port, baud).unwrap_or_else(|e| {
+                eprintln!("waiting for {} ({e})", port.display());
+                SerialLink::by_path(&port, baud)
+            });
+            let stop = std::sync::atomic::AtomicBool::new(false);
+            let run = run_bridge(&mut link, Source::Sim(spec), &BridgeOptions::new(mode), &stop).map_err(|e| e.to_string())?;
+            let (r, st) = (&run.result, &run.stats);
+            if json {
+                let goals: Vec<_> = run.goals.iter().map(|((x, y), h)| serde_json::json!([x, y, h.0])).collect();
+                say!("{}", serde_json::json!({ "result": r, "link": st, "goals": goals, "wall_s": run.wall_s }));
+            } else {
+                let ticks = r.ticks.max(1) as f64;
+                say!(
+                    "{} {} {} {} seed {}: {} in {:.1} s (limit {:.0} s), path {:.1} m, {} ticks, {} goals; {:.2} s wall",
+                    if r.found { "FOUND" } else { "NOT FOUND" },
+                    r.world,
+                    r.scenario,
+                    r.planner,
+                    r.seed,
+                    r.outcome,
+                    r.time_s,
+                    r.time_limit_s,
+                    r.path_m,
+                    r.ticks,
+                    r.goals,
+                    run.wall_s
+                );
+                say!(
+                    "link: sent {} frames / {} B ({:.0} B per tick), received {} frames / {} B, rejected {} {:?}",
+                    st.frames_sent,
+                    st.bytes_sent,
+                    st.bytes_sent as f64 / ticks,
+                    st.frames_received,
+                    st.bytes_received,
+                    st.rejected,
+                    st.decoder
+                );
+                say!(
+                    "link: {} retries, {} hellos, {} losses, {} reopenings, {} io errors; round trip p50 {:.0} us p95 {:.0} us; scan frame {} B",
+                    st.retries,
+                    st.hellos_sent,
+                    st.link_losses,
+                    st.reconnects,
+                    st.io_errors,
+                    st.link_rtt_us.p50,
+                    st.link_rtt_us.p95,
+                    st.scan_frame_bytes
+                );
+                if let Some(n) = &st.node_status {
+                    say!("node: {:?}, {} ticks, {} scans, rejected {} {:?}", n.mode, n.ticks, n.scans, n.link.dropped(), n.link);
+                }
+            }
+            Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
         }
         Cmd::Params => {
             say!("{:#?}", firmware::Config::DEFAULT);

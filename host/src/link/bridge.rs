@@ -1,0 +1,800 @@
+//! `lives bridge`: the host side of the serial link.
+//!
+//! The bridge owns the sources (for now the simulator, [`Source::Sim`]) and the base. Each tick it
+//! sends the robot's pose, the LiDAR scan, a detection (if any) and the base's state as frames;
+//! it drives the base with the goals that come back and stops it on `Stop`. It opens the session
+//! with `Hello` (sent again every `hello_interval` until a `HelloAck`, whose version it checks),
+//! sends the controller's configuration for the world, then `Start`.
+//!
+//! **Time.** In [`TimeMode::Lockstep`] the simulator waits for the node: batch `t` (the tick's
+//! frames closed by `Heartbeat { t_us: t }`) is sent, and the tick is done when `Status(t)` and
+//! the echo of that heartbeat are back (and, while exploring, the goal the status counts). A batch
+//! with no echo after `retry_timeout`, or an echo without its `Status` (the node did not get the
+//! whole batch, or its answer was damaged), is sent again, byte for byte: the node ticks a time
+//! once, so a retry never changes the run. With a clean link the run is the in-process
+//! [`crate::search::run`] tick for tick. In [`TimeMode::RealTime`] the bridge sends a batch every
+//! `period` of wall time, moves the base for that period, and applies goals as they arrive.
+//!
+//! **Link loss.** No frame from the node for `watchdog`, or the port failing, is a lost link: the
+//! base is stopped at once, the session is closed, and the bridge keeps reopening the port (when it
+//! has a path) and saying `Hello`. When the node answers again the search resumes: the node sends
+//! its goal again after every `Hello`, and the bridge applies it.
+//!
+//! **Health** ([`LinkStats`]): frames and bytes each way, frames rejected by the decoder (by
+//! cause), batch retries, `Hello`s, losses, reconnections, and the round-trip time of heartbeat
+//! echoes.
+
+use super::{Link, Summary, TimeMode};
+use crate::search::{controller_config, encode_ranges, gt_label, PlannerChoice, SearchResult, SearchSpec, TICK_US};
+use crate::sim::{BaseStatus as SimBase, Sim};
+use firmware::protocol::{
+    encode, BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, GoalMsg, Heartbeat, Hello, HostDecoder, HostToCore, IncompatiblePeer,
+    LinkCounters, PoseMsg, Role, ScanMsg, StatusMsg, WireCommand, WireMode, MAX_FRAME_LEN,
+};
+use firmware::scan::BeamLabel;
+use firmware::{BinaryAngle, GridGeometry, Meters, Pose2, ScanInput};
+use std::collections::VecDeque;
+use std::fmt;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Base sub-steps per tick (as in the in-process loop).
+const SUBSTEPS: u32 = 4;
+/// Heartbeat sequence numbers of the bridge start here (the node's own count from 1).
+const SEQ_BASE: u32 = 0x8000_0000;
+
+/// Where the data comes from.
+#[derive(Clone, Debug)]
+pub enum Source {
+    /// The simulator, with this search's world, scenario, planner and seed.
+    Sim(SearchSpec),
+}
+
+/// How the bridge runs.
+#[derive(Clone, Debug)]
+pub struct BridgeOptions {
+    /// Lockstep (the simulator waits for the node) or real time.
+    pub mode: TimeMode,
+    /// Ask the node for per-scan labels (`Labels` frames, for logging).
+    pub want_labels: bool,
+    /// No frame from the node for this long: the link is lost and the base stops.
+    pub watchdog: Duration,
+    /// Lockstep: a batch without an answer after this long is sent again.
+    pub retry_timeout: Duration,
+    /// `Hello` is sent again after this long without a `HelloAck`.
+    pub hello_interval: Duration,
+    /// Real time: tick period.
+    pub period: Duration,
+    /// Heartbeat probes (with the configuration in the first three) before `Start`: they measure
+    /// the link's round trip with no tick in it.
+    pub setup_probes: u32,
+    /// Back-off between reopen attempts of a failed port.
+    pub reconnect_every: Duration,
+    /// Give up after this much wall time (outcome `stopped`).
+    pub max_wall: Option<Duration>,
+    /// Ticks done, for a watcher (tests, progress bars).
+    pub progress: Option<Arc<AtomicU32>>,
+}
+
+impl BridgeOptions {
+    /// Defaults: 1 s watchdog and hello interval, 250 ms retries, 200 ms period.
+    pub fn new(mode: TimeMode) -> Self {
+        BridgeOptions {
+            mode,
+            want_labels: false,
+            watchdog: Duration::from_secs(1),
+            retry_timeout: Duration::from_millis(250),
+            hello_interval: Duration::from_secs(1),
+            period: Duration::from_micros(TICK_US),
+            setup_probes: 20,
+            reconnect_every: Duration::from_millis(100),
+            max_wall: None,
+            progress: None,
+        }
+    }
+}
+
+/// Link health.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct LinkStats {
+    /// Frames written.
+    pub frames_sent: u64,
+    /// Bytes written.
+    pub bytes_sent: u64,
+    /// Frames decoded.
+    pub frames_received: u64,
+    /// Bytes read.
+    pub bytes_received: u64,
+    /// Frames rejected by the decoder (bad COBS, CRC, body, too long).
+    pub rejected: u64,
+    /// The decoder's counters by cause.
+    pub decoder: LinkCounters,
+    /// Lockstep batches sent again.
+    pub retries: u64,
+    /// `Hello`s sent.
+    pub hellos_sent: u64,
+    /// Times the link was lost (base stopped).
+    pub link_losses: u32,
+    /// Read or write failures.
+    pub io_errors: u32,
+    /// Successful reopenings of a failed port.
+    pub reconnects: u32,
+    /// `Error` frames from the node.
+    pub errors_from_node: u32,
+    /// Round trip of heartbeat probes with no tick in between (setup, real time), µs.
+    pub link_rtt_us: Summary,
+    /// Lockstep: from sending a batch to the echo closing its answer (link + tick), µs.
+    pub batch_rtt_us: Summary,
+    /// Bytes of the last scan frame.
+    pub scan_frame_bytes: usize,
+    /// The node's last status (its own receive counters are in `link`).
+    pub node_status: Option<StatusMsg>,
+}
+
+/// Something that happened on the link.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BridgeEventKind {
+    /// A `HelloAck` opened (or reopened) the session.
+    SessionOpened,
+    /// The link was lost and the base stopped.
+    LinkLost {
+        /// Silence or a port error.
+        cause: String,
+    },
+    /// The port was reopened.
+    Reopened,
+}
+
+/// A timestamped [`BridgeEventKind`].
+#[derive(Clone, Debug)]
+pub struct BridgeEvent {
+    /// When.
+    pub at: Instant,
+    /// Simulated time then.
+    pub sim_s: f64,
+    /// What.
+    pub kind: BridgeEventKind,
+}
+
+/// Why a bridge run could not happen.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BridgeError {
+    /// The node speaks another protocol version (or refused ours).
+    Incompatible(IncompatiblePeer),
+    /// Stopped (flag or `max_wall`) before a session was opened.
+    NoSession,
+}
+
+impl fmt::Display for BridgeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            BridgeError::Incompatible(e) => write!(f, "{e}"),
+            BridgeError::NoSession => f.write_str("no answer from the node (no HelloAck)"),
+        }
+    }
+}
+
+impl std::error::Error for BridgeError {}
+
+/// A search run through the link.
+pub struct BridgeResult {
+    /// As `lives search` reports it (outcome `stopped` if the run was cut short).
+    pub result: SearchResult,
+    /// Every new goal applied to the base, in order (cell and heading), as
+    /// [`crate::search::SearchRun::goals`].
+    pub goals: Vec<((i32, i32), BinaryAngle)>,
+    /// Every `Goal` frame received (repeats included).
+    pub goals_received: Vec<GoalMsg>,
+    /// Link health.
+    pub stats: LinkStats,
+    /// Sessions, losses, reopenings.
+    pub events: Vec<BridgeEvent>,
+    /// Robot positions, one per tick.
+    pub trajectory: Vec<[f64; 2]>,
+    /// Wall time of the run.
+    pub wall_s: f64,
+}
+
+struct Bridge<'l> {
+    link: &'l mut dyn Link,
+    opts: BridgeOptions,
+    stop: &'l AtomicBool,
+    started: Instant,
+    dec: HostDecoder,
+    buf: Vec<u8>,
+    enc: Vec<u8>,
+    st: LinkStats,
+    link_rtt: Vec<f64>,
+    batch_rtt: Vec<f64>,
+    probes: VecDeque<(u32, u64, Instant, bool)>,
+    seq: u32,
+    events: Vec<BridgeEvent>,
+    open: bool,
+    was_open: bool,
+    lost: bool,
+    down: bool,
+    last_rx: Instant,
+    last_hello: Option<Instant>,
+    last_reopen: Instant,
+    incompatible: Option<IncompatiblePeer>,
+    sim: Sim,
+    goal: Option<GoalMsg>,
+    status: Option<StatusMsg>,
+    goals_received: Vec<GoalMsg>,
+    applied_seq: Option<u32>,
+    /// The goal the base was driving to when the link was lost.
+    interrupted_seq: Option<u32>,
+}
+
+impl<'l> Bridge<'l> {
+    fn frame(&mut self, m: &HostToCore) -> Vec<u8> {
+        match encode(m, &mut self.enc) {
+            Ok(f) => f.to_vec(),
+            Err(e) => panic!("a host message must always fit a frame buffer: {e}"),
+        }
+    }
+
+    fn should_stop(&self) -> bool {
+        self.stop.load(Ordering::Relaxed) || self.opts.max_wall.is_some_and(|m| self.started.elapsed() >= m)
+    }
+
+    fn event(&mut self, kind: BridgeEventKind) {
+        self.events.push(BridgeEvent { at: Instant::now(), sim_s: self.sim.time_s(), kind });
+    }
+
+    /// The link is gone: stop the base now, close the session.
+    fn lose(&mut self, cause: String) {
+        self.open = false;
+        if let Some(seq) = self.applied_seq.take() {
+            self.interrupted_seq = Some(seq);
+        }
+        if self.was_open && !self.lost {
+            self.lost = true;
+            self.sim.stop_base();
+            self.st.link_losses += 1;
+            self.event(BridgeEventKind::LinkLost { cause });
+        }
+    }
+
+    fn send(&mut self, bytes: &[u8]) -> bool {
+        if self.down {
+            return false;
+        }
+        match self.link.write_all(bytes) {
+            Ok(()) => {
+                self.st.frames_sent += bytes.iter().filter(|&&b| b == 0).count() as u64;
+                self.st.bytes_sent += bytes.len() as u64;
+                true
+            }
+            Err(e) => {
+                self.st.io_errors += 1;
+                self.down = true;
+                self.last_reopen = Instant::now();
+                self.lose(format!("write failed on {}: {e}", self.link.describe()));
+                false
+            }
+        }
+    }
+
+    /// A heartbeat probe at `t_us`; `link_only` if no tick answers it.
+    fn probe(&mut self, t_us: u64, link_only: bool) -> (u32, Vec<u8>) {
+        self.seq = self.seq.wrapping_add(1);
+        let seq = SEQ_BASE | (self.seq & !SEQ_BASE);
+        if self.probes.len() >= 64 {
+            self.probes.pop_front();
+        }
+        self.probes.push_back((seq, t_us, Instant::now(), link_only));
+        (seq, self.frame(&HostToCore::Heartbeat(Heartbeat { t_us, seq })))
+    }
+
+    fn handle(&mut self, m: &CoreToHost) {
+        match m {
+            CoreToHost::HelloAck(a) => match a.check() {
+                Ok(()) => {
+                    if !self.open {
+                        self.open = true;
+                        self.was_open = true;
+                        self.lost = false;
+                        self.event(BridgeEventKind::SessionOpened);
+                    }
+                }
+                Err(e) => self.incompatible = Some(e),
+            },
+            CoreToHost::Heartbeat(h) => {
+                if let Some(i) = self.probes.iter().position(|p| p.0 == h.seq && p.1 == h.t_us) {
+                    if let Some((_, _, sent, link_only)) = self.probes.remove(i) {
+                        let us = sent.elapsed().as_secs_f64() * 1e6;
+                        if link_only { &mut self.link_rtt } else { &mut self.batch_rtt }.push(us);
+                    }
+                }
+            }
+            CoreToHost::Goal(g) => {
+                self.goals_received.push(g.clone());
+                self.goal = Some(g.clone());
+            }
+            CoreToHost::Status(s) => {
+                self.status = Some(*s);
+                self.st.node_status = Some(*s);
+            }
+            CoreToHost::Error(_) => self.st.errors_from_node += 1,
+            CoreToHost::Stop(_) | CoreToHost::Labels(_) => {}
+        }
+    }
+
+    /// Reads for up to `wait`, handles what came, watches the link. Returns the messages.
+    fn poll(&mut self, wait: Duration) -> Vec<CoreToHost> {
+        let mut got = Vec::new();
+        let now = Instant::now();
+        if self.down {
+            std::thread::sleep(wait.min(self.opts.reconnect_every));
+            if self.last_reopen.elapsed() >= self.opts.reconnect_every {
+                self.last_reopen = Instant::now();
+                if self.link.reconnect().is_ok() {
+                    self.down = false;
+                    self.st.reconnects += 1;
+                    self.dec.clear();
+                    self.last_rx = Instant::now();
+                    self.last_hello = None;
+                    self.event(BridgeEventKind::Reopened);
+                }
+            }
+        } else {
+            // Wake in time for the watchdog.
+            let left = (self.last_rx + self.opts.watchdog).saturating_duration_since(now);
+            let wait = if self.open && !left.is_zero() { wait.min(left) } else { wait };
+            match self.link.read(&mut self.buf, wait) {
+                Ok(n) => {
+                    self.st.bytes_received += n as u64;
+                    let bytes = std::mem::take(&mut self.buf);
+                    let msgs: Vec<_> = self.dec.feed(&bytes[..n]).flatten().collect();
+                    self.buf = bytes;
+                    for m in msgs {
+                        self.last_rx = Instant::now();
+                        self.st.frames_received += 1;
+                        self.handle(&m);
+                        got.push(m);
+                    }
+                }
+                Err(e) => {
+                    self.st.io_errors += 1;
+                    self.down = true;
+                    self.last_reopen = Instant::now();
+                    self.lose(format!("read failed on {}: {e}", self.link.describe()));
+                    std::thread::sleep(wait.min(self.opts.reconnect_every));
+                }
+            }
+        }
+        if self.open && self.last_rx.elapsed() >= self.opts.watchdog {
+            let cause = format!("no frame from the node for {:?}", self.opts.watchdog);
+            self.lose(cause);
+        }
+        if !self.open && !self.down && self.last_hello.is_none_or(|t| t.elapsed() >= self.opts.hello_interval) {
+            let hello = self.frame(&HostToCore::Hello(Hello::new(Role::Simulator, self.opts.want_labels)));
+            self.last_hello = Some(Instant::now());
+            if self.send(&hello) {
+                self.st.hellos_sent += 1;
+            }
+        }
+        got
+    }
+
+    /// Until a session is open. `Err` on an incompatible node; `Ok(false)` if told to stop.
+    fn await_session(&mut self) -> Result<bool, BridgeError> {
+        while !self.open {
+            if let Some(e) = self.incompatible {
+                return Err(BridgeError::Incompatible(e));
+            }
+            if self.should_stop() {
+                return Ok(false);
+            }
+            self.poll(Duration::from_millis(20));
+        }
+        Ok(true)
+    }
+
+    /// Opens the session, sends the configuration, measures the link.
+    fn setup(&mut self, config: &ConfigMsg) -> Result<(), BridgeError> {
+        if !self.await_session()? {
+            return Err(BridgeError::NoSession);
+        }
+        let cfg = self.frame(&HostToCore::Config(*config));
+        for i in 0..self.opts.setup_probes.max(3) {
+            let mut bytes = if i < 3 { cfg.clone() } else { Vec::new() };
+            let (seq, hb) = self.probe(0, true);
+            bytes.extend(hb);
+            self.send(&bytes);
+            let t0 = Instant::now();
+            while t0.elapsed() < self.opts.retry_timeout && !self.should_stop() {
+                let got = self.poll(Duration::from_millis(20));
+                if got.iter().any(|m| matches!(m, CoreToHost::Heartbeat(h) if h.seq == seq)) {
+                    break;
+                }
+            }
+            if !self.await_session()? {
+                return Err(BridgeError::NoSession);
+            }
+        }
+        Ok(())
+    }
+
+    /// Drives the base to `g` unless it already is. The goal interrupted by a lost link resumes
+    /// from the path segment nearest the robot, not from the path's start (already driven).
+    fn apply_goal(&mut self, g: &GoalMsg) -> bool {
+        if self.applied_seq == Some(g.seq) {
+            return false;
+        }
+        let mut path: Vec<[f64; 2]> = g.waypoints().map(|(x, y)| [x.to_num::<f64>(), y.to_num::<f64>()]).collect();
+        if self.interrupted_seq == Some(g.seq) {
+            let p = self.sim.pose();
+            path = resume_from(&path, [p[0], p[1]]);
+        }
+        self.sim.set_path(&path, Some(BinaryAngle(g.theta).to_radians()));
+        self.applied_seq = Some(g.seq);
+        self.interrupted_seq = None;
+        true
+    }
+
+    /// While exploring, the status counts `goals` goals and the current one has that `seq`: it must
+    /// be here (none yet if the count is 0, e.g. exploring without a valid pose).
+    fn goal_consistent(&self, s: &StatusMsg) -> bool {
+        s.mode != WireMode::Exploring || s.goals == 0 || self.goal.as_ref().is_some_and(|g| g.seq == s.goals)
+    }
+}
+
+/// The rest of `path` for a robot at `p`: from the end of the segment nearest to it.
+fn resume_from(path: &[[f64; 2]], p: [f64; 2]) -> Vec<[f64; 2]> {
+    let seg_dist = |a: [f64; 2], b: [f64; 2]| {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let len2 = dx * dx + dy * dy;
+        let t = if len2 > 0.0 { (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0) } else { 0.0 };
+        (a[0] + t * dx - p[0]).hypot(a[1] + t * dy - p[1])
+    };
+    let best = (0..path.len().saturating_sub(1)).min_by(|&i, &j| seg_dist(path[i], path[i + 1]).total_cmp(&seg_dist(path[j], path[j + 1])));
+    match best {
+        Some(i) => path[i + 1..].to_vec(),
+        None => path.to_vec(),
+    }
+}
+
+/// Records a goal applied to the base in the run's decision list (once per `seq`: a goal resumed
+/// after a lost link is the same decision).
+fn note_goal(goals: &mut Vec<((i32, i32), BinaryAngle)>, recorded: &mut Option<u32>, geom: &GridGeometry, g: &GoalMsg) {
+    if *recorded != Some(g.seq) {
+        *recorded = Some(g.seq);
+        goals.push((geom.cell_of(Meters::from_bits(g.x), Meters::from_bits(g.y)), BinaryAngle(g.theta)));
+    }
+}
+
+fn round3(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0
+}
+
+/// Runs the search of `source` through the node at the other end of `link` until the target is
+/// found, the search is exhausted, the time limit passes, or `stop` is set.
+pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, stop: &AtomicBool) -> Result<BridgeResult, BridgeError> {
+    let Source::Sim(spec) = source;
+    let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
+    let geom = GridGeometry { origin_x: cfg.origin_x_m, origin_y: cfg.origin_y_m };
+    let sim = Sim::new(spec.world.clone(), spec.sim.clone(), spec.seed);
+    let mut b = Bridge {
+        link,
+        opts: opts.clone(),
+        stop,
+        started: Instant::now(),
+        dec: HostDecoder::new(),
+        buf: vec![0u8; 16384],
+        enc: vec![0u8; MAX_FRAME_LEN],
+        st: LinkStats::default(),
+        link_rtt: Vec::new(),
+        batch_rtt: Vec::new(),
+        probes: VecDeque::new(),
+        seq: 0,
+        events: Vec::new(),
+        open: false,
+        was_open: false,
+        lost: false,
+        down: false,
+        last_rx: Instant::now(),
+        last_hello: None,
+        last_reopen: Instant::now(),
+        incompatible: None,
+        sim,
+        goal: None,
+        status: None,
+        goals_received: Vec::new(),
+        applied_seq: None,
+        interrupted_seq: None,
+    };
+    let config_msg = ConfigMsg::from_config(&cfg);
+    b.setup(&config_msg)?;
+
+    let start = b.sim.pose();
+    let limit = spec.world.time_limit_s;
+    // As in the in-process loop: ground-truth labels unless `lives` runs the node's classifier
+    // (then the node must have been started with the same model, see `NodeOptions::model`).
+    let classifier = spec.planner == PlannerChoice::Lives && spec.model.is_some();
+    let use_labels = !classifier && matches!(spec.planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
+    let increment = BinaryAngle::from_fraction(1, spec.sim.beams.max(1) as i64);
+    let mut trajectory = vec![[start[0], start[1]]];
+    let mut goals = Vec::new();
+    let mut recorded_seq = None;
+    let (mut ticks, mut blocked_count, mut collisions) = (0u32, 0u32, 0u32);
+    let mut base_blocked = false;
+    let mut outcome = "time-limit";
+    let mut need_start = true;
+    let mut last_beat = Instant::now();
+    let realtime = opts.mode == TimeMode::RealTime;
+    let mut next_tick = Instant::now();
+
+    'run: loop {
+        if b.should_stop() {
+            outcome = "stopped";
+            break;
+        }
+        if let Some(e) = b.incompatible {
+            return Err(BridgeError::Incompatible(e));
+        }
+        if realtime && Instant::now() < next_tick {
+            // Between ticks: apply what the node says.
+            let wait = next_tick.saturating_duration_since(Instant::now()).min(Duration::from_millis(20));
+            for m in b.poll(wait) {
+                match m {
+                    CoreToHost::Goal(g) if b.open && b.apply_goal(&g) => note_goal(&mut goals, &mut recorded_seq, &geom, &g),
+                    CoreToHost::Stop(_) => b.sim.stop_base(),
+                    CoreToHost::Status(s) => {
+                        need_start = s.mode == WireMode::Idle;
+                        match s.mode {
+                            WireMode::TargetFound => {
+                                outcome = "found";
+                                break 'run;
+                            }
+                            WireMode::Exhausted => {
+                                outcome = "exhausted";
+                                break 'run;
+                            }
+                            _ => {}
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            continue;
+        }
+
+        // A tick: the base moved for a period (real time), then sense and send.
+        if realtime && ticks > 0 {
+            base_blocked = false;
+            for _ in 0..SUBSTEPS {
+                if b.sim.step(opts.period.as_secs_f64() / SUBSTEPS as f64) == SimBase::Blocked {
+                    base_blocked = true;
+                }
+            }
+            blocked_count += base_blocked as u32;
+            let q = b.sim.pose();
+            trajectory.push([q[0], q[1]]);
+            collisions += b.sim.collides([q[0], q[1]]) as u32;
+            if b.sim.time_s() >= limit {
+                break;
+            }
+        }
+        let now_us = if realtime { (b.sim.time_s() * 1e6).round() as u64 } else { ticks as u64 * TICK_US };
+        let p = b.sim.pose();
+        let scan = b.sim.scan();
+        let ranges = encode_ranges(&scan, spec.sim.lidar_min_range_m);
+        let labels: Vec<BeamLabel> = scan.hits.iter().map(|&h| gt_label(h)).collect();
+        let detected = b.sim.detect().is_some();
+        let scan_in = ScanInput {
+            angle_min: BinaryAngle::from_radians(scan.angle_min).unwrap_or(BinaryAngle::HALF),
+            angle_increment: BinaryAngle::from_radians(scan.angle_increment).unwrap_or(increment),
+            ranges_mm: &ranges,
+            labels: use_labels.then_some(&labels[..]),
+        };
+        let scan_msg = match ScanMsg::from_scan_input(now_us, &scan_in) {
+            Ok(m) => m,
+            Err(e) => panic!("the simulator's {} beams must fit a scan frame: {e:?}", ranges.len()),
+        };
+        let mut batch = Vec::new();
+        if need_start {
+            if ticks > 0 {
+                // The node is idle (it restarted, or missed Start): configure it again.
+                batch.extend(b.frame(&HostToCore::Config(config_msg)));
+            }
+            batch.extend(b.frame(&HostToCore::Command(WireCommand::Start)));
+        }
+        batch.extend(b.frame(&HostToCore::BaseStatus(BaseStatus { blocked: base_blocked })));
+        let pose = Pose2::from_f64(p[0], p[1], p[2]).unwrap_or_default();
+        batch.extend(b.frame(&HostToCore::Pose(PoseMsg::from_pose(now_us, &pose))));
+        if detected {
+            batch.extend(b.frame(&HostToCore::Detection(DetectionMsg { t_us: now_us, position: None })));
+        }
+        let scan_frame = b.frame(&HostToCore::Scan(scan_msg));
+        b.st.scan_frame_bytes = scan_frame.len();
+        batch.extend(scan_frame);
+
+        if realtime {
+            if b.open {
+                if last_beat.elapsed() >= Duration::from_secs(1) {
+                    last_beat = Instant::now();
+                    let (_, hb) = b.probe(now_us, true);
+                    batch.extend(hb);
+                }
+                b.send(&batch);
+            }
+            ticks += 1;
+            next_tick += opts.period;
+            if next_tick < Instant::now() {
+                next_tick = Instant::now() + opts.period;
+            }
+            if let Some(pr) = &opts.progress {
+                pr.store(ticks, Ordering::Relaxed);
+            }
+            continue;
+        }
+
+        // Lockstep: send until the node has answered this batch.
+        let mut attempts = 0u32;
+        let status = loop {
+            if !b.await_session().unwrap_or(false) || b.should_stop() {
+                if let Some(e) = b.incompatible {
+                    return Err(BridgeError::Incompatible(e));
+                }
+                outcome = "stopped";
+                break 'run;
+            }
+            if attempts > 0 {
+                b.st.retries += 1;
+            }
+            attempts += 1;
+            let (seq, hb) = b.probe(now_us, false);
+            let mut bytes = batch.clone();
+            bytes.extend(hb);
+            b.send(&bytes);
+            let sent = Instant::now();
+            let mut status_t = None;
+            let mut echoed = false;
+            while b.open && !echoed && sent.elapsed() < b.opts.retry_timeout && !b.should_stop() {
+                for m in b.poll(Duration::from_millis(20)) {
+                    match m {
+                        CoreToHost::Status(s) if s.t_us == now_us => status_t = Some(s),
+                        // The echo of any attempt at this batch closes its answer.
+                        CoreToHost::Heartbeat(h) if h.t_us == now_us && h.seq & SEQ_BASE != 0 => echoed = h.seq <= seq,
+                        _ => {}
+                    }
+                }
+            }
+            if let Some(s) = status_t {
+                // (After a few complete answers without the goal, go on without it rather than
+                // retry for ever; never seen, a guard.)
+                if echoed && (b.goal_consistent(&s) || attempts >= 8) {
+                    break s;
+                }
+            }
+        };
+        ticks += 1;
+        if let Some(pr) = &opts.progress {
+            pr.store(ticks, Ordering::Relaxed);
+        }
+        need_start = status.mode == WireMode::Idle;
+        match status.mode {
+            WireMode::TargetFound => {
+                outcome = "found";
+                break;
+            }
+            WireMode::Exhausted => {
+                outcome = "exhausted";
+                break;
+            }
+            _ => {}
+        }
+        if status.mode != WireMode::Exploring {
+            b.sim.stop_base();
+        } else if let Some(g) = b.goal.clone() {
+            if b.apply_goal(&g) {
+                note_goal(&mut goals, &mut recorded_seq, &geom, &g);
+            }
+        }
+        base_blocked = false;
+        for _ in 0..SUBSTEPS {
+            if b.sim.step(TICK_US as f64 / 1e6 / SUBSTEPS as f64) == SimBase::Blocked {
+                base_blocked = true;
+            }
+        }
+        blocked_count += base_blocked as u32;
+        let q = b.sim.pose();
+        trajectory.push([q[0], q[1]]);
+        collisions += b.sim.collides([q[0], q[1]]) as u32;
+        if b.sim.time_s() >= limit {
+            break;
+        }
+    }
+
+    let found = outcome == "found";
+    let status = b.st.node_status;
+    b.st.decoder = b.dec.counters();
+    b.st.rejected = b.dec.counters().dropped() as u64;
+    b.st.link_rtt_us = Summary::of(&b.link_rtt);
+    b.st.batch_rtt_us = Summary::of(&b.batch_rtt);
+    let result = SearchResult {
+        world: spec.world_name.clone(),
+        scenario: spec.scenario.to_string(),
+        planner: spec.planner.to_string(),
+        seed: spec.seed,
+        found,
+        time_s: if found { round3(b.sim.time_s()) } else { limit },
+        path_m: round3(b.sim.path_length_m()),
+        ticks,
+        time_limit_s: limit,
+        outcome: outcome.to_string(),
+        goals: status.map_or(0, |s| s.goals),
+        blacklisted: status.map_or(0, |s| s.blacklisted),
+        blocked: blocked_count,
+        collisions,
+        labels: spec.planner.label_source(classifier).to_string(),
+        targets: b.sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
+    };
+    Ok(BridgeResult {
+        result,
+        goals,
+        goals_received: b.goals_received,
+        stats: b.st,
+        events: b.events,
+        trajectory,
+        wall_s: b.started.elapsed().as_secs_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::{mem_pair, Link};
+    use crate::sim::{Scenario, World};
+    use firmware::protocol::{AckReason, CoreDecoder, HelloAck, PROTOCOL_VERSION};
+
+    #[test]
+    fn hello_is_repeated_until_answered_and_an_incompatible_node_is_refused_clearly() {
+        let (mut node_end, mut bridge_end) = mem_pair();
+        // A node of version 99 that answers only the third Hello.
+        let fake = std::thread::spawn(move || {
+            let mut dec = CoreDecoder::new();
+            let mut buf = [0u8; 4096];
+            let mut hellos = 0;
+            let t0 = Instant::now();
+            while hellos < 3 && t0.elapsed() < Duration::from_secs(5) {
+                let n = node_end.read(&mut buf, Duration::from_millis(10)).unwrap_or(0);
+                for m in dec.feed(&buf[..n]).flatten() {
+                    if let HostToCore::Hello(h) = m {
+                        assert_eq!(h.version, PROTOCOL_VERSION);
+                        hellos += 1;
+                    }
+                }
+            }
+            let ack = HelloAck { version: 99, accepted: false, reason: AckReason::VersionMismatch };
+            let mut out = [0u8; 64];
+            node_end.write_all(encode(&CoreToHost::HelloAck(ack), &mut out).unwrap()).unwrap();
+            std::thread::sleep(Duration::from_millis(200));
+            hellos
+        });
+        let spec =
+            SearchSpec::new("apartment", World::builtin("apartment", Scenario::Easy).unwrap(), Scenario::Easy, PlannerChoice::LivesGt, 1);
+        let opts = BridgeOptions {
+            hello_interval: Duration::from_millis(50),
+            max_wall: Some(Duration::from_secs(5)),
+            ..BridgeOptions::new(TimeMode::Lockstep)
+        };
+        let err = run_bridge(&mut bridge_end, Source::Sim(spec), &opts, &AtomicBool::new(false)).err().expect("refused");
+        assert_eq!(err, BridgeError::Incompatible(IncompatiblePeer { ours: PROTOCOL_VERSION, theirs: 99 }));
+        let text = err.to_string();
+        assert!(text.contains("v99") && text.contains("incompatible"), "{text}");
+        assert_eq!(fake.join().unwrap(), 3);
+    }
+
+    #[test]
+    fn an_interrupted_path_resumes_past_what_was_driven() {
+        let path = [[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]];
+        assert_eq!(resume_from(&path, [1.0, 0.1]), path[1..].to_vec());
+        assert_eq!(resume_from(&path, [2.1, 1.5]), path[2..].to_vec());
+        assert_eq!(resume_from(&path, [-1.0, 0.0]), path[1..].to_vec());
+        assert_eq!(resume_from(&path[..1], [5.0, 5.0]), path[..1].to_vec());
+    }
+}

@@ -1,0 +1,410 @@
+//! End-to-end: the controller as a serial node and the host bridge on the two ends of a real
+//! pseudo-terminal pair (issue 5's acceptance tests). The node and bridge loops run as library
+//! functions in threads (`lives node` / `lives bridge` are thin wrappers around them).
+//!
+//! Pseudo-terminals are made one at a time and these tests run one at a time (`PTY`).
+
+use firmware::node::TimeMode;
+use firmware::protocol::GoalMsg;
+use firmware::Config;
+use host::link::{
+    run_bridge, BridgeEventKind, BridgeOptions, BridgeResult, FaultConfig, FaultHandle, FaultyLink, Link, NodeOptions, NodeProcess,
+    NodeReport, SerialLink, Source,
+};
+use host::search::{self, PlannerChoice, SearchSpec};
+use host::sim::{Scenario, World};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+static PTY: Mutex<()> = Mutex::new(());
+
+fn spec(world: &str, scenario: Scenario, planner: PlannerChoice, seed: u64) -> SearchSpec {
+    SearchSpec::new(world, World::builtin(world, scenario).expect("built-in world"), scenario, planner, seed)
+}
+
+fn node_opts(mode: TimeMode) -> NodeOptions {
+    NodeOptions { record_goals: true, ..NodeOptions::new(mode) }
+}
+
+/// Runs a node on `node_link` in a thread and the bridge on `bridge_link` here; stops the node
+/// once the bridge is done.
+fn run_pair(
+    mut node_link: Box<dyn Link>,
+    mut bridge_link: Box<dyn Link>,
+    spec: &SearchSpec,
+    bopts: &BridgeOptions,
+    nopts: NodeOptions,
+) -> (BridgeResult, NodeReport) {
+    let stop_node = AtomicBool::new(false);
+    let stop_bridge = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        let node = s.spawn(|| {
+            let mut p = NodeProcess::new(Config::DEFAULT, nopts).expect("no model");
+            p.run(&mut *node_link, &stop_node);
+            p.report()
+        });
+        let r = run_bridge(&mut *bridge_link, Source::Sim(spec.clone()), bopts, &stop_bridge).expect("a session");
+        // Let the node read what is still on the line, then stop it.
+        std::thread::sleep(Duration::from_millis(300));
+        stop_node.store(true, Ordering::Relaxed);
+        (r, node.join().expect("node thread"))
+    })
+}
+
+/// Every goal the bridge received is one the node sent (byte-for-byte equal values).
+fn assert_goals_came_from_the_node(r: &BridgeResult, n: &NodeReport) {
+    assert!(!r.goals_received.is_empty());
+    for g in &r.goals_received {
+        assert!(n.goals_sent.contains(g), "goal seq {} was never sent by the node: {g:?}", g.seq);
+    }
+    let sent_seqs: Vec<u32> = n.goals_sent.iter().map(|g: &GoalMsg| g.seq).collect();
+    assert!(r.goals.len() <= sent_seqs.len());
+}
+
+fn figures(label: &str, r: &BridgeResult, n: &NodeReport) {
+    let st = &r.stats;
+    let ticks = r.result.ticks.max(1) as f64;
+    eprintln!(
+        "[{label}] {} in {:.1} s simulated, {} ticks, {:.2} s wall ({:.0} ticks/s, {:.0}x real time)",
+        r.result.outcome,
+        r.result.time_s,
+        r.result.ticks,
+        r.wall_s,
+        ticks / r.wall_s,
+        ticks * 0.2 / r.wall_s
+    );
+    eprintln!(
+        "[{label}] host->core {} frames {} B ({:.1} frames/tick, {:.0} B/tick = {:.1} kB/s at 5 Hz); core->host {} frames {} B ({:.1} frames/tick, {:.0} B/tick = {:.2} kB/s at 5 Hz); scan frame {} B",
+        st.frames_sent,
+        st.bytes_sent,
+        st.frames_sent as f64 / ticks,
+        st.bytes_sent as f64 / ticks,
+        st.bytes_sent as f64 / ticks * 5.0 / 1000.0,
+        st.frames_received,
+        st.bytes_received,
+        st.frames_received as f64 / ticks,
+        st.bytes_received as f64 / ticks,
+        st.bytes_received as f64 / ticks * 5.0 / 1000.0,
+        st.scan_frame_bytes
+    );
+    eprintln!(
+        "[{label}] node: {} frames in / {:.0} frames/s over the run; tick {:.2} ms mean, {:.2} ms p95, {:.2} ms max",
+        n.link.frames_ok,
+        n.link.frames_ok as f64 / r.wall_s,
+        n.tick_us.mean / 1e3,
+        n.tick_us.p95 / 1e3,
+        n.tick_us.max / 1e3
+    );
+    eprintln!(
+        "[{label}] link RTT (heartbeat echo, no tick) p50 {:.0} us p95 {:.0} us max {:.0} us (n={}); batch round trip (incl. tick) p50 {:.2} ms p95 {:.2} ms max {:.2} ms",
+        st.link_rtt_us.p50,
+        st.link_rtt_us.p95,
+        st.link_rtt_us.max,
+        st.link_rtt_us.n,
+        st.batch_rtt_us.p50 / 1e3,
+        st.batch_rtt_us.p95 / 1e3,
+        st.batch_rtt_us.max / 1e3
+    );
+    eprintln!(
+        "[{label}] bridge rejected {} {:?}; node rejected {} {:?}; retries {}, hellos {}, losses {}, reconnects {}, io errors {}; node incomplete {} repeats {} goals sent {}",
+        st.rejected,
+        st.decoder,
+        n.link.dropped(),
+        n.link,
+        st.retries,
+        st.hellos_sent,
+        st.link_losses,
+        st.reconnects,
+        st.io_errors,
+        n.counters.lockstep_incomplete,
+        n.counters.lockstep_repeats,
+        n.counters.goals_sent
+    );
+}
+
+#[test]
+fn node_and_bridge_on_a_pty_pair_find_the_target_and_change_nothing() {
+    let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
+    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    let t0 = Instant::now();
+    let inproc = search::run(&sp, |_| {});
+    let inproc_wall = t0.elapsed().as_secs_f64();
+    assert!(inproc.result.found);
+
+    let (master, slave) = SerialLink::pty_pair().expect("a pseudo-terminal pair");
+    let bopts = BridgeOptions { max_wall: Some(Duration::from_secs(240)), ..BridgeOptions::new(TimeMode::Lockstep) };
+    let (r, n) = run_pair(Box::new(slave), Box::new(master), &sp, &bopts, node_opts(TimeMode::Lockstep));
+    figures("clean pty", &r, &n);
+    eprintln!("[clean pty] in-process run: {inproc_wall:.2} s wall");
+
+    assert!(r.result.found, "{:?}", r.result);
+    // The link changes nothing: same decisions, same path, same result.
+    assert_eq!(r.goals, inproc.goals, "the goal sequence differs from the in-process run");
+    assert_eq!(r.trajectory, inproc.trajectory);
+    assert_eq!(r.result, inproc.result);
+    assert_goals_came_from_the_node(&r, &n);
+    // A clean line: nothing rejected either way, no loss.
+    assert_eq!(r.stats.rejected, 0);
+    assert_eq!(n.link.dropped(), 0);
+    assert_eq!(r.stats.link_losses, 0);
+    assert_eq!(n.counters.lockstep_incomplete, 0);
+}
+
+/// Both directions damaged: `node_faults` on what the node reads, `bridge_faults` on what the
+/// bridge reads.
+fn faulty_run(
+    sp: &SearchSpec,
+    node_faults: FaultConfig,
+    bridge_faults: FaultConfig,
+    max_wall: Duration,
+) -> (BridgeResult, NodeReport, host::link::FaultStats, host::link::FaultStats) {
+    let (master, slave) = SerialLink::pty_pair().expect("a pseudo-terminal pair");
+    let node_end = FaultyLink::new(slave, node_faults, 11);
+    let bridge_end = FaultyLink::new(master, bridge_faults, 12);
+    let (ns, bs) = (node_end.stats_handle(), bridge_end.stats_handle());
+    // A pty answers in well under a millisecond: retry sooner than the default (250 ms, sized for
+    // a UART at 921 600 baud where a scan frame alone takes 30 ms).
+    let bopts =
+        BridgeOptions { max_wall: Some(max_wall), retry_timeout: Duration::from_millis(100), ..BridgeOptions::new(TimeMode::Lockstep) };
+    let (r, n) = run_pair(Box::new(node_end), Box::new(bridge_end), sp, &bopts, node_opts(TimeMode::Lockstep));
+    let (ns, bs) = (*ns.lock().unwrap(), *bs.lock().unwrap());
+    (r, n, ns, bs)
+}
+
+#[test]
+fn under_corruption_and_dropped_frames_the_search_still_finds_the_target() {
+    let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
+    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    // 1 % of frames get a corrupted byte, plus a 1e-4 per-byte error rate (a 2.7 kB scan frame is
+    // hit 24 % of the time), and 5 % of frames are lost — in both directions.
+    let faults = FaultConfig { corrupt_frame_prob: 0.01, corrupt_byte_prob: 1e-4, drop_frame_prob: 0.05, ..FaultConfig::default() };
+    let (r, n, ns, bs) = faulty_run(&sp, faults.clone(), faults, Duration::from_secs(400));
+    figures("faulty pty", &r, &n);
+    eprintln!("[faulty pty] faults on the node's input {ns:?}");
+    eprintln!("[faulty pty] faults on the bridge's input {bs:?}");
+
+    assert!(r.result.found, "{:?}", r.result);
+    assert!(ns.frames_damaged > 20 && bs.frames_damaged > 5 && ns.frames_dropped > 50, "the faults happened: {ns:?} {bs:?}");
+    // Every damaged frame was counted as rejected, on both sides, and nothing else was.
+    assert_eq!(n.link.dropped() as u64, ns.frames_damaged, "node: {:?} vs {ns:?}", n.link);
+    assert_eq!(r.stats.rejected, bs.frames_damaged, "bridge: {:?} vs {bs:?}", r.stats.decoder);
+    // No goal from a damaged frame: every goal the bridge took is one the node sent.
+    assert_goals_came_from_the_node(&r, &n);
+    assert!(r.stats.retries > 0);
+    // Retries resend the same batch and the node ticks each time once: the decisions match the
+    // clean run unless a lost Detection/BaseStatus frame changed an input (reported, not required).
+    let inproc = search::run(&sp, |_| {});
+    eprintln!(
+        "[faulty pty] goal sequence equal to the in-process run: {} ({} vs {} goals; {:.1} s vs {:.1} s)",
+        r.goals == inproc.goals,
+        r.goals.len(),
+        inproc.goals.len(),
+        r.result.time_s,
+        inproc.result.time_s
+    );
+}
+
+#[test]
+fn one_percent_of_all_bytes_corrupted_is_rejected_frame_by_frame_and_moves_nothing() {
+    let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
+    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    // 1 % of *bytes*: a 2.7 kB scan frame survives with probability 0.99^2700 ≈ 2e-12, so no scan
+    // ever reaches the node and the search cannot run; what must hold is that every damaged frame
+    // is rejected and nothing is produced from one.
+    let faults = FaultConfig { corrupt_byte_prob: 0.01, drop_frame_prob: 0.05, ..FaultConfig::default() };
+    let (r, n, ns, bs) = faulty_run(&sp, faults.clone(), faults, Duration::from_secs(4));
+    figures("1% bytes", &r, &n);
+    assert_eq!(n.link.dropped() as u64, ns.frames_damaged);
+    assert_eq!(r.stats.rejected, bs.frames_damaged);
+    assert!(ns.frames_damaged > 10, "{ns:?}");
+    assert_eq!(n.counters.ticks, 0, "no complete batch ever arrived, so the node never ticked");
+    for g in &r.goals_received {
+        assert!(n.goals_sent.contains(g));
+    }
+    assert!(r.goals.is_empty());
+    assert_eq!(r.result.path_m, 0.0, "the base never moved");
+}
+
+/// Closes the node's end of the pty mid-search (the plug pulled), reopens it 2.5 s later.
+#[test]
+fn closing_the_nodes_end_stops_the_base_at_once_and_reopening_resumes_the_search() {
+    let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
+    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    let inproc = search::run(&sp, |_| {});
+    let (mut master, slave) = SerialLink::pty_pair().expect("a pseudo-terminal pair");
+    let path = slave.path().expect("slave path").to_path_buf();
+    let progress = Arc::new(AtomicU32::new(0));
+    let bopts = BridgeOptions {
+        max_wall: Some(Duration::from_secs(240)),
+        progress: Some(progress.clone()),
+        ..BridgeOptions::new(TimeMode::Lockstep)
+    };
+    let (pause, done) = (AtomicBool::new(false), AtomicBool::new(false));
+    let stop_bridge = AtomicBool::new(false);
+    let (r, node, pulled_at, replugged_at, ticks_at_pull, ticks_at_replug) = std::thread::scope(|s| {
+        let node = s.spawn(|| {
+            let mut p = NodeProcess::new(Config::DEFAULT, node_opts(TimeMode::Lockstep)).unwrap();
+            let mut link = slave;
+            p.run(&mut link, &pause);
+            let pulled_at = Instant::now();
+            drop(link); // the plug is out
+            let ticks_at_pull = progress.load(Ordering::Relaxed);
+            std::thread::sleep(Duration::from_millis(2500));
+            let ticks_at_replug = progress.load(Ordering::Relaxed);
+            // Back in: the same device path, the same controller.
+            let mut link = SerialLink::open(&path, 921_600).expect("reopen the pty slave");
+            let replugged_at = Instant::now();
+            p.node.link_reset();
+            p.run(&mut link, &done);
+            (p.report(), pulled_at, replugged_at, ticks_at_pull, ticks_at_replug)
+        });
+        s.spawn(|| {
+            while progress.load(Ordering::Relaxed) < 60 {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            pause.store(true, Ordering::Relaxed);
+        });
+        let r = run_bridge(&mut master, Source::Sim(sp.clone()), &bopts, &stop_bridge).expect("a session");
+        std::thread::sleep(Duration::from_millis(200));
+        done.store(true, Ordering::Relaxed);
+        let (report, pulled_at, replugged_at, tp, tr) = node.join().unwrap();
+        (r, report, pulled_at, replugged_at, tp, tr)
+    });
+    figures("pulled pty", &r, &node);
+    let lost: Vec<_> = r.events.iter().filter(|e| matches!(e.kind, BridgeEventKind::LinkLost { .. })).collect();
+    assert_eq!(lost.len(), 1, "{:?}", r.events);
+    let stop_after = lost[0].at.saturating_duration_since(pulled_at);
+    eprintln!("[pulled pty] base stopped {:.1} ms after the plug was pulled ({:?})", stop_after.as_secs_f64() * 1e3, lost[0].kind);
+    assert!(lost[0].at >= pulled_at, "lost before the pull?");
+    assert!(stop_after <= Duration::from_secs(1), "stopped {stop_after:?} after the pull: more than one watchdog period");
+    // Nothing moved while the plug was out (lockstep: the simulator waits for the node).
+    assert!(ticks_at_replug <= ticks_at_pull + 1, "{ticks_at_pull} -> {ticks_at_replug}");
+    let reopened = r.events.iter().find(|e| e.kind == BridgeEventKind::SessionOpened && e.at > lost[0].at).expect("session reopened");
+    assert!(reopened.at >= replugged_at);
+    // The search resumed and found the target.
+    assert!(r.result.found, "{:?}", r.result);
+    assert_goals_came_from_the_node(&r, &node);
+    eprintln!(
+        "[pulled pty] found in {:.1} s ({} goals) vs {:.1} s ({} goals) without the pull",
+        r.result.time_s,
+        r.goals.len(),
+        inproc.result.time_s,
+        inproc.goals.len()
+    );
+}
+
+#[test]
+fn a_silent_link_stops_the_base_within_one_watchdog_period_and_the_search_resumes() {
+    let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
+    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    let (master, slave) = SerialLink::pty_pair().expect("a pseudo-terminal pair");
+    let cable = FaultHandle::new();
+    let node_end = FaultyLink::new(slave, FaultConfig::default(), 1).with_handle(cable.clone());
+    let bridge_end = FaultyLink::new(master, FaultConfig::default(), 2).with_handle(cable.clone());
+    let progress = Arc::new(AtomicU32::new(0));
+    let bopts = BridgeOptions {
+        max_wall: Some(Duration::from_secs(240)),
+        progress: Some(progress.clone()),
+        ..BridgeOptions::new(TimeMode::Lockstep)
+    };
+    let watch = std::thread::spawn({
+        let cable = cable.clone();
+        let progress = progress.clone();
+        move || {
+            while progress.load(Ordering::Relaxed) < 80 {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            // The far end goes quiet (frames lost, ports still open) ...
+            let quiet_at = Instant::now();
+            cable.blackhole(true);
+            std::thread::sleep(Duration::from_millis(2000));
+            cable.blackhole(false);
+            let back_at = Instant::now();
+            while progress.load(Ordering::Relaxed) < 120 {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            // ... then the cable is pulled out: the ports fail.
+            let pulled_at = Instant::now();
+            cable.disconnect();
+            std::thread::sleep(Duration::from_millis(1500));
+            cable.reconnect();
+            (quiet_at, back_at, pulled_at)
+        }
+    });
+    let (r, n) = run_pair(Box::new(node_end), Box::new(bridge_end), &sp, &bopts, node_opts(TimeMode::Lockstep));
+    let (quiet_at, back_at, pulled_at) = watch.join().unwrap();
+    figures("silent+pulled", &r, &n);
+    let lost: Vec<_> = r.events.iter().filter(|e| matches!(e.kind, BridgeEventKind::LinkLost { .. })).collect();
+    assert_eq!(lost.len(), 2, "{:?}", r.events);
+    let silent_stop = lost[0].at.saturating_duration_since(quiet_at);
+    let pulled_stop = lost[1].at.saturating_duration_since(pulled_at);
+    eprintln!(
+        "[silent+pulled] base stopped {:.0} ms after the link went quiet ({:?}); {:.1} ms after the cable was pulled ({:?})",
+        silent_stop.as_secs_f64() * 1e3,
+        lost[0].kind,
+        pulled_stop.as_secs_f64() * 1e3,
+        lost[1].kind
+    );
+    // Silence: stopped one watchdog period (1 s) after the last frame, which came before the link
+    // went quiet (+ 500 ms slack for the scheduler of a loaded 2-core CI machine; measured
+    // 1000-1002 ms, printed above).
+    assert!(lost[0].at > quiet_at && silent_stop <= Duration::from_millis(1500), "{silent_stop:?}");
+    // A failing port: stopped at once (one read timeout).
+    assert!(lost[1].at >= pulled_at && pulled_stop <= Duration::from_millis(600), "{pulled_stop:?}");
+    let reopened: Vec<_> = r.events.iter().filter(|e| e.kind == BridgeEventKind::SessionOpened).collect();
+    assert_eq!(reopened.len(), 3, "initial + two recoveries: {:?}", r.events);
+    assert!(reopened[1].at >= back_at);
+    assert!(r.result.found, "{:?}", r.result);
+    assert_goals_came_from_the_node(&r, &n);
+}
+
+#[test]
+fn real_time_node_and_bridge_drive_the_base_and_stop_it_when_the_link_is_lost() {
+    let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
+    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    let (master, slave) = SerialLink::pty_pair().expect("a pseudo-terminal pair");
+    let cable = FaultHandle::new();
+    let node_end = FaultyLink::new(slave, FaultConfig::default(), 1).with_handle(cable.clone());
+    let bridge_end = FaultyLink::new(master, FaultConfig::default(), 2).with_handle(cable.clone());
+    let progress = Arc::new(AtomicU32::new(0));
+    let bopts = BridgeOptions {
+        max_wall: Some(Duration::from_millis(10_000)),
+        progress: Some(progress.clone()),
+        ..BridgeOptions::new(TimeMode::RealTime)
+    };
+    let watch = std::thread::spawn({
+        let cable = cable.clone();
+        move || {
+            while progress.load(Ordering::Relaxed) < 20 {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            let quiet_at = Instant::now();
+            cable.blackhole(true);
+            std::thread::sleep(Duration::from_millis(2500));
+            cable.blackhole(false);
+            quiet_at
+        }
+    });
+    let (r, n) = run_pair(Box::new(node_end), Box::new(bridge_end), &sp, &bopts, node_opts(TimeMode::RealTime));
+    let quiet_at = watch.join().unwrap();
+    figures("real time", &r, &n);
+    let lost = r.events.iter().find(|e| matches!(e.kind, BridgeEventKind::LinkLost { .. })).expect("the loss was noticed");
+    let stop_after = lost.at.saturating_duration_since(quiet_at);
+    eprintln!("[real time] base stopped {:.0} ms after the link went quiet", stop_after.as_secs_f64() * 1e3);
+    // One watchdog period after the node's last frame (+ 500 ms scheduling slack on a loaded CI
+    // machine; measured 975-980 ms, printed above).
+    assert!(stop_after <= Duration::from_millis(1500), "{stop_after:?}");
+    let back = r.events.iter().find(|e| e.kind == BridgeEventKind::SessionOpened && e.at > lost.at).expect("session reopened");
+    // One trajectory point per 200 ms tick: the base moved before the loss, stood still from the
+    // stop until the session came back, and moved again after.
+    let tick_of = |sim_s: f64| (sim_s / 0.2).round() as usize;
+    let (k_lost, k_back) = (tick_of(lost.sim_s), tick_of(back.sim_s));
+    let tr = &r.trajectory;
+    let moved = |a: usize, b: usize| (tr[b][0] - tr[a][0]).hypot(tr[b][1] - tr[a][1]);
+    assert!(moved(0, k_lost) > 0.1, "it moved before: {}", moved(0, k_lost));
+    assert!(moved(k_lost, k_back.min(tr.len() - 1)) < 1e-9, "it stood still while the link was lost");
+    assert!(tr.len() > k_back + 5 && moved(k_back, tr.len() - 1) > 0.1, "it moved again after");
+    // The node's own watchdog fired too (no pose or scan for a second).
+    assert!(r.stats.node_status.expect("a status").watchdog_trips >= 1);
+}
