@@ -11,3 +11,4 @@ pub mod picture;
 pub mod render;
 pub mod search;
 pub mod sim;
+pub mod train;

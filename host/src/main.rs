@@ -128,6 +128,78 @@ enum Cmd {
         #[arg(long)]
         json: bool,
     },
+    /// Train the map-free scan classifier (LabelPoseNet, f32, CPU) on a dataset; writes a safetensors checkpoint.
+    Train {
+        /// The dataset directory (`lives dataset --out DIR`).
+        #[arg(long)]
+        data: PathBuf,
+        /// Where to write the f32 checkpoint.
+        #[arg(long, default_value = host::train::DEFAULT_CHECKPOINT_PATH)]
+        out: PathBuf,
+        /// Passes over the training samples (the paper: 20–50 on a GPU; 10 epochs took 5.5–7 min on ~43 k samples here).
+        #[arg(long, default_value_t = host::train::DEFAULT_EPOCHS)]
+        epochs: usize,
+        /// Samples per optimiser step (the paper: 4096).
+        #[arg(long, default_value_t = host::train::DEFAULT_BATCH)]
+        batch: usize,
+        /// Adam learning rate.
+        #[arg(long, default_value_t = 1e-3)]
+        lr: f64,
+        /// Seed of the initialisation, shuffling and label flips.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Fraction of history labels sign-flipped in training.
+        #[arg(long, default_value_t = 0.1)]
+        flip: f64,
+        /// Train without the label history (all label inputs zero): the ablation.
+        #[arg(long)]
+        no_label_history: bool,
+        /// Fraction of samples whose label history is the model's own rollout (0 = the paper's teacher forcing).
+        #[arg(long, default_value_t = 0.5)]
+        self_feedback: f64,
+        /// Fraction of samples whose label history is all zero.
+        #[arg(long, default_value_t = 0.05)]
+        history_dropout: f64,
+        /// Added to the diagonal of the encoders' 897 × 897 weights at initialisation (0: PyTorch's default init).
+        #[arg(long, default_value_t = 1.0)]
+        init_diag: f32,
+        /// Train only on steps with 8 predecessors (the paper), not on the bootstrap steps too.
+        #[arg(long)]
+        no_bootstrap: bool,
+        /// Use at most this many training samples (a seeded subset), for quick runs.
+        #[arg(long)]
+        max_samples: Option<usize>,
+        /// Continue from this checkpoint instead of a fresh initialisation.
+        #[arg(long)]
+        resume: Option<PathBuf>,
+    },
+    /// Quantise a checkpoint to the int8 blob the firmware runs, evaluate it, and write the model card.
+    Quantise {
+        /// The f32 checkpoint (`lives train --out`).
+        #[arg(long, default_value = host::train::DEFAULT_CHECKPOINT_PATH)]
+        checkpoint: PathBuf,
+        /// The dataset whose validation split calibrates and evaluates (default: the one the checkpoint was trained on).
+        #[arg(long)]
+        data: Option<PathBuf>,
+        /// Where to write the blob.
+        #[arg(long, default_value = host::train::DEFAULT_BLOB_PATH)]
+        out: PathBuf,
+        /// Where to write the model card (`-` for none).
+        #[arg(long, default_value = host::train::DEFAULT_CARD_PATH)]
+        card: String,
+        /// A second checkpoint (trained with or without --no-label-history) for the label-history ablation.
+        #[arg(long)]
+        ablation: Option<PathBuf>,
+        /// Calibration inputs (steps of an autoregressive float run over the validation split).
+        #[arg(long, default_value_t = 256)]
+        calibration: usize,
+        /// Seconds of random walk per built-in world and scenario for the unseen-world accuracy (0: skip).
+        #[arg(long, default_value_t = 60.0)]
+        unseen_seconds: f64,
+        /// A Markdown file appended to the model card under "Notes".
+        #[arg(long)]
+        notes: Option<PathBuf>,
+    },
     /// List the controller parameters `--set` accepts, with their defaults.
     Params,
     /// List the built-in worlds, or print one as a world file.
@@ -452,6 +524,80 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 }
             }
             Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
+        }
+        Cmd::Train {
+            data,
+            out,
+            epochs,
+            batch,
+            lr,
+            seed,
+            flip,
+            no_label_history,
+            self_feedback,
+            history_dropout,
+            no_bootstrap,
+            init_diag,
+            max_samples,
+            resume,
+        } => {
+            let cfg = host::train::TrainConfig {
+                data,
+                epochs,
+                batch,
+                lr,
+                seed,
+                flip,
+                label_history: !no_label_history,
+                bootstrap: !no_bootstrap,
+                self_feedback,
+                history_dropout,
+                init_diag,
+                max_samples,
+                command: std::env::args().collect::<Vec<_>>().join(" "),
+            };
+            let progress = |e: &host::train::EpochLog| {
+                say!(
+                    "epoch {:3}: loss {:.4}, val accuracy teacher-forced {:.2} %, autoregressive {:.2} %, {:.0} s",
+                    e.epoch,
+                    e.train_loss,
+                    100.0 * e.val_accuracy,
+                    100.0 * e.val_ar_accuracy,
+                    e.train_s
+                )
+            };
+            let (model, log) = match resume {
+                Some(p) => {
+                    let (init, _) = host::train::load_checkpoint(&p).map_err(|e| e.to_string())?;
+                    host::train::train_from(&cfg, init, progress)
+                }
+                None => host::train::train(&cfg, progress),
+            }
+            .map_err(|e| e.to_string())?;
+            host::train::save_checkpoint(&model, Some(&log), &out).map_err(|e| e.to_string())?;
+            say!("trained {} epochs on {} samples in {:.0} s; checkpoint {}", log.epochs.len(), log.samples[0], log.total_s, out.display());
+            Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Quantise { checkpoint, data, out, card, ablation, calibration, unseen_seconds, notes } => {
+            let mut cfg = host::train::QuantiseConfig::new(checkpoint);
+            cfg.data = data;
+            cfg.out = out;
+            cfg.card = (card != "-").then(|| PathBuf::from(card));
+            cfg.ablation = ablation;
+            cfg.calibration = calibration;
+            cfg.unseen_seconds = unseen_seconds;
+            cfg.command = std::env::args().collect::<Vec<_>>().join(" ");
+            cfg.notes = match notes {
+                Some(p) => Some(std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?),
+                None => None,
+            };
+            let r = host::train::quantise_and_evaluate(&cfg, |line| say!("{line}")).map_err(|e| e.to_string())?;
+            say!(
+                "int8 per-point accuracy (autoregressive, as on the robot): validation {:.2} %{}",
+                100.0 * r.val.int8_ar_raw.all.accuracy(),
+                r.unseen.as_ref().map(|u| format!(", built-in worlds {:.2} %", 100.0 * u.int8_ar_raw.all.accuracy())).unwrap_or_default()
+            );
+            Ok(ExitCode::SUCCESS)
         }
         Cmd::Params => {
             say!("{:#?}", firmware::Config::DEFAULT);

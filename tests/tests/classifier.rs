@@ -81,3 +81,12 @@ fn the_classifier_is_deterministic_inside_the_controller() {
     b.set_model(m).unwrap();
     assert_eq!(run(&mut a, 15), run(&mut b, 15));
 }
+
+#[test]
+fn the_embedded_model_validates_and_runs() {
+    let mut c = Box::new(Controller::new(Config::DEFAULT));
+    c.set_model(firmware::classifier::EMBEDDED_MODEL).expect("the committed model blob validates");
+    let out = run(&mut c, 3);
+    assert_eq!(out[2].0.status.cost.classify, WORK_PER_CLASSIFY);
+    assert!(out[2].1.iter().all(|&l| l != BeamLabel::Unlabelled), "every valid beam labelled");
+}

@@ -524,3 +524,8 @@ mod tests {
         assert!(checked >= 5, "{checked} files in {dir}");
     }
 }
+
+/// The trained int8 model committed with the repository (`firmware/model/lives-int8.bin`, its
+/// model card in `docs/model-card.md`), embedded at build time. Install it with
+/// `Controller::set_model(EMBEDDED_MODEL)`, which validates it first.
+pub static EMBEDDED_MODEL: &[u8] = include_bytes!("../../model/lives-int8.bin");
