@@ -62,13 +62,13 @@ pub const POSE_FEATURES: usize = 3;
 /// Flattened pose encoder width (9 channels × 9 steps).
 pub const POSE_FLAT: usize = POSE_CHANNELS * HISTORY;
 
-/// Multiply-accumulates per [`Classifier::classify`]: two encoder convolutions, two 897 × 897
-/// layers, the pose convolution, the 81 → 897 layer and the output products.
 /// The trained int8 model committed with the repository (`firmware/model/lives-int8.bin`, its
 /// model card in `docs/model-card.md`), embedded at build time. Install it with
 /// `Controller::set_model(EMBEDDED_MODEL)`, which validates it first.
 pub static EMBEDDED_MODEL: &[u8] = include_bytes!("../../model/lives-int8.bin");
 
+/// Multiply-accumulates per [`Classifier::classify`]: two encoder convolutions, two 897 × 897
+/// layers, the pose convolution, the 81 → 897 layer and the output products.
 pub const WORK_PER_CLASSIFY: u32 =
     (2 * BEAMS * HISTORY * ENC_KERNEL + 2 * BEAMS * BEAMS + POSE_CHANNELS * HISTORY * POSE_FEATURES + BEAMS * POSE_FLAT + BEAMS) as u32;
 
