@@ -32,13 +32,12 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::labeller::{hit_code, Agreement, GtLabel, Labeller, LabellerConfig};
-use crate::search::{controller_config, encode_ranges, gt_label, PlannerChoice, TICK_US};
+use crate::search::{controller_config, EncodedScan, PlannerChoice, TICK_US};
 use crate::sim::generate::GENERATOR_ROBOT_RADIUS_M;
 use crate::sim::geometry::dist;
 use crate::sim::reach::ReachMap;
 use crate::sim::{BaseStatus, Scan, Scenario, Sim, SimConfig, World, P2};
-use firmware::scan::BeamLabel;
-use firmware::{BinaryAngle, Command, Config, Controller, Detection, Inputs, Mode, Pose2, ScanInput};
+use firmware::{Command, Config, Controller, Detection, Inputs, Mode, Pose2};
 
 /// `meta.json`'s `format`.
 pub const FORMAT: &str = "lives-scan-dataset";
@@ -629,7 +628,6 @@ fn drive_episode(
     };
     let mut outcome = if ctrl.is_some() { "running" } else { "walk" };
     let mut walker = RandomWalker::new(mix(sim_seed ^ 0x5741_4C4B));
-    let increment = BinaryAngle::from_fraction(1, cfg.beams.max(1) as i64);
     let mut base_blocked = false;
     for tick in 0..ticks {
         let p = sim.pose();
@@ -637,17 +635,11 @@ fn drive_episode(
         on_tick(tick, p, &scan);
         let mut handed_over = false;
         if let Some((c, planner)) = ctrl.as_mut() {
-            let ranges = encode_ranges(&scan, cfg.lidar_min_range_m);
             let use_labels = matches!(planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
-            let labels: Vec<BeamLabel> = scan.hits.iter().map(|&h| gt_label(h)).collect();
+            let encoded = EncodedScan::new(&scan, cfg.lidar_min_range_m);
             let inputs = Inputs {
                 pose: Pose2::from_f64(p[0], p[1], p[2]),
-                scan: Some(ScanInput {
-                    angle_min: BinaryAngle::from_radians(scan.angle_min).unwrap_or(BinaryAngle::HALF),
-                    angle_increment: BinaryAngle::from_radians(scan.angle_increment).unwrap_or(increment),
-                    ranges_mm: &ranges,
-                    labels: use_labels.then_some(&labels[..]),
-                }),
+                scan: Some(encoded.input(use_labels)),
                 detection: sim.detect().map(|_| Detection { position: None }),
                 command: (tick == 0).then_some(Command::Start),
                 base_blocked,

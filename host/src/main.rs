@@ -16,22 +16,29 @@ struct Cli {
     command: Cmd,
 }
 
+/// What to simulate: the world, scenario, planner and seed (shared by `search` and `bridge`).
+#[derive(clap::Args)]
+struct RunArgs {
+    /// A built-in world (apartment, office, hallway), `random` (with --seed), or a world file (.toml).
+    #[arg(long, default_value = "apartment")]
+    world: String,
+    /// easy or hard (built-in worlds).
+    #[arg(long, default_value = "easy")]
+    scenario: Scenario,
+    /// lives, lives-gt, multisensor or nearest.
+    #[arg(long, default_value = "lives")]
+    planner: PlannerChoice,
+    /// Seed: start jitter, target placement, people, sensor noise (and the random world).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+}
+
 #[derive(Subcommand)]
 enum Cmd {
     /// Run one simulated search and report the result.
     Search {
-        /// A built-in world (apartment, office, hallway), `random` (with --seed), or a world file (.toml).
-        #[arg(long, default_value = "apartment")]
-        world: String,
-        /// easy or hard (built-in worlds).
-        #[arg(long, default_value = "easy")]
-        scenario: Scenario,
-        /// lives, lives-gt, multisensor or nearest.
-        #[arg(long, default_value = "lives")]
-        planner: PlannerChoice,
-        /// Seed: start jitter, target placement, people, sensor noise (and the random world).
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
+        #[command(flatten)]
+        run: RunArgs,
         /// Write a picture of the run here.
         #[arg(long)]
         png: Option<PathBuf>,
@@ -106,18 +113,8 @@ enum Cmd {
         /// Where the data comes from: `sim` (the simulator; sensors and logs come later).
         #[arg(long, default_value = "sim")]
         source: String,
-        /// A built-in world, `random` (with --seed), or a world file (.toml).
-        #[arg(long, default_value = "apartment")]
-        world: String,
-        /// easy or hard (built-in worlds).
-        #[arg(long, default_value = "easy")]
-        scenario: Scenario,
-        /// lives, lives-gt, multisensor or nearest.
-        #[arg(long, default_value = "lives")]
-        planner: PlannerChoice,
-        /// Simulator seed.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
+        #[command(flatten)]
+        run: RunArgs,
         /// Override a controller parameter sent to the node, e.g. `--set w_dist_per_m=2`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
@@ -275,7 +272,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<ExitCode, String> {
     match cli.command {
-        Cmd::Search { world, scenario, planner, seed, png, json, trace, model, set } => {
+        Cmd::Search { run: RunArgs { world, scenario, planner, seed }, png, json, trace, model, set } => {
             let (name, w) = load_world(&world, scenario, seed)?;
             let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
             spec.trace = trace;
@@ -460,7 +457,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             );
             Ok(ExitCode::SUCCESS)
         }
-        Cmd::Bridge { port, baud, source, world, scenario, planner, seed, set, lockstep, json } => {
+        Cmd::Bridge { port, baud, source, run: RunArgs { world, scenario, planner, seed }, set, lockstep, json } => {
             use host::link::{run_bridge, BridgeOptions, SerialLink, Source, TimeMode};
             if source != "sim" {
                 return Err(format!("unknown source `{source}` (only `sim` for now)"));

@@ -190,6 +190,42 @@ pub fn encode_range(r: f64, min_range_m: f64) -> u16 {
     }
 }
 
+/// One simulated scan in the core's encoding (the host/core boundary): ranges in integer
+/// millimetres, the scan's angles as binary angles, and the ground-truth label of every beam.
+pub struct EncodedScan {
+    /// Ranges, see [`encode_range`].
+    pub ranges_mm: Vec<u16>,
+    /// Ground-truth labels (from the simulator's per-beam truth).
+    pub labels: Vec<BeamLabel>,
+    /// First beam's angle.
+    pub angle_min: BinaryAngle,
+    /// Angle between beams.
+    pub angle_increment: BinaryAngle,
+}
+
+impl EncodedScan {
+    /// Encodes `scan`; readings below `min_range_m` are invalid.
+    pub fn new(scan: &Scan, min_range_m: f64) -> Self {
+        let fallback = BinaryAngle::from_fraction(1, scan.ranges_m.len().max(1) as i64);
+        EncodedScan {
+            ranges_mm: encode_ranges(scan, min_range_m),
+            labels: scan.hits.iter().map(|&h| gt_label(h)).collect(),
+            angle_min: BinaryAngle::from_radians(scan.angle_min).unwrap_or(BinaryAngle::HALF),
+            angle_increment: BinaryAngle::from_radians(scan.angle_increment).unwrap_or(fallback),
+        }
+    }
+
+    /// The core's view of it, with or without the ground-truth labels.
+    pub fn input(&self, with_labels: bool) -> ScanInput<'_> {
+        ScanInput {
+            angle_min: self.angle_min,
+            angle_increment: self.angle_increment,
+            ranges_mm: &self.ranges_mm,
+            labels: with_labels.then_some(&self.labels[..]),
+        }
+    }
+}
+
 /// The ground-truth label of what a beam hit.
 pub fn gt_label(h: HitKind) -> BeamLabel {
     match h {
@@ -239,7 +275,6 @@ fn run_with(spec: &SearchSpec, mut ctrl: Box<Controller>, classifier: bool, mut 
     let limit = spec.world.time_limit_s;
     // Ground-truth labels for lives-gt, and for lives until a classifier model is installed.
     let use_labels = !classifier && matches!(spec.planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
-    let increment = BinaryAngle::from_fraction(1, spec.sim.beams.max(1) as i64);
     let mut trajectory = vec![[start[0], start[1]]];
     let mut goals = Vec::new();
     let (mut ticks, mut blocked_count, mut collisions) = (0u32, 0u32, 0u32);
@@ -251,17 +286,11 @@ fn run_with(spec: &SearchSpec, mut ctrl: Box<Controller>, classifier: bool, mut 
         let now_us = ticks as u64 * TICK_US;
         let p = sim.pose();
         let scan = sim.scan();
-        let ranges = encode_ranges(&scan, spec.sim.lidar_min_range_m);
-        let labels: Vec<BeamLabel> = scan.hits.iter().map(|&h| gt_label(h)).collect();
+        let encoded = EncodedScan::new(&scan, spec.sim.lidar_min_range_m);
         let detection = sim.detect().map(|_| Detection { position: None });
         let inputs = Inputs {
             pose: Pose2::from_f64(p[0], p[1], p[2]),
-            scan: Some(ScanInput {
-                angle_min: BinaryAngle::from_radians(scan.angle_min).unwrap_or(BinaryAngle::HALF),
-                angle_increment: BinaryAngle::from_radians(scan.angle_increment).unwrap_or(increment),
-                ranges_mm: &ranges,
-                labels: use_labels.then_some(&labels[..]),
-            }),
+            scan: Some(encoded.input(use_labels)),
             detection,
             command: (ticks == 0).then_some(Command::Start),
             base_blocked,
