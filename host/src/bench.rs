@@ -60,6 +60,20 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
         c.frontiers.compute(&c.lidar, &c.visual, cfg.min_frontier_cells);
     });
 
+    // The int8 classifier on the same scan (the committed model, read in place).
+    let mut classifier = Box::new(firmware::classifier::Classifier::new(firmware::classifier::ClassifierConfig {
+        feedback: firmware::classifier::LabelFeedback::Raw,
+    }));
+    let mut classify_work = 0;
+    let t_classify = match firmware::classifier::ModelView::parse(firmware::classifier::EMBEDDED_MODEL) {
+        Ok(model) => {
+            classifier.set_model(model);
+            let mut labels = [firmware::scan::BeamLabel::Unlabelled; firmware::capacity::BEAMS];
+            Some(time(reps, || classify_work = classifier.classify(&pose, &beams, &mut labels)))
+        }
+        Err(_) => None,
+    };
+
     println!(
         "map: office hard after {explore_s:.0} s of lives-gt search: {free} free, {occ} occupied LiDAR cells; {seen} camera-seen cells;"
     );
@@ -69,6 +83,10 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
         c.frontiers.frontiers().len()
     );
     println!("{:<36} {:>12} {:>14}", "stage (host, release)", "median ms", "work units");
+    match t_classify {
+        Some(t) => println!("{:<36} {:>12.3} {:>14}", "classify (int8, embedded model)", t, classify_work),
+        None => println!("{:<36} {:>12} {:>14}", "classify (int8, embedded model)", "no model", ""),
+    }
     println!("{:<36} {:>12.3} {:>14}", "LiDAR update (897 beams)", t_lidar, lidar_work);
     println!("{:<36} {:>12.3} {:>14}", "visual update (camera cone)", t_visual, visual_work);
     println!("{:<36} {:>12.3} {:>14}", "frontiers (both maps)", t_frontiers, "");
