@@ -30,6 +30,9 @@ fi
 say "host tests (cargo test --workspace --release)"
 cargo test --workspace --release
 
+say "training pipeline (host built with --features train: candle)"
+cargo test --release -p host --features train --lib train
+
 say "no_std core for $TARGET (firmware, fixed_point)"
 cargo build --release --target "$TARGET" -p fixed_point -p firmware
 # The core must not link an allocator or std: the build above fails if it does (no_std target).

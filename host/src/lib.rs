@@ -11,4 +11,5 @@ pub mod picture;
 pub mod render;
 pub mod search;
 pub mod sim;
+#[cfg(feature = "train")]
 pub mod train;

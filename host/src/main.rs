@@ -126,6 +126,8 @@ enum Cmd {
         json: bool,
     },
     /// Train the map-free scan classifier (LabelPoseNet, f32, CPU) on a dataset; writes a safetensors checkpoint.
+    /// (Built with `--features train`.)
+    #[cfg(feature = "train")]
     Train {
         /// The dataset directory (`lives dataset --out DIR`).
         #[arg(long)]
@@ -171,6 +173,8 @@ enum Cmd {
         resume: Option<PathBuf>,
     },
     /// Quantise a checkpoint to the int8 blob the firmware runs, evaluate it, and write the model card.
+    /// (Built with `--features train`.)
+    #[cfg(feature = "train")]
     Quantise {
         /// The f32 checkpoint (`lives train --out`).
         #[arg(long, default_value = host::train::DEFAULT_CHECKPOINT_PATH)]
@@ -522,6 +526,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             }
             Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
         }
+        #[cfg(feature = "train")]
         Cmd::Train {
             data,
             out,
@@ -575,6 +580,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             say!("trained {} epochs on {} samples in {:.0} s; checkpoint {}", log.epochs.len(), log.samples[0], log.total_s, out.display());
             Ok(ExitCode::SUCCESS)
         }
+        #[cfg(feature = "train")]
         Cmd::Quantise { checkpoint, data, out, card, ablation, calibration, unseen_seconds, notes } => {
             let mut cfg = host::train::QuantiseConfig::new(checkpoint);
             cfg.data = data;
