@@ -251,6 +251,24 @@ fn load_world(name: &str, scenario: Scenario, seed: u64) -> Result<(String, Worl
     Err(format!("unknown world `{name}`: expected one of {}, `random`, or a .toml world file", World::builtin_names().join(", ")))
 }
 
+/// The human-readable summary of a search: `FOUND apartment easy lives seed 1: found in …`.
+fn result_line(r: &search::SearchResult) -> String {
+    format!(
+        "{} {} {} {} seed {}: {} in {:.1} s (limit {:.0} s), path {:.1} m, {} ticks, {} goals",
+        if r.found { "FOUND" } else { "NOT FOUND" },
+        r.world,
+        r.scenario,
+        r.planner,
+        r.seed,
+        r.outcome,
+        r.time_s,
+        r.time_limit_s,
+        r.path_m,
+        r.ticks,
+        r.goals
+    )
+}
+
 fn progress_bar(len: u64) -> ProgressBar {
     if !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
@@ -315,23 +333,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 say!("{}", serde_json::to_string(r).map_err(|e| e.to_string())?);
             } else {
                 let sim_s = r.ticks as f64 * search::TICK_US as f64 / 1e6;
-                say!(
-                    "{} {} {} {} seed {}: {} in {:.1} s (limit {:.0} s), path {:.1} m, {} ticks, {} goals; {:.1} s simulated in {:.2} s ({:.0}x real time)",
-                    if r.found { "FOUND" } else { "NOT FOUND" },
-                    r.world,
-                    r.scenario,
-                    r.planner,
-                    r.seed,
-                    r.outcome,
-                    r.time_s,
-                    r.time_limit_s,
-                    r.path_m,
-                    r.ticks,
-                    r.goals,
-                    sim_s,
-                    wall,
-                    sim_s / wall.max(1e-9)
-                );
+                say!("{}; {:.1} s simulated in {:.2} s ({:.0}x real time)", result_line(r), sim_s, wall, sim_s / wall.max(1e-9));
                 if planner == PlannerChoice::Lives && r.labels == "ground-truth" {
                     say!("note: no --model given, so `lives` runs on the simulator's ground-truth labels (same as lives-gt)");
                 }
@@ -484,21 +486,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 say!("{}", serde_json::json!({ "result": r, "link": st, "goals": goals, "wall_s": run.wall_s }));
             } else {
                 let ticks = r.ticks.max(1) as f64;
-                say!(
-                    "{} {} {} {} seed {}: {} in {:.1} s (limit {:.0} s), path {:.1} m, {} ticks, {} goals; {:.2} s wall",
-                    if r.found { "FOUND" } else { "NOT FOUND" },
-                    r.world,
-                    r.scenario,
-                    r.planner,
-                    r.seed,
-                    r.outcome,
-                    r.time_s,
-                    r.time_limit_s,
-                    r.path_m,
-                    r.ticks,
-                    r.goals,
-                    run.wall_s
-                );
+                say!("{}; {:.2} s wall", result_line(r), run.wall_s);
                 say!(
                     "link: sent {} frames / {} B ({:.0} B per tick), received {} frames / {} B, rejected {} {:?}",
                     st.frames_sent,
