@@ -226,6 +226,26 @@ impl EncodedScan {
     }
 }
 
+/// What the base did during one controller period.
+pub struct BaseStep {
+    /// It reported blocked in at least one sub-step.
+    pub blocked: bool,
+    /// Where it ended.
+    pub position: [f64; 2],
+    /// It ended overlapping a wall, an obstacle or a person (must never happen).
+    pub collided: bool,
+}
+
+/// Moves the simulated base for `period_s` in [`SUBSTEPS`] steps.
+pub fn step_base(sim: &mut Sim, period_s: f64) -> BaseStep {
+    let mut blocked = false;
+    for _ in 0..SUBSTEPS {
+        blocked |= sim.step(period_s / SUBSTEPS as f64) == BaseStatus::Blocked;
+    }
+    let q = sim.pose();
+    BaseStep { blocked, position: [q[0], q[1]], collided: sim.collides([q[0], q[1]]) }
+}
+
 /// The ground-truth label of what a beam hit.
 pub fn gt_label(h: HitKind) -> BeamLabel {
     match h {
@@ -339,20 +359,11 @@ fn run_with(spec: &SearchSpec, mut ctrl: Box<Controller>, classifier: bool, mut 
             let path: Vec<[f64; 2]> = g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect();
             sim.set_path(&path, Some(g.pose.theta.to_radians()));
         }
-        base_blocked = false;
-        for _ in 0..SUBSTEPS {
-            if sim.step(TICK_US as f64 / 1e6 / SUBSTEPS as f64) == BaseStatus::Blocked {
-                base_blocked = true;
-            }
-        }
-        if base_blocked {
-            blocked_count += 1;
-        }
-        let q = sim.pose();
-        trajectory.push([q[0], q[1]]);
-        if sim.collides([q[0], q[1]]) {
-            collisions += 1;
-        }
+        let moved = step_base(&mut sim, TICK_US as f64 / 1e6);
+        base_blocked = moved.blocked;
+        blocked_count += moved.blocked as u32;
+        trajectory.push(moved.position);
+        collisions += moved.collided as u32;
         progress(sim.time_s());
         if sim.time_s() >= limit {
             break;

@@ -25,8 +25,8 @@
 //! echoes.
 
 use super::{Link, Summary, TimeMode};
-use crate::search::{controller_config, encode_ranges, gt_label, PlannerChoice, SearchResult, SearchSpec, TICK_US};
-use crate::sim::{BaseStatus as SimBase, Sim};
+use crate::search::{controller_config, encode_ranges, gt_label, step_base, PlannerChoice, SearchResult, SearchSpec, TICK_US};
+use crate::sim::Sim;
 use firmware::protocol::{
     encode, BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, GoalMsg, Heartbeat, Hello, HostDecoder, HostToCore, IncompatiblePeer,
     LinkCounters, PoseMsg, Role, ScanMsg, StatusMsg, WireCommand, WireMode, MAX_FRAME_LEN,
@@ -39,8 +39,6 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// Base sub-steps per tick (as in the in-process loop).
-const SUBSTEPS: u32 = 4;
 /// Heartbeat sequence numbers of the bridge start here (the node's own count from 1).
 const SEQ_BASE: u32 = 0x8000_0000;
 
@@ -564,16 +562,11 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
 
         // A tick: the base moved for a period (real time), then sense and send.
         if realtime && ticks > 0 {
-            base_blocked = false;
-            for _ in 0..SUBSTEPS {
-                if b.sim.step(opts.period.as_secs_f64() / SUBSTEPS as f64) == SimBase::Blocked {
-                    base_blocked = true;
-                }
-            }
-            blocked_count += base_blocked as u32;
-            let q = b.sim.pose();
-            trajectory.push([q[0], q[1]]);
-            collisions += b.sim.collides([q[0], q[1]]) as u32;
+            let moved = step_base(&mut b.sim, opts.period.as_secs_f64());
+            base_blocked = moved.blocked;
+            blocked_count += moved.blocked as u32;
+            trajectory.push(moved.position);
+            collisions += moved.collided as u32;
             if b.sim.time_s() >= limit {
                 break;
             }
@@ -694,16 +687,11 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
                 note_goal(&mut goals, &mut recorded_seq, &geom, &g);
             }
         }
-        base_blocked = false;
-        for _ in 0..SUBSTEPS {
-            if b.sim.step(TICK_US as f64 / 1e6 / SUBSTEPS as f64) == SimBase::Blocked {
-                base_blocked = true;
-            }
-        }
-        blocked_count += base_blocked as u32;
-        let q = b.sim.pose();
-        trajectory.push([q[0], q[1]]);
-        collisions += b.sim.collides([q[0], q[1]]) as u32;
+        let moved = step_base(&mut b.sim, TICK_US as f64 / 1e6);
+        base_blocked = moved.blocked;
+        blocked_count += moved.blocked as u32;
+        trajectory.push(moved.position);
+        collisions += moved.collided as u32;
         if b.sim.time_s() >= limit {
             break;
         }
