@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The whole test suite: host tests (all crates), the Cortex-M build of the no_std core.
-# Sets up what it needs (the thumbv7em-none-eabihf target) or says exactly what is missing.
+# The whole test suite: host tests (all crates), the Cortex-M build of the no_std core, and the
+# MCU images under QEMU (docs/mcu.md).
+# Sets up what it needs (the thumbv7em-none-eabihf target, qemu-system-arm) or says exactly what is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -37,5 +38,26 @@ say "no_std core for $TARGET (firmware, fixed_point)"
 cargo build --release --target "$TARGET" -p fixed_point -p firmware
 # The core must not link an allocator or std: the build above fails if it does (no_std target).
 echo "ok: firmware and fixed_point build for $TARGET"
+
+say "MCU under QEMU (mps2-an386): golden trace, stage budgets, memory, faults, SMLAD, end to end"
+if ! command -v qemu-system-arm >/dev/null 2>&1; then
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+        echo "installing qemu-system-arm (apt-get)"
+        apt-get update -qq && apt-get install -y -qq qemu-system-arm >/dev/null
+    elif command -v apt-get >/dev/null 2>&1 && command -v sudo >/dev/null 2>&1; then
+        echo "installing qemu-system-arm (sudo apt-get)"
+        sudo apt-get update -qq && sudo apt-get install -y -qq qemu-system-arm >/dev/null
+    fi
+fi
+need qemu-system-arm "apt-get install -y qemu-system-arm (Debian/Ubuntu), or your distribution's QEMU Arm system emulator"
+qemu-system-arm --version | head -1
+# The images: mcu-node (real time), mcu-lockstep, mcu-trace (golden trace + timing), mcu-selftest.
+cargo build --release --target "$TARGET" -p firmware --features mcu --bins
+LIVES_MCU_DIR="${CARGO_TARGET_DIR:-target}/$TARGET/release"
+case "$LIVES_MCU_DIR" in /*) ;; *) LIVES_MCU_DIR="$PWD/$LIVES_MCU_DIR" ;; esac
+export LIVES_MCU_DIR
+# The memory report (static RAM and flash of each image against memory.x), the per-stage
+# instruction counts against firmware/mcu-budgets.toml, and the rest (tests/tests/mcu.rs).
+cargo test --release -p lives-tests --test mcu -- --ignored --nocapture --test-threads 2
 
 say "all tests passed"

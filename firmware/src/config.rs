@@ -86,6 +86,16 @@ pub struct Config {
     /// `lives` and `multisensor` also score the four headings at the robot's own cell (turning in
     /// place to look is an action). Default false (the paper's candidates).
     pub look_around_here: bool,
+    /// Look while walking: on the way to a goal the camera faces the heading (of 16) with the
+    /// most to see from where the robot is — camera-unseen cells and, for `lives`, non-map
+    /// points — instead of the direction of travel; the base (holonomic, like Spot's) walks its
+    /// path facing that way. The paper's robot faces where it walks. Default false: on the
+    /// procedurally generated tuning worlds (`lives tune --grid gaze=false,true`) it did not
+    /// help (docs/architecture.md, "Look while walking").
+    pub gaze: bool,
+    /// The least view utility (same units as the utility's terms) worth turning the camera for
+    /// while walking; below it the camera faces the direction of travel. Default 4.0.
+    pub gaze_min_gain: Weight,
     /// `lives` also scores one viewpoint per cluster of non-map points (an addition to the
     /// paper, whose candidates are frontier centroids only). Default true.
     pub nonmap_viewpoints: bool,
@@ -155,6 +165,8 @@ impl Config {
         w_frontier_per_cell: w(10),
         w_nonmap_per_point: w(1_500),
         look_around_here: false,
+        gaze: false,
+        gaze_min_gain: w(4_000),
         nonmap_block_cap: 0,
         nonmap_viewpoints: true,
         nonmap_standoff_m: m(1_500),

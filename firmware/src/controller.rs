@@ -20,7 +20,7 @@ use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
 use crate::nonmap::NonMapStore;
 use crate::planner::{Goal, Planner, Site};
 use crate::scan::{BeamScan, ScanError, ScanInput};
-use fixed_point::{hypot, Meters, Pose2};
+use fixed_point::{hypot, BinaryAngle, Meters, Pose2};
 
 /// Operator commands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -84,6 +84,41 @@ pub struct StageCost {
     pub nonmap: u32,
     /// Planning step (frontiers + planner).
     pub plan: u32,
+    /// Choosing where to look while walking ([`crate::Config::gaze`]).
+    pub gaze: u32,
+}
+
+/// A stage of a tick, as reported to a [`StageObserver`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// Scan classification (int8 network).
+    Classify,
+    /// LiDAR-map update.
+    Lidar,
+    /// Visual-map update.
+    Visual,
+    /// Non-map store update and filters.
+    NonMap,
+    /// Planning step (frontiers + planner).
+    Plan,
+    /// Choosing where to look while walking ([`crate::Config::gaze`]).
+    Gaze,
+}
+
+/// Told when each stage of a tick begins and ends (the MCU times stages with it). It sees no
+/// data and cannot change the tick; `()` observes nothing and compiles away.
+pub trait StageObserver {
+    /// `stage` is about to run.
+    fn begin(&mut self, stage: Stage);
+    /// `stage` has run.
+    fn end(&mut self, stage: Stage);
+}
+
+impl StageObserver for () {
+    #[inline(always)]
+    fn begin(&mut self, _: Stage) {}
+    #[inline(always)]
+    fn end(&mut self, _: Stage) {}
 }
 
 /// Counters and state, reported every tick.
@@ -117,6 +152,9 @@ pub struct Status {
     pub overruns: [u32; 5],
     /// Dijkstra open-list overflows, cumulative.
     pub heap_overflows: u32,
+    /// Which way the camera should face now while walking to the goal (`None`: the direction of
+    /// travel, or the goal's heading once near it). See [`crate::Config::gaze`].
+    pub gaze: Option<BinaryAngle>,
 }
 
 /// What the controller asks of the robot this tick.
@@ -196,9 +234,10 @@ impl Controller {
                 blacklisted: 0,
                 retired: 0,
                 watchdog_trips: 0,
-                cost: StageCost { classify: 0, lidar: 0, visual: 0, nonmap: 0, plan: 0 },
+                cost: StageCost { classify: 0, lidar: 0, visual: 0, nonmap: 0, plan: 0, gaze: 0 },
                 overruns: [0; 5],
                 heap_overflows: 0,
+                gaze: None,
             },
         }
     }
@@ -273,6 +312,15 @@ impl Controller {
 
     /// Runs one tick at time `now_us` (microseconds, monotonic, supplied by the caller).
     pub fn tick(&mut self, now_us: u64, inputs: &Inputs<'_>) -> Outputs {
+        #[cfg(not(feature = "stage-hook"))]
+        let mut obs = ();
+        #[cfg(feature = "stage-hook")]
+        let mut obs = crate::mcu::hook::Hooked;
+        self.tick_observed(now_us, inputs, &mut obs)
+    }
+
+    /// [`Controller::tick`], telling `obs` where each stage begins and ends.
+    pub fn tick_observed(&mut self, now_us: u64, inputs: &Inputs<'_>, obs: &mut impl StageObserver) -> Outputs {
         self.status.ticks = self.status.ticks.wrapping_add(1);
         let mut new_goal = false;
 
@@ -307,17 +355,24 @@ impl Controller {
                     if scan.labels.is_none() {
                         // No labels from upstream: the int8 network labels the scan (every beam
                         // stays unlabelled until a model is installed).
+                        obs.begin(Stage::Classify);
                         let w = self.classifier.label_scan(&pose, &mut self.beams);
+                        obs.end(Stage::Classify);
                         self.status.cost.classify = w;
                         self.budget_check(4, w);
                     }
+                    obs.begin(Stage::Lidar);
                     let w = self.lidar.integrate(&pose, &self.beams, self.cfg.lidar_max_range_m);
+                    obs.end(Stage::Lidar);
                     self.status.cost.lidar = w;
                     self.budget_check(0, w);
+                    obs.begin(Stage::Visual);
                     let w = self.visual.integrate(&self.lidar, &pose, self.cfg.camera_fov, self.cfg.camera_range_m);
+                    obs.end(Stage::Visual);
                     self.status.cost.visual = w;
                     self.budget_check(1, w);
                     let geom = self.lidar.geom;
+                    obs.begin(Stage::NonMap);
                     let mut w = self.nonmap.integrate(
                         &geom,
                         &self.visual,
@@ -327,6 +382,7 @@ impl Controller {
                         self.cfg.nonmap_wall_clearance_m,
                     );
                     w += self.nonmap.filter(&geom, &self.visual, self.cfg.nonmap_pool_radius_m, self.cfg.nonmap_wall_clearance_m);
+                    obs.end(Stage::NonMap);
                     self.status.cost.nonmap = w;
                     self.budget_check(2, w);
                 }
@@ -359,7 +415,21 @@ impl Controller {
 
         if self.mode == Mode::Exploring {
             if let Some(pose) = self.pose {
-                new_goal = self.maybe_plan(now_us, &pose, inputs.base_blocked);
+                new_goal = self.maybe_plan(now_us, &pose, inputs.base_blocked, obs);
+            }
+        }
+
+        // Look while walking (see [`Config::gaze`]): scored every tick from where the robot is.
+        self.status.gaze = None;
+        if self.mode == Mode::Exploring && self.cfg.gaze {
+            if let (Some(pose), Some(g)) = (self.pose, &self.goal) {
+                if hypot(g.pose.x - pose.x, g.pose.y - pose.y) > crate::planner::GAZE_HANDOVER_M {
+                    obs.begin(Stage::Gaze);
+                    let (gaze, work) = self.planner.gaze(&self.cfg, &self.lidar, &self.visual, &self.nonmap, &pose);
+                    obs.end(Stage::Gaze);
+                    self.status.gaze = gaze.map(|(h, _)| h);
+                    self.status.cost.gaze = work;
+                }
             }
         }
 
@@ -369,7 +439,7 @@ impl Controller {
     }
 
     /// Plans when due; returns true if a different goal was chosen.
-    fn maybe_plan(&mut self, now_us: u64, pose: &Pose2, base_blocked: bool) -> bool {
+    fn maybe_plan(&mut self, now_us: u64, pose: &Pose2, base_blocked: bool, obs: &mut impl StageObserver) -> bool {
         // A block that clears (a person passing) is not the goal's fault; one that persists is.
         self.blocked_since = if base_blocked { Some(self.blocked_since.unwrap_or(now_us)) } else { None };
         let mut force = self.goal.is_none() || self.last_plan_us.is_none();
@@ -406,9 +476,11 @@ impl Controller {
             return false;
         }
         self.last_plan_us = Some(now_us);
+        obs.begin(Stage::Plan);
         let mut work = self.frontiers.compute(&self.lidar, &self.visual, self.cfg.min_frontier_cells);
         let current = self.goal.as_ref().map(|g| (g.viewpoint.cell, g.viewpoint.heading));
         let (best, current_utility) = self.planner.plan(&self.cfg, &self.lidar, &self.visual, &self.frontiers, &self.nonmap, pose, current);
+        obs.end(Stage::Plan);
         work += self.planner.stats.work;
         self.status.plans += 1;
         self.status.heap_overflows += self.planner.stats.heap_overflows;

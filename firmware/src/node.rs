@@ -21,7 +21,12 @@
 //!   `now_us = t` — the same inputs at the same time as an in-process loop, so the link changes
 //!   nothing. It ticks only when both the pose and the scan stamped `t` arrived: a batch that lost
 //!   one of them is not ticked (counted in [`NodeCounters::lockstep_incomplete`]) and the host sends
-//!   it again. A heartbeat for the time already ticked (a retry whose answer was lost) ticks
+//!   it again. A scan sent in segments (protocol v2) is assembled across the attempts at a batch
+//!   (a retry brings the segments again, and the ones lost before fill in); the batch ticks as
+//!   soon as the scan is complete — on a clean line at once, so segments change nothing — or, if
+//!   beams are still missing, on the [`NodeConfig::lockstep_partial_after`]-th heartbeat closing
+//!   it (default 8), with the beams that arrived ([`NodeCounters::lockstep_partial`]): a noisy
+//!   line delays a tick by a bounded number of retries and then costs beams, not the tick. A heartbeat for the time already ticked (a retry whose answer was lost) ticks
 //!   nothing and sends that tick's outputs again, the goal included; an older one is ignored.
 //!   Every host heartbeat is echoed *after* it was handled, so in this mode the echo says "batch
 //!   `t` is done" and follows the tick's `Status`: a host that sees the echo without `Status(t)`
@@ -67,12 +72,19 @@ pub struct NodeConfig {
     pub heartbeat_interval_us: u64,
     /// A goal is sent again after this long even if unchanged (µs).
     pub goal_refresh_us: u64,
+    /// Lockstep: a batch whose pose arrived but whose scan (sent in segments) is still missing
+    /// beams ticks on this many-th heartbeat closing it, with the beams that arrived (`0` or `1`:
+    /// on the first). A complete scan ticks at once.
+    pub lockstep_partial_after: u8,
 }
 
 impl NodeConfig {
-    /// One-second heartbeats and goal refreshes in `time_mode`.
+    /// One-second heartbeats and goal refreshes in `time_mode`; a partial scan ticks on the eighth
+    /// heartbeat of its batch (on a line that delivers 45 % of the segments per attempt, eight
+    /// attempts bring 99 % of them; lockstep time stands still meanwhile, so retries cost wall
+    /// time only).
     pub const fn new(time_mode: TimeMode) -> Self {
-        Self { time_mode, heartbeat_interval_us: 1_000_000, goal_refresh_us: 1_000_000 }
+        Self { time_mode, heartbeat_interval_us: 1_000_000, goal_refresh_us: 1_000_000, lockstep_partial_after: 8 }
     }
 }
 
@@ -99,8 +111,12 @@ pub struct NodeCounters {
     pub configs_applied: u32,
     /// Configurations refused (controller not idle).
     pub configs_refused: u32,
-    /// Lockstep: heartbeats for a new time whose pose or scan was missing (not ticked).
+    /// Lockstep: heartbeats for a new time whose pose or scan was missing, or whose scan was
+    /// still missing beams (not ticked).
     pub lockstep_incomplete: u32,
+    /// Lockstep: ticks with a scan missing beams (after [`NodeConfig::lockstep_partial_after`]
+    /// heartbeats).
+    pub lockstep_partial: u32,
     /// Lockstep: heartbeats for the time already ticked (outputs sent again).
     pub lockstep_repeats: u32,
     /// Lockstep: heartbeats older than the last tick (ignored).
@@ -122,6 +138,8 @@ pub struct Node {
     /// Stamps of the pose and scan received since the last tick (lockstep completeness).
     pose_t_us: Option<u64>,
     scan_t_us: Option<u64>,
+    /// Lockstep: the time of the batch whose scan is incomplete, and heartbeats that closed it.
+    partial_beats: Option<(u64, u8)>,
     /// Fingerprint (CRC of the frame) and time of the last goal sent.
     goal_sent: Option<(u32, u64)>,
     resend_goal: bool,
@@ -144,6 +162,7 @@ impl Node {
             last_out: None,
             pose_t_us: None,
             scan_t_us: None,
+            partial_beats: None,
             goal_sent: None,
             resend_goal: false,
             hb_seq: 0,
@@ -161,6 +180,7 @@ impl Node {
                 configs_applied: 0,
                 configs_refused: 0,
                 lockstep_incomplete: 0,
+                lockstep_partial: 0,
                 lockstep_repeats: 0,
                 lockstep_stale: 0,
                 encode_errors: 0,
@@ -237,26 +257,28 @@ impl Node {
                 return 0;
             }
         }
-        let beat = match &msg {
-            HostToCore::Pose(p) => {
-                self.pose_t_us = Some(p.t_us);
-                None
-            }
-            HostToCore::Scan(s) => {
-                self.scan_t_us = Some(s.t_us);
-                None
-            }
-            HostToCore::Heartbeat(h) => Some(*h),
-            _ => None,
+        let (beat, pose_t, scan_t) = match &msg {
+            HostToCore::Pose(p) => (None, Some(p.t_us), None),
+            HostToCore::Scan(s) => (None, None, Some(s.t_us)),
+            HostToCore::ScanSegment(s) => (None, None, Some(s.t_us)),
+            HostToCore::Heartbeat(h) => (Some(*h), None, None),
+            _ => (None, None, None),
         };
-        if let Accepted::Config(c) = self.inbox.accept(msg) {
-            if ctl.mode() == Mode::Idle {
-                ctl.set_config(c.config());
-                self.counters.configs_applied = self.counters.configs_applied.wrapping_add(1);
-            } else {
-                self.counters.configs_refused = self.counters.configs_refused.wrapping_add(1);
-                self.emit_error(ErrorCode::ConfigRefused, send);
+        match self.inbox.accept(msg) {
+            Accepted::Config(c) => {
+                if ctl.mode() == Mode::Idle {
+                    ctl.set_config(c.config());
+                    self.counters.configs_applied = self.counters.configs_applied.wrapping_add(1);
+                } else {
+                    self.counters.configs_refused = self.counters.configs_refused.wrapping_add(1);
+                    self.emit_error(ErrorCode::ConfigRefused, send);
+                }
             }
+            Accepted::Stored => {
+                self.pose_t_us = pose_t.or(self.pose_t_us);
+                self.scan_t_us = scan_t.or(self.scan_t_us);
+            }
+            Accepted::NotForInbox | Accepted::Refused => {}
         }
         let Some(h) = beat else { return 0 };
         let mut ticks = 0;
@@ -288,6 +310,18 @@ impl Node {
             // Nothing since the last tick: a plain heartbeat (a link probe), not a batch.
             _ if self.pose_t_us.is_none() && self.scan_t_us.is_none() => 0,
             _ if self.pose_t_us == Some(t) && self.scan_t_us == Some(t) => {
+                if !self.inbox.scan_complete() {
+                    let beats = match self.partial_beats {
+                        Some((pt, n)) if pt == t => n.saturating_add(1),
+                        _ => 1,
+                    };
+                    if beats < self.cfg.lockstep_partial_after {
+                        self.partial_beats = Some((t, beats));
+                        self.counters.lockstep_incomplete = self.counters.lockstep_incomplete.wrapping_add(1);
+                        return 0;
+                    }
+                    self.counters.lockstep_partial = self.counters.lockstep_partial.wrapping_add(1);
+                }
                 self.tick(t, ctl, |f| send(f));
                 1
             }
@@ -307,6 +341,7 @@ impl Node {
         self.inbox.ticked();
         self.pose_t_us = None;
         self.scan_t_us = None;
+        self.partial_beats = None;
         self.last_tick_us = Some(now_us);
         self.counters.ticks = self.counters.ticks.wrapping_add(1);
         if self.session.is_open() {
@@ -396,8 +431,8 @@ mod tests {
     use crate::config::Config;
     use crate::grid::Cell;
     use crate::protocol::{
-        AckReason, BaseStatus, ConfigMsg, GoalMsg, Hello, HostDecoder, PoseMsg, Role, ScanMsg, WireCommand, WireMode, MAX_FRAME_LEN,
-        PROTOCOL_VERSION,
+        AckReason, BaseStatus, ConfigMsg, GoalMsg, Hello, HostDecoder, PoseMsg, Role, ScanMsg, StatusMsg, WireCommand, WireMode,
+        MAX_FRAME_LEN, PROTOCOL_VERSION,
     };
     use crate::scan::{BeamLabel, RANGE_NO_RETURN};
     use std::boxed::Box;
@@ -565,6 +600,84 @@ mod tests {
     impl Rig {
         fn ctl_ticks(&self) -> u32 {
             self.node.last_out.as_ref().map_or(0, |o| o.status.ticks)
+        }
+    }
+
+    /// A batch with its scan cut into segments of `per` beams, leaving out the segments `lose`.
+    fn segmented_batch(t_us: u64, extra: &[HostToCore], per: usize, lose: &[usize]) -> Vec<u8> {
+        let mut b = Vec::new();
+        for m in extra {
+            b.extend(frame(m));
+        }
+        b.extend(frame(&pose(t_us)));
+        let HostToCore::Scan(s) = scan(t_us, true) else { unreachable!() };
+        for (i, seg) in s.segments(per).enumerate() {
+            if !lose.contains(&i) {
+                b.extend(frame(&HostToCore::ScanSegment(seg)));
+            }
+        }
+        b.extend(frame(&beat(t_us, t_us as u32)));
+        b
+    }
+
+    #[test]
+    fn a_scan_in_segments_ticks_exactly_like_the_whole_scan() {
+        let mut whole = Rig::new(TimeMode::Lockstep);
+        let mut split = Rig::new(TimeMode::Lockstep);
+        whole.hello(false);
+        split.hello(false);
+        for k in 0..6u64 {
+            let extra: &[HostToCore] = if k == 0 { &[HostToCore::Command(WireCommand::Start)] } else { &[] };
+            let (tw, ow) = whole.rx(&batch(k * T, extra));
+            let (ts, os) = split.rx(&segmented_batch(k * T, extra, 16, &[]));
+            assert_eq!((tw, ts), (1, 1), "a complete segmented scan ticks at once");
+            // Same goals and statuses (the link counters aside: more frames came in).
+            assert_eq!(goals(&ow), goals(&os));
+            let strip = |v: Vec<StatusMsg>| v.into_iter().map(|s| StatusMsg { link: LinkCounters::default(), ..s }).collect::<Vec<_>>();
+            assert_eq!(strip(statuses(&ow)), strip(statuses(&os)));
+        }
+        assert_eq!(whole.ctl.lidar.grid.count(Cell::Free), split.ctl.lidar.grid.count(Cell::Free));
+        assert_eq!(split.node.counters().lockstep_partial, 0);
+        assert_eq!(split.node.inbox().segments_accepted, 6 * 45);
+    }
+
+    #[test]
+    fn a_partial_scan_waits_for_retries_then_ticks_with_what_arrived() {
+        let mut r = Rig::new(TimeMode::Lockstep);
+        r.node.cfg.lockstep_partial_after = 3;
+        r.hello(false);
+        let start = [HostToCore::Command(WireCommand::Start)];
+        // Segments 3 and 7 lost: no tick on the first two heartbeats (the host retries) ...
+        let (ticks, out) = r.rx(&segmented_batch(0, &start, 16, &[3, 7]));
+        assert_eq!(ticks, 0);
+        assert_eq!(out, [CoreToHost::Heartbeat(Heartbeat { t_us: 0, seq: 0 })]);
+        // ... the retry brings segment 3 but loses 7 again ...
+        let (ticks, _) = r.rx(&segmented_batch(0, &[], 16, &[7]));
+        assert_eq!(ticks, 0);
+        assert_eq!(r.node.counters().lockstep_incomplete, 2);
+        assert_eq!(r.node.inbox().scan_beams(), Some((720 - 16, 720)), "segment 3 filled in across the attempts");
+        // ... and the third heartbeat ticks with the 704 beams that arrived.
+        let (ticks, out) = r.rx(&segmented_batch(0, &[], 16, &[7]));
+        assert_eq!(ticks, 1);
+        assert_eq!(statuses(&out)[0].t_us, 0);
+        assert_eq!(statuses(&out)[0].scans, 1);
+        assert_eq!(r.node.counters().lockstep_partial, 1);
+        assert_eq!(r.ctl.mode(), Mode::Exploring, "the Start of the first attempt was kept");
+        // A batch whose retry completes the scan ticks at once, on its second heartbeat.
+        let (ticks, _) = r.rx(&segmented_batch(T, &[], 16, &[0]));
+        assert_eq!(ticks, 0);
+        let (ticks, _) = r.rx(&segmented_batch(T, &[], 16, &[5]));
+        assert_eq!(ticks, 1);
+        assert_eq!(r.node.counters().lockstep_partial, 1);
+        // A heartbeat without the pose never ticks, however often.
+        for _ in 0..5 {
+            let mut b = Vec::new();
+            let HostToCore::Scan(s) = scan(2 * T, true) else { unreachable!() };
+            for seg in s.segments(16) {
+                b.extend(frame(&HostToCore::ScanSegment(seg)));
+            }
+            b.extend(frame(&beat(2 * T, 1)));
+            assert_eq!(r.rx(&b).0, 0);
         }
     }
 

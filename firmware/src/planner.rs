@@ -46,6 +46,11 @@ pub const UNREACHABLE: u16 = u16::MAX;
 pub const MAX_SEGMENT_CELLS: i32 = 30;
 /// Rays cast across the camera cone when scoring a viewpoint's unseen cells.
 pub const SCORE_RAYS: usize = 24;
+/// Headings the gaze is chosen from (every 22.5°).
+pub const GAZE_HEADINGS: usize = 16;
+/// Within this distance of its goal the robot stops choosing a gaze and turns to the goal's
+/// heading (the viewpoint's own view).
+pub const GAZE_HANDOVER_M: Meters = Meters::from_bits(1 << 16);
 
 /// The four viewpoint headings.
 pub const HEADINGS: [BinaryAngle; 4] = [BinaryAngle::ZERO, BinaryAngle::QUARTER, BinaryAngle::HALF, BinaryAngle(-(1 << 30))];
@@ -592,6 +597,43 @@ impl Planner {
         self.stats.work = work;
         let goal = best.map(|vp| self.goal_for(lidar, vp));
         (goal, current_utility)
+    }
+
+    /// Where the camera should look from the robot's own cell while the base walks its path
+    /// (the base is holonomic: Spot can walk one way and face another). Each of
+    /// [`GAZE_HEADINGS`] headings is scored with the utility's view terms — camera-unseen cells
+    /// and, for `lives`, non-map points in the cone — and the best is returned with its score
+    /// (Q16.16 utility bits), or `None` when no heading offers at least `cfg.gaze_min_gain`.
+    /// Reads the grids, writes only scratch; its work units are returned too.
+    pub fn gaze(
+        &mut self,
+        cfg: &Config,
+        lidar: &LidarGrid,
+        visual: &VisualGrid,
+        nonmap: &NonMapStore,
+        pose: &Pose2,
+    ) -> (Option<(BinaryAngle, i64)>, u32) {
+        let robot = lidar.geom.cell_of(pose.x, pose.y);
+        if !PackedGrid::in_bounds(robot.0, robot.1) {
+            return (None, 0);
+        }
+        let range_cells = GridGeometry::cells(cfg.camera_range_m);
+        let w_nonmap = cfg.effective_w_nonmap();
+        let mut work = if w_nonmap != Weight::ZERO { self.visible_nonmap(lidar, nonmap, robot, range_cells) } else { 0 };
+        let mut best: Option<(BinaryAngle, i64)> = None;
+        for i in 0..GAZE_HEADINGS {
+            let heading = BinaryAngle((i as u32).wrapping_mul(u32::MAX / GAZE_HEADINGS as u32 + 1) as i32);
+            let view = visual.unseen_in_cone(lidar, robot.0, robot.1, heading, cfg.camera_fov, range_cells, SCORE_RAYS, cfg.unseen_unknown_eighths);
+            work += view.work;
+            let nm = if w_nonmap != Weight::ZERO { self.in_cone(heading, cfg.camera_fov, cfg.nonmap_block_cap) } else { 0 };
+            let gain = cfg.w_unknown_per_cell.to_bits() as i64 * view.unseen_cells as i64
+                + cfg.w_surface_per_ray.to_bits() as i64 * view.unseen_surface_rays as i64
+                + w_nonmap.to_bits() as i64 * nm as i64;
+            if best.is_none_or(|(_, g)| gain > g) {
+                best = Some((heading, gain));
+            }
+        }
+        (best.filter(|&(_, g)| g >= cfg.gaze_min_gain.to_bits() as i64), work)
     }
 
     /// Visible non-map points (from the last [`Planner::visible_nonmap`]) within the cone.

@@ -418,3 +418,42 @@ fn a_goal_blocked_for_too_long_is_blacklisted_and_replaced() {
         assert!(dx * dx + dy * dy > 25, "the new goal is outside the blacklist radius");
     }
 }
+
+#[test]
+fn the_gaze_turns_to_what_is_unseen_and_to_non_map_points() {
+    // The room, all free to the LiDAR; the camera has seen everything but the west half.
+    let lidar = room_grid(false);
+    let mut vis = Box::new(VisualGrid::new());
+    for y in 51..100 {
+        for x in 75..100 {
+            vis.grid.set(x, y, Cell::Free);
+        }
+    }
+    let store = Box::new(NonMapStore::new());
+    let mut planner = Box::new(Planner::new());
+    let robot = pose(7.55, 7.55, 0.0); // the room's centre, facing east
+    let cfg = Config { planner: PlannerKind::Multisensor, ..Config::DEFAULT };
+    let (gaze, work) = planner.gaze(&cfg, &lidar, &vis, &store, &robot);
+    let (h, _) = gaze.expect("half the room unseen is worth a look");
+    assert!((h - firmware::BinaryAngle::HALF).unsigned_abs() <= firmware::BinaryAngle::from_degrees(45).unsigned_abs(), "looks west: {h:?}");
+    assert!(work > 0);
+
+    // Everything seen: nothing is worth turning for (the camera faces the way it walks).
+    for y in 51..100 {
+        for x in 51..100 {
+            vis.grid.set(x, y, Cell::Free);
+        }
+    }
+    assert_eq!(planner.gaze(&cfg, &lidar, &vis, &store, &robot).0, None);
+
+    // Non-map points to the north pull the gaze of `lives`, not of `multisensor`.
+    let mut store = Box::new(NonMapStore::new());
+    for k in 0..8 {
+        store.insert(&geom(), Config::mm(7_000 + 150 * k), Config::mm(9_400), cfg.nonmap_pool_radius_m);
+    }
+    let lives = Config { planner: PlannerKind::Lives, ..Config::DEFAULT };
+    let (g, _) = planner.gaze(&lives, &lidar, &vis, &store, &robot);
+    let (h, _) = g.expect("points in view are worth a look");
+    assert!((h - firmware::BinaryAngle::QUARTER).unsigned_abs() <= firmware::BinaryAngle::from_degrees(45).unsigned_abs(), "looks north: {h:?}");
+    assert_eq!(planner.gaze(&cfg, &lidar, &vis, &store, &robot).0, None);
+}

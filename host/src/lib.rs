@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod dataset;
+pub mod eval;
 pub mod labeller;
 pub mod link;
 pub mod model;
@@ -11,5 +12,6 @@ pub mod picture;
 pub mod render;
 pub mod search;
 pub mod sim;
+pub mod trace;
 #[cfg(feature = "train")]
 pub mod train;

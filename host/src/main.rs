@@ -121,6 +121,11 @@ enum Cmd {
         /// The simulator waits for the node each tick (the node must run with --lockstep too).
         #[arg(long)]
         lockstep: bool,
+        /// Send each scan in segments of this many beams (1-128; protocol v2 `ScanSegment`)
+        /// instead of one frame: for a noisy line, where small frames survive and a 2.7 kB scan
+        /// frame does not. 0: whole scans.
+        #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u16).range(0..=128))]
+        scan_segment_beams: u16,
         /// Print one JSON object (result and link health).
         #[arg(long)]
         json: bool,
@@ -171,6 +176,30 @@ enum Cmd {
         /// Continue from this checkpoint instead of a fresh initialisation.
         #[arg(long)]
         resume: Option<PathBuf>,
+        /// The range (mm) that normalises to 1; longer ranges clamp (written into the blob).
+        #[arg(long, default_value_t = 30_000)]
+        range_max_mm: u32,
+        /// Start the scan convolution as this weight on the newest scan's centre tap, zero elsewhere (0: PyTorch's init).
+        #[arg(long, default_value_t = 0.0)]
+        scan_conv_init: f32,
+        /// First epoch whose self-feedback histories are a rollout of the current model (1 when resuming a trained model).
+        #[arg(long, default_value_t = 2)]
+        own_history_from_epoch: usize,
+        /// Initial bias of the label encoder's linear layer (0: PyTorch's init; 2 starts label_enc near +1 everywhere).
+        #[arg(long, default_value_t = 0.0)]
+        label_bias_init: f32,
+        /// Inverse-range scan inputs: min(1, range_max_mm / r), no return 0, dropouts filled from the previous beam.
+        #[arg(long)]
+        inverse_range: bool,
+        /// Epochs with the encoders' 897 × 897 weights trained as circulant matrices (one kernel for every beam), before full training.
+        #[arg(long, default_value_t = 0)]
+        circulant_epochs: usize,
+        /// Loss weight of non-map beams (map beams 1).
+        #[arg(long, default_value_t = 1.0)]
+        non_map_weight: f32,
+        /// Cosine learning-rate decay to lr / 20 over the run.
+        #[arg(long)]
+        lr_decay: bool,
     },
     /// Quantise a checkpoint to the int8 blob the firmware runs, evaluate it, and write the model card.
     /// (Built with `--features train`.)
@@ -201,6 +230,57 @@ enum Cmd {
         #[arg(long)]
         notes: Option<PathBuf>,
     },
+    /// Golden traces of the serial link: record the host → core stream of a simulated search,
+    /// or replay one through the core and print a digest of every answer (docs/mcu.md).
+    #[command(subcommand)]
+    Trace(TraceCmd),
+    /// Reproduce the paper's Table I: every planner over the built-in worlds and scenarios,
+    /// N trials each, in parallel; writes the table (Markdown, JSON, CSV) and plots.
+    Eval {
+        /// Trials per planner and setting (seeds 1..=N: start pose, target placement, people, noise).
+        #[arg(long, default_value_t = 10)]
+        trials: u64,
+        /// Built-in worlds, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "apartment,office,hallway")]
+        worlds: Vec<String>,
+        /// Scenarios, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "easy,hard")]
+        scenarios: Vec<Scenario>,
+        /// Planners, comma-separated (`lives` runs the embedded int8 classifier).
+        #[arg(long, value_delimiter = ',', default_value = "nearest,multisensor,lives-gt,lives")]
+        planners: Vec<PlannerChoice>,
+        /// Worker threads (default: the machine's cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Output directory: table.md, results.json, results.csv, times.png, trajectories/.
+        #[arg(long, default_value = "out/eval")]
+        out: PathBuf,
+        /// Skip the trajectory pictures.
+        #[arg(long)]
+        no_pictures: bool,
+        /// Override a controller parameter for every planner (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        set: Vec<String>,
+    },
+    /// Tune planner parameters on procedurally generated worlds only (never the built-in ones):
+    /// scores every combination of the `--grid` values by mean time to find / time limit.
+    Tune {
+        /// Random worlds `--world random --seed 1..=N`.
+        #[arg(long, default_value_t = 48)]
+        worlds: u64,
+        /// Planners the score averages over, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "lives-gt,multisensor")]
+        planners: Vec<PlannerChoice>,
+        /// A parameter and its candidate values, e.g. `--grid w_dist_per_m=0.5,1,2` (repeatable).
+        #[arg(long, value_name = "NAME=V1,V2,...", required = true)]
+        grid: Vec<String>,
+        /// Worker threads (default: the machine's cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Write the ranking as JSON here.
+        #[arg(long, default_value = "out/tune.json")]
+        out: PathBuf,
+    },
     /// List the controller parameters `--set` accepts, with their defaults.
     Params,
     /// List the built-in worlds, or print one as a world file.
@@ -224,6 +304,33 @@ enum Cmd {
         /// Also time whole simulated searches (apartment easy, seeds 1–5) against real time.
         #[arg(long)]
         searches: bool,
+    },
+}
+
+#[derive(Subcommand)]
+enum TraceCmd {
+    /// Record the first --ticks lockstep batches of a simulated search (bridge ↔ node in memory).
+    Record {
+        #[command(flatten)]
+        run: RunArgs,
+        /// Where to write the trace.
+        #[arg(long)]
+        out: PathBuf,
+        /// Ticks (lockstep batches) to record.
+        #[arg(long, default_value_t = 150)]
+        ticks: u32,
+        /// Send the simulator's labels with the scans instead of running the core's classifier
+        /// (embedded model) on them.
+        #[arg(long)]
+        labels: bool,
+    },
+    /// Replay a trace through a fresh lockstep node and print `R record t_us ticks len crc32` per record.
+    Replay {
+        /// The trace file.
+        file: PathBuf,
+        /// Also print every message of the trace and of the node's answers.
+        #[arg(long)]
+        decode: bool,
     },
 }
 
@@ -279,6 +386,111 @@ fn progress_bar(len: u64) -> ProgressBar {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     pb
+}
+
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// A progress bar counting searches (hidden when stderr is not a terminal).
+fn count_bar() -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(0);
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} searches {pos}/{len} [{bar:40}] {elapsed} (eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    pb
+}
+
+fn write_file(path: &std::path::Path, text: &str) -> Result<(), String> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn eval_cmd(
+    trials: u64,
+    worlds: &[String],
+    scenarios: &[Scenario],
+    planners: &[PlannerChoice],
+    threads: Option<usize>,
+    out: &std::path::Path,
+    no_pictures: bool,
+    set: &[String],
+) -> Result<ExitCode, String> {
+    use host::eval;
+    if trials == 0 {
+        return Err("--trials must be at least 1".into());
+    }
+    let configure = |spec: &mut SearchSpec| -> Result<(), String> {
+        for a in set {
+            host::overrides::apply(&mut spec.controller, a)?;
+        }
+        Ok(())
+    };
+    let specs = eval::eval_specs(worlds, scenarios, planners, trials, firmware::classifier::EMBEDDED_MODEL, configure)?;
+    let pb = count_bar();
+    pb.set_length(specs.len() as u64);
+    let t0 = Instant::now();
+    let results = eval::run_batch(&specs, threads.unwrap_or_else(cores), |n| pb.set_position(n as u64))?;
+    pb.finish_and_clear();
+    let wall = t0.elapsed().as_secs_f64();
+    let cells = eval::summarise(&results);
+    let commit = std::process::Command::new("git")
+        .args(["rev-parse", "--short", "HEAD"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|| "unknown".into());
+    let command = std::env::args().map(|a| if a.contains(' ') { format!("'{a}'") } else { a }).collect::<Vec<_>>().join(" ");
+    let table = eval::markdown_table(&cells);
+    let md = format!(
+        "{table}\nCommand: `{command}` · commit {commit} · {} searches in {wall:.0} s on {} threads.\n",
+        results.len(),
+        threads.unwrap_or_else(cores)
+    );
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    write_file(&out.join("table.md"), &md)?;
+    write_file(&out.join("results.csv"), &eval::csv(&cells))?;
+    let json = serde_json::json!({ "command": command, "commit": commit, "wall_s": wall, "summary": cells, "trials": results });
+    write_file(&out.join("results.json"), &serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?)?;
+    // Time-to-find distributions: one panel per setting, one column per planner.
+    let mut panels = Vec::new();
+    let mut seen: Vec<(String, String)> = Vec::new();
+    for c in &cells {
+        let key = (c.world.clone(), c.scenario.clone());
+        if seen.contains(&key) {
+            continue;
+        }
+        seen.push(key);
+        let columns =
+            cells.iter().filter(|d| d.world == c.world && d.scenario == c.scenario).map(|d| (d.planner.as_str(), d.times_s.clone())).collect();
+        panels.push(host::render::StripPanel { title: format!("{} {} (limit {:.0} s)", c.world, c.scenario, c.time_limit_s), y_max: c.time_limit_s, columns });
+    }
+    let times_png = out.join("times.png");
+    host::render::write_strip_plot(&times_png, &format!("time to find, {trials} trials (failure = limit)"), "s", &panels)
+        .map_err(|e| format!("{}: {e}", times_png.display()))?;
+    if !no_pictures {
+        // One trajectory picture per planner and setting, all for seed 1.
+        let dir = out.join("trajectories");
+        std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        for spec in specs.iter().filter(|s| s.seed == 1) {
+            let run = search::try_run(spec, |_| {}).map_err(|e| format!("{e:?}"))?;
+            let r = &run.result;
+            let title = format!("{} {} · {} · seed 1 · {}", r.world, r.scenario, r.planner, if r.found { format!("FOUND in {:.1} s", r.time_s) } else { "NOT FOUND".into() });
+            let path = dir.join(format!("{}-{}-{}.png", r.world, r.scenario, r.planner));
+            host::picture::write_png(&run, &path, &title).map_err(|e| format!("{}: {e}", path.display()))?;
+        }
+    }
+    say!("{md}");
+    say!("written: {0}/table.md, {0}/results.json, {0}/results.csv, {0}/times.png{1}", out.display(), if no_pictures { "" } else { ", trajectories/" });
+    Ok(ExitCode::SUCCESS)
 }
 
 fn main() -> ExitCode {
@@ -463,7 +675,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             );
             Ok(ExitCode::SUCCESS)
         }
-        Cmd::Bridge { port, baud, source, run: RunArgs { world, scenario, planner, seed }, set, lockstep, json } => {
+        Cmd::Bridge { port, baud, source, run: RunArgs { world, scenario, planner, seed }, set, lockstep, scan_segment_beams, json } => {
             use host::link::{run_bridge, BridgeOptions, SerialLink, Source, TimeMode};
             if source != "sim" {
                 return Err(format!("unknown source `{source}` (only `sim` for now)"));
@@ -479,7 +691,8 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 SerialLink::by_path(&port, baud)
             });
             let stop = std::sync::atomic::AtomicBool::new(false);
-            let run = run_bridge(&mut link, Source::Sim(spec), &BridgeOptions::new(mode), &stop).map_err(|e| e.to_string())?;
+            let opts = BridgeOptions { scan_segment_beams: scan_segment_beams as usize, ..BridgeOptions::new(mode) };
+            let run = run_bridge(&mut link, Source::Sim(spec), &opts, &stop).map_err(|e| e.to_string())?;
             let (r, st) = (&run.result, &run.stats);
             if json {
                 let goals: Vec<_> = run.goals.iter().map(|((x, y), h)| serde_json::json!([x, y, h.0])).collect();
@@ -498,7 +711,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                     st.decoder
                 );
                 say!(
-                    "link: {} retries, {} hellos, {} losses, {} reopenings, {} io errors; round trip p50 {:.0} us p95 {:.0} us; scan frame {} B",
+                    "link: {} retries, {} hellos, {} losses, {} reopenings, {} io errors; round trip p50 {:.0} us p95 {:.0} us; batch round trip p50 {:.0} us p95 {:.0} us; scan {} B in {} frame(s)",
                     st.retries,
                     st.hellos_sent,
                     st.link_losses,
@@ -506,7 +719,10 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                     st.io_errors,
                     st.link_rtt_us.p50,
                     st.link_rtt_us.p95,
-                    st.scan_frame_bytes
+                    st.batch_rtt_us.p50,
+                    st.batch_rtt_us.p95,
+                    st.scan_frame_bytes,
+                    st.scan_frames
                 );
                 if let Some(n) = &st.node_status {
                     say!("node: {:?}, {} ticks, {} scans, rejected {} {:?}", n.mode, n.ticks, n.scans, n.link.dropped(), n.link);
@@ -530,6 +746,14 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             init_diag,
             max_samples,
             resume,
+            range_max_mm,
+            inverse_range,
+            label_bias_init,
+            own_history_from_epoch,
+            scan_conv_init,
+            circulant_epochs,
+            non_map_weight,
+            lr_decay,
         } => {
             let cfg = host::train::TrainConfig {
                 data,
@@ -544,6 +768,14 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 history_dropout,
                 init_diag,
                 max_samples,
+                range_max_mm,
+                inverse_range,
+                label_bias_init,
+                own_history_from_epoch,
+                scan_conv_init,
+                circulant_epochs,
+                non_map_weight,
+                lr_decay,
                 command: std::env::args().collect::<Vec<_>>().join(" "),
             };
             let progress = |e: &host::train::EpochLog| {
@@ -588,6 +820,68 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 100.0 * r.val.int8_ar_raw.all.accuracy(),
                 r.unseen.as_ref().map(|u| format!(", built-in worlds {:.2} %", 100.0 * u.int8_ar_raw.all.accuracy())).unwrap_or_default()
             );
+            Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Trace(TraceCmd::Record { run: RunArgs { world, scenario, planner, seed }, out, ticks, labels }) => {
+            let (name, w) = load_world(&world, scenario, seed)?;
+            let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
+            if !labels {
+                spec.model = Some(firmware::classifier::EMBEDDED_MODEL);
+            }
+            let bytes = host::trace::record(spec, ticks)?;
+            std::fs::write(&out, &bytes).map_err(|e| format!("{}: {e}", out.display()))?;
+            say!("{}: {} bytes, {} ticks", out.display(), bytes.len(), ticks);
+            Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Trace(TraceCmd::Replay { file, decode }) => {
+            let bytes = std::fs::read(&file).map_err(|e| format!("{}: {e}", file.display()))?;
+            if decode {
+                for line in host::trace::decode(&bytes).map_err(|e| format!("{}: {e}", file.display()))? {
+                    say!("{line}");
+                }
+                return Ok(ExitCode::SUCCESS);
+            }
+            for d in host::trace::replay(&bytes).map_err(|e| format!("{}: {e}", file.display()))? {
+                say!("{}", host::trace::digest_line(&d));
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Eval { trials, worlds, scenarios, planners, threads, out, no_pictures, set } => {
+            eval_cmd(trials, &worlds, &scenarios, &planners, threads, &out, no_pictures, &set)
+        }
+        Cmd::Tune { worlds, planners, grid, threads, out } => {
+            let grid: Vec<(String, Vec<String>)> = grid.iter().map(|g| host::eval::parse_grid_axis(g)).collect::<Result<_, _>>()?;
+            // Reject unknown names and bad values before spending minutes.
+            for a in host::eval::grid_assignments(&grid) {
+                let mut c = firmware::Config::DEFAULT;
+                for x in &a {
+                    host::overrides::apply(&mut c, x)?;
+                }
+            }
+            if worlds == 0 {
+                return Err("--worlds must be at least 1".into());
+            }
+            let pb = count_bar();
+            let t0 = Instant::now();
+            let scores = host::eval::tune(&grid, &planners, 1..=worlds, threads.unwrap_or_else(cores), |n, total| {
+                pb.set_length(total as u64);
+                pb.set_position(n as u64);
+            })?;
+            pb.finish_and_clear();
+            say!("| rank | assignment | mean time / limit | 95 % CI | found |\n|---|---|---|---|---|");
+            for (i, sc) in scores.iter().enumerate() {
+                say!("| {} | {} | {:.3} | ± {:.3} | {:.0} % |", i + 1, sc.sets.join(" "), sc.mean_normalised_time, sc.ci95, 100.0 * sc.success_rate);
+            }
+            if let Some(best) = scores.first() {
+                say!(
+                    "best on random worlds 1..={worlds} ({} searches each, {:.0} s): --set {}",
+                    best.searches,
+                    t0.elapsed().as_secs_f64(),
+                    best.sets.join(" --set ")
+                );
+            }
+            write_file(&out, &serde_json::to_string_pretty(&scores).map_err(|e| e.to_string())?)?;
+            say!("ranking: {}", out.display());
             Ok(ExitCode::SUCCESS)
         }
         Cmd::Params => {

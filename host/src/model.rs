@@ -14,7 +14,7 @@
 
 use firmware::capacity::BEAMS;
 use firmware::classifier::{
-    model::layout, ChannelParams, HeadParams, Layer, ModelWriter, Normalisation, ENC_KERNEL, ENC_PAD, HISTORY, LABEL_ROWS, POSE_CHANNELS,
+    model::layout, ChannelParams, HeadParams, Layer, ModelWriter, Normalisation, RangeEncoding, ENC_KERNEL, ENC_PAD, HISTORY, LABEL_ROWS, POSE_CHANNELS,
     POSE_FEATURES, POSE_FLAT,
 };
 use firmware::scan::{RANGE_INVALID, RANGE_NO_RETURN};
@@ -217,13 +217,32 @@ impl FloatModel {
     }
 }
 
-/// One range (mm) normalised in floating point, as the firmware does in integers: invalid → 0,
-/// no return → 1, otherwise `min(r, max) / max`.
+/// One range (mm) normalised in floating point, as the firmware does in integers. Linear: invalid
+/// → 0, no return → 1, otherwise `min(r, max) / max` (not rounded). Inverse: exactly the
+/// firmware's int8 value over 127 (invalid beams are filled by [`normalise_scan_f32`]; here they
+/// give −1/127).
 pub fn normalise_range_f32(r_mm: u16, norm: &Normalisation) -> f32 {
-    match r_mm {
-        RANGE_INVALID => 0.0,
-        RANGE_NO_RETURN => 1.0,
-        r => (r as f32).min(norm.range_max_mm as f32) / norm.range_max_mm as f32,
+    match norm.range_encoding {
+        RangeEncoding::Inverse => firmware::classifier::normalise_range(r_mm, norm) as f32 / 127.0,
+        RangeEncoding::Linear => match r_mm {
+            RANGE_INVALID => 0.0,
+            RANGE_NO_RETURN => 1.0,
+            r => (r as f32).min(norm.range_max_mm as f32) / norm.range_max_mm as f32,
+        },
+    }
+}
+
+/// A whole scan normalised as the firmware's `normalise_scan` does (in the inverse encoding,
+/// invalid beams take the nearest valid value before them), appended to `out`.
+pub fn normalise_scan_f32(ranges_mm: &[u16], norm: &Normalisation, out: &mut Vec<f32>) {
+    match norm.range_encoding {
+        RangeEncoding::Linear => out.extend(ranges_mm.iter().map(|&r| normalise_range_f32(r, norm))),
+        RangeEncoding::Inverse => {
+            let mut row = [0i8; BEAMS];
+            let ranges: &[u16; BEAMS] = ranges_mm.try_into().expect("897 beams");
+            firmware::classifier::normalise_scan(ranges, norm, &mut row);
+            out.extend(row.iter().map(|&q| q as f32 / 127.0));
+        }
     }
 }
 
@@ -261,7 +280,9 @@ impl FloatHistory {
     /// Appends a scan taken at `pose`.
     pub fn push_scan(&mut self, pose: &Pose2, ranges_mm: &[u16]) {
         self.scans.remove(0);
-        self.scans.push(ranges_mm.iter().map(|&r| normalise_range_f32(r, &self.norm)).collect());
+        let mut row = Vec::with_capacity(BEAMS);
+        normalise_scan_f32(ranges_mm, &self.norm, &mut row);
+        self.scans.push(row);
         self.poses.remove(0);
         self.poses.push(Some(*pose));
     }
@@ -512,6 +533,34 @@ mod tests {
                 assert!((pq[t][f] as f32 - 127.0 * x.poses[t][f]).abs() <= 0.51, "pose {t} {f}: {} vs {}", pq[t][f], x.poses[t][f]);
             }
         }
+    }
+
+    /// In the inverse encoding the float history sees exactly the firmware's int8 scan rows
+    /// (dropouts filled the same way), and the blob carries the encoding.
+    #[test]
+    fn inverse_range_inputs_are_the_firmwares() {
+        let norm = Normalisation { range_max_mm: 500, range_encoding: RangeEncoding::Inverse, ..Normalisation::DEFAULT };
+        let mut rng = SplitMix64(9);
+        let h = raw_history(&mut rng);
+        let mut model = FloatModel::random(5);
+        model.norm = norm;
+        let x = float_inputs(&h, norm);
+        let mut fh = firmware::classifier::ScanHistory::new();
+        for (s, p) in h.scans.iter().zip(&h.poses) {
+            fh.push_scan(p, s, &norm);
+        }
+        let mut invalid = 0;
+        for r in 0..HISTORY {
+            for b in 0..BEAMS {
+                assert_eq!(fh.scan_row(r)[b] as f32 / 127.0, x.scans[r * BEAMS + b], "scan {r} {b}");
+                invalid += (h.scans[r][b] == RANGE_INVALID) as usize;
+            }
+            assert!(fh.scan_row(r).iter().all(|&q| q >= 0));
+        }
+        assert!(invalid > 0, "the test history has dropouts");
+        let blob = quantise(&model, &[x]);
+        let view = firmware::classifier::ModelView::parse(&blob).unwrap();
+        assert_eq!(view.normalisation(), norm);
     }
 
     /// The blob parses in the firmware; quantising twice gives the same bytes; and on random

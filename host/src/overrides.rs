@@ -21,6 +21,8 @@ pub const NAMES: &[(&str, &str)] = &[
     ("unseen_unknown_eighths", "weight of LiDAR-unknown cells in the unseen term, eighths (8 = paper)"),
     ("nonmap_block_cap", "non-map points counted per 0.8 m block (0 = all)"),
     ("look_around_here", "true/false: score turning in place at the robot's cell"),
+    ("gaze", "true/false: look while walking (camera faces the best heading, not the travel direction)"),
+    ("gaze_min_gain", "least view utility worth turning the camera for while walking"),
     ("nonmap_viewpoints", "true/false: viewpoints aimed at non-map clusters (lives)"),
     ("nonmap_standoff_m", "distance of a non-map viewpoint from its cluster, metres"),
     ("nonmap_pool_radius_m", "pooling radius of non-map points, metres"),
@@ -88,6 +90,8 @@ pub fn apply(cfg: &mut Config, assignment: &str) -> Result<(), String> {
         }
         "nonmap_block_cap" => cfg.nonmap_block_cap = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a count (0-255)"))?,
         "look_around_here" => cfg.look_around_here = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
+        "gaze" => cfg.gaze = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
+        "gaze_min_gain" => cfg.gaze_min_gain = weight(name, v)?,
         "nonmap_viewpoints" => cfg.nonmap_viewpoints = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
         "nonmap_standoff_m" => cfg.nonmap_standoff_m = meters(name, v)?,
         "nonmap_pool_radius_m" => cfg.nonmap_pool_radius_m = meters(name, v)?,
@@ -118,7 +122,7 @@ mod tests {
         }
         for (name, _) in NAMES {
             let value = match *name {
-                "nonmap_viewpoints" | "look_around_here" => "true",
+                "nonmap_viewpoints" | "look_around_here" | "gaze" => "true",
                 "min_frontier_cells" | "nonmap_block_cap" | "unseen_unknown_eighths" => "5",
                 "camera_fov_deg" => "90",
                 _ => "1",

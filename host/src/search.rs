@@ -359,6 +359,7 @@ fn run_with(spec: &SearchSpec, mut ctrl: Box<Controller>, classifier: bool, mut 
             let path: Vec<[f64; 2]> = g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect();
             sim.set_path(&path, Some(g.pose.theta.to_radians()));
         }
+        sim.set_gaze(out.status.gaze.map(|h| h.to_radians()));
         let moved = step_base(&mut sim, TICK_US as f64 / 1e6);
         base_blocked = moved.blocked;
         blocked_count += moved.blocked as u32;

@@ -30,7 +30,7 @@
 
 use crate::dataset::{self, DatasetReader, Split};
 use crate::labeller::{Labeller, LabellerConfig};
-use crate::model::{normalise_pose_f32, normalise_range_f32, quantise_with, FloatHistory, FloatInputs, FloatModel, QuantiseOptions};
+use crate::model::{normalise_pose_f32, normalise_scan_f32, quantise_with, FloatHistory, FloatInputs, FloatModel, QuantiseOptions};
 use crate::search::{encode_range, TICK_US};
 use crate::sim::reach::ReachMap;
 use crate::sim::{BaseStatus, Scenario, Sim, World, P2};
@@ -38,7 +38,7 @@ use candle_core::{Device, Tensor, Var};
 use candle_nn::{AdamW, Optimizer, ParamsAdamW};
 use firmware::capacity::BEAMS;
 use firmware::classifier::{
-    Classifier, ClassifierConfig, LabelFeedback, ModelView, Normalisation, ENC_KERNEL, ENC_PAD, HISTORY, LABEL_ROWS, LABEL_WEIGHT_SUM,
+    Classifier, ClassifierConfig, LabelFeedback, ModelView, Normalisation, RangeEncoding, ENC_KERNEL, ENC_PAD, HISTORY, LABEL_ROWS, LABEL_WEIGHT_SUM,
     POSE_CHANNELS, POSE_FEATURES, POSE_FLAT,
 };
 use fixed_point::Pose2;
@@ -143,10 +143,14 @@ pub struct CandleEncoder {
     pub conv_w: Var,
     /// Conv bias `[1]`.
     pub conv_b: Var,
-    /// Linear weight `[out, in]`.
+    /// Linear weight `[out, in]` (unused while [`CandleEncoder::circulant`] is set).
     pub fc_w: Var,
     /// Linear bias `[out]`.
     pub fc_b: Var,
+    /// Training-time weight sharing: when set, the linear weight is the circulant matrix
+    /// `W[o][i] = c[(i − o) mod 897]` of this `[897]` vector (the gather index is the second
+    /// field), i.e. the same kernel at every beam. Exported as the full matrix.
+    pub circulant: Option<(Var, Tensor)>,
 }
 
 /// The pose encoder's parameters (conv `[9, 3]` = `[c][f]`, bias `[9]`, fc `[897, 81]`, bias `[897]`).
@@ -191,6 +195,42 @@ impl CandleEncoder {
             conv_b: var(&[e.conv_b], &[1], dev)?,
             fc_w: var(&e.fc_w, &[BEAMS, BEAMS], dev)?,
             fc_b: var(&e.fc_b, &[BEAMS], dev)?,
+            circulant: None,
+        })
+    }
+
+    /// Switches to the circulant parameterisation, its kernel the mean of each wrapped diagonal
+    /// of the current weight (exact for a circulant matrix).
+    pub fn make_circulant(&mut self) -> Result<()> {
+        let w = to_vec(&self.fc_w)?;
+        let mut c = vec![0.0f32; BEAMS];
+        for o in 0..BEAMS {
+            for (d, cd) in c.iter_mut().enumerate() {
+                *cd += w[o * BEAMS + (o + d) % BEAMS];
+            }
+        }
+        c.iter_mut().for_each(|v| *v /= BEAMS as f32);
+        let idx: Vec<u32> = (0..BEAMS * BEAMS).map(|k| ((k % BEAMS + BEAMS - k / BEAMS) % BEAMS) as u32).collect();
+        let dev = self.fc_w.device().clone();
+        self.circulant = Some((var(&c, &[BEAMS], &dev)?, Tensor::from_vec(idx, BEAMS * BEAMS, &dev)?));
+        Ok(())
+    }
+
+    /// Back to a full weight matrix (the expanded circulant), trainable element by element.
+    pub fn make_full(&mut self) -> Result<()> {
+        if self.circulant.is_some() {
+            let w = self.fc_weight()?;
+            self.fc_w = Var::from_tensor(&w)?;
+            self.circulant = None;
+        }
+        Ok(())
+    }
+
+    /// The linear weight `[out, in]` as a tensor.
+    fn fc_weight(&self) -> Result<Tensor> {
+        Ok(match &self.circulant {
+            Some((c, idx)) => c.as_tensor().index_select(idx, 0)?.reshape((BEAMS, BEAMS))?,
+            None => self.fc_w.as_tensor().clone(),
         })
     }
 
@@ -198,7 +238,7 @@ impl CandleEncoder {
         Ok(crate::model::Encoder {
             conv_w: to_vec(&self.conv_w)?,
             conv_b: to_vec(&self.conv_b)?[0],
-            fc_w: to_vec(&self.fc_w)?,
+            fc_w: self.fc_weight()?.flatten_all()?.to_vec1::<f32>()?,
             fc_b: to_vec(&self.fc_b)?,
         })
     }
@@ -224,11 +264,15 @@ impl CandleEncoder {
         }
         let conv = conv.squeeze(2)?.broadcast_add(self.conv_b.as_tensor())?;
         let hidden = conv.tanh()?;
-        Ok(hidden.matmul(&self.fc_w.as_tensor().t()?)?.broadcast_add(self.fc_b.as_tensor())?.tanh()?)
+        Ok(hidden.matmul(&self.fc_weight()?.t()?)?.broadcast_add(self.fc_b.as_tensor())?.tanh()?)
     }
 
     fn vars(&self) -> [Var; 4] {
-        [self.conv_w.clone(), self.conv_b.clone(), self.fc_w.clone(), self.fc_b.clone()]
+        let fc = match &self.circulant {
+            Some((c, _)) => c.clone(),
+            None => self.fc_w.clone(),
+        };
+        [self.conv_w.clone(), self.conv_b.clone(), fc, self.fc_b.clone()]
     }
 }
 
@@ -457,7 +501,7 @@ pub fn fill_sample(ep: &Episode, s: usize, norm: &Normalisation, history: &mut L
         match (s + t).checked_sub(HISTORY - 1) {
             Some(i) => {
                 let st = &ep.steps[i];
-                b.scans.extend(st.ranges_mm.iter().map(|&r| normalise_range_f32(r, norm)));
+                normalise_scan_f32(&st.ranges_mm, norm, &mut b.scans);
                 b.poses.extend(normalise_pose_f32(&st.pose, newest, norm));
             }
             None => {
@@ -755,8 +799,54 @@ pub struct TrainConfig {
     pub init_diag: f32,
     /// Use at most this many training samples (a fixed, seeded subset), for quick runs.
     pub max_samples: Option<usize>,
+    /// The range that normalises to 1 (millimetres; written into the blob as `range_max_mm`).
+    #[serde(default = "default_range_max_mm")]
+    pub range_max_mm: u32,
+    /// When non-zero, the scan convolution starts as this weight on the newest scan's centre tap
+    /// and zero elsewhere (bias zero), so the scan encoder's hidden layer starts as
+    /// `tanh(w · range input)` of each beam and the linear layer sees the scan itself.
+    #[serde(default)]
+    pub scan_conv_init: f32,
+    /// The first epoch whose self-feedback histories come from a rollout (before it the
+    /// self-feedback share uses flipped true labels): 2 for a fresh start (the first rollout is of
+    /// the untrained model), 1 when continuing from a trained checkpoint.
+    #[serde(default = "two")]
+    pub own_history_from_epoch: usize,
+    /// Initial bias of the label encoder's linear layer (0: PyTorch's default init). A positive
+    /// value starts `label_enc` near +1 on every beam, so the output starts as
+    /// `tanh(scan_enc + pose_enc)`: with PyTorch's init the label encoding of a zero history is
+    /// a small per-beam constant of random sign (measured ±0.45 after training), which flips the
+    /// sign of the scan path's gradient from beam to beam and all but stops the shared
+    /// convolution (and a circulant layer) from learning.
+    #[serde(default)]
+    pub label_bias_init: f32,
+    /// Inverse-range scan inputs (`min(1, range_max_mm / r)`, dropouts filled) instead of linear.
+    #[serde(default)]
+    pub inverse_range: bool,
+    /// Train the encoders' 897 × 897 weights as circulant matrices (one kernel shared by every
+    /// beam) for this many epochs, then as full matrices. 0: full from the start.
+    #[serde(default)]
+    pub circulant_epochs: usize,
+    /// Loss weight of non-map beams (map beams 1); 1: the plain masked MSE.
+    #[serde(default = "one")]
+    pub non_map_weight: f32,
+    /// Cosine learning-rate decay from `lr` to `lr / 20` over the run (per batch).
+    #[serde(default)]
+    pub lr_decay: bool,
     /// The command line, for the record.
     pub command: String,
+}
+
+fn default_range_max_mm() -> u32 {
+    Normalisation::DEFAULT.range_max_mm as u32
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn two() -> usize {
+    2
 }
 
 impl TrainConfig {
@@ -779,6 +869,14 @@ impl TrainConfig {
             history_dropout: 0.05,
             init_diag: 1.0,
             max_samples: None,
+            range_max_mm: default_range_max_mm(),
+            inverse_range: false,
+            label_bias_init: 0.0,
+            own_history_from_epoch: 2,
+            scan_conv_init: 0.0,
+            circulant_epochs: 0,
+            non_map_weight: 1.0,
+            lr_decay: false,
             command: String::new(),
         }
     }
@@ -848,12 +946,25 @@ pub fn train(cfg: &TrainConfig, progress: impl FnMut(&EpochLog)) -> Result<(Floa
             e.fc_w[b * BEAMS + b] += cfg.init_diag;
         }
     }
+    if cfg.label_bias_init != 0.0 {
+        init.label.fc_b.iter_mut().for_each(|v| *v = cfg.label_bias_init);
+    }
+    if cfg.scan_conv_init != 0.0 {
+        init.scan.conv_w.iter_mut().for_each(|v| *v = 0.0);
+        init.scan.conv_w[(HISTORY - 1) * ENC_KERNEL + ENC_PAD] = cfg.scan_conv_init;
+        init.scan.conv_b = 0.0;
+    }
     train_from(cfg, init, progress)
 }
 
 /// [`train`] starting from `init` (e.g. a checkpoint, to continue training).
-pub fn train_from(cfg: &TrainConfig, init: FloatModel, mut progress: impl FnMut(&EpochLog)) -> Result<(FloatModel, TrainLog)> {
+pub fn train_from(cfg: &TrainConfig, mut init: FloatModel, mut progress: impl FnMut(&EpochLog)) -> Result<(FloatModel, TrainLog)> {
     tune_allocator();
+    init.norm.range_max_mm = u16::try_from(cfg.range_max_mm).unwrap_or(0);
+    init.norm.range_encoding = if cfg.inverse_range { RangeEncoding::Inverse } else { RangeEncoding::Linear };
+    if !init.norm.is_valid() {
+        return Err(TrainError(format!("range_max_mm {} out of range (1 … 65 534)", cfg.range_max_mm)));
+    }
     let t0 = Instant::now();
     let meta = dataset::read_meta(&cfg.data)?;
     let train_eps = load_split(&cfg.data, Split::Train)?;
@@ -869,8 +980,15 @@ pub fn train_from(cfg: &TrainConfig, init: FloatModel, mut progress: impl FnMut(
         return Err(TrainError("no training samples (episodes shorter than k steps?)".into()));
     }
     let dev = Device::Cpu;
-    let net = LabelPoseNet::from_float(&init, &dev)?;
-    let mut opt = AdamW::new(net.vars(), ParamsAdamW { lr: cfg.lr, weight_decay: 0.0, ..ParamsAdamW::default() })?;
+    let mut net = LabelPoseNet::from_float(&init, &dev)?;
+    if cfg.circulant_epochs > 0 {
+        net.scan.make_circulant()?;
+        net.label.make_circulant()?;
+    }
+    let adam = |net: &LabelPoseNet| AdamW::new(net.vars(), ParamsAdamW { lr: cfg.lr, weight_decay: 0.0, ..ParamsAdamW::default() });
+    let mut opt = adam(&net)?;
+    let total_batches = (cfg.epochs * idx.len().div_ceil(cfg.batch.max(1))).max(1);
+    let mut batch_no = 0usize;
     let split_count = |name: &str| meta.splits.get(name).map(|s| (s.world_seeds.len(), s.records as usize)).unwrap_or((0, 0));
     let (tw, tr) = split_count("train");
     let (vw, vr) = split_count("val");
@@ -889,7 +1007,12 @@ pub fn train_from(cfg: &TrainConfig, init: FloatModel, mut progress: impl FnMut(
     let mut own: Option<Vec<Vec<Vec<i8>>>> = None;
     for epoch in 1..=cfg.epochs {
         let te = Instant::now();
-        if cfg.label_history && cfg.self_feedback > 0.0 && epoch > 1 {
+        if cfg.circulant_epochs > 0 && epoch == cfg.circulant_epochs + 1 {
+            net.scan.make_full()?;
+            net.label.make_full()?;
+            opt = adam(&net)?;
+        }
+        if cfg.label_history && cfg.self_feedback > 0.0 && epoch >= cfg.own_history_from_epoch.max(1) {
             own = Some(rollout(&net, &train_eps, None)?);
         }
         idx.shuffle(&mut rng);
@@ -908,8 +1031,20 @@ pub fn train_from(cfg: &TrainConfig, init: FloatModel, mut progress: impl FnMut(
             }
             let out = net.forward_batch(&b)?;
             let target = Tensor::from_slice(&b.target, (b.n, BEAMS), &dev)?;
+            if cfg.non_map_weight != 1.0 {
+                for (m, &t) in b.mask.iter_mut().zip(&b.target) {
+                    if t < 0.0 {
+                        *m *= cfg.non_map_weight;
+                    }
+                }
+            }
             let mask = Tensor::from_slice(&b.mask, (b.n, BEAMS), &dev)?;
             let loss = masked_mse(&out, &target, &mask)?;
+            if cfg.lr_decay {
+                let f = batch_no as f64 / total_batches as f64;
+                opt.set_learning_rate(cfg.lr * (0.05 + 0.95 * 0.5 * (1.0 + (std::f64::consts::PI * f).cos())));
+            }
+            batch_no += 1;
             opt.backward_step(&loss)?;
             loss_sum += loss.to_scalar::<f32>()? as f64;
             batches += 1;
@@ -977,6 +1112,14 @@ pub fn save_checkpoint(m: &FloatModel, log: Option<&TrainLog>, path: &Path) -> R
     meta.insert("format".to_string(), CHECKPOINT_FORMAT.to_string());
     meta.insert("range_max_mm".to_string(), m.norm.range_max_mm.to_string());
     meta.insert("pose_scale_mm".to_string(), m.norm.pose_scale_mm.to_string());
+    meta.insert(
+        "range_encoding".to_string(),
+        match m.norm.range_encoding {
+            RangeEncoding::Linear => "linear",
+            RangeEncoding::Inverse => "inverse",
+        }
+        .to_string(),
+    );
     if let Some(l) = log {
         meta.insert("train_log".to_string(), serde_json::to_string(l).map_err(|e| TrainError(e.to_string()))?);
     }
@@ -998,7 +1141,13 @@ pub fn load_checkpoint(path: &Path) -> Result<(FloatModel, Option<TrainLog>)> {
     let num = |k: &str| -> Result<u32> {
         meta.get(k).and_then(|v| v.parse().ok()).ok_or_else(|| TrainError(format!("{}: metadata `{k}` missing", path.display())))
     };
-    let norm = Normalisation { range_max_mm: num("range_max_mm")?, pose_scale_mm: num("pose_scale_mm")? };
+    let range_encoding = match meta.get("range_encoding").map(String::as_str) {
+        None | Some("linear") => RangeEncoding::Linear,
+        Some("inverse") => RangeEncoding::Inverse,
+        Some(other) => return Err(TrainError(format!("{}: unknown range_encoding `{other}`", path.display()))),
+    };
+    let range_max_mm = u16::try_from(num("range_max_mm")?).map_err(|_| TrainError(format!("{}: range_max_mm out of range", path.display())))?;
+    let norm = Normalisation { range_max_mm, pose_scale_mm: num("pose_scale_mm")?, range_encoding };
     let st = safetensors::SafeTensors::deserialize(&bytes)?;
     let mut m = FloatModel::random(0);
     m.norm = norm;
@@ -1385,6 +1534,27 @@ pub fn model_card(r: &QuantiseReport) -> String {
              masked), seed {} (initialisation = PyTorch's default plus {} on the encoders' 897 × 897 diagonals; shuffling; flips)",
             c.epochs, c.batch, c.lr, c.seed, c.init_diag
         );
+        let _ = writeln!(
+            s,
+            "- scan input: {}; label encoder's linear bias initialised to {} ({}){}; encoders' 897 × 897 weights \
+             trained as circulant matrices (one kernel shared by all beams) for the first {} epochs, then as full \
+             matrices; learning rate {}; non-map beams weighted {} in the loss",
+            if c.inverse_range {
+                format!("inverse range `min(1, {} mm / r)`, no return 0, dropouts filled from the previous beam", c.range_max_mm)
+            } else {
+                format!("linear `min(r, {} mm) / {} mm`, no return 1, dropouts 0", c.range_max_mm, c.range_max_mm)
+            },
+            c.label_bias_init,
+            if c.label_bias_init == 0.0 { "PyTorch's default" } else { "label_enc starts near +1 on every beam" },
+            if c.scan_conv_init == 0.0 {
+                String::new()
+            } else {
+                format!("; scan convolution initialised to {} on the newest scan's centre tap, 0 elsewhere", c.scan_conv_init)
+            },
+            c.circulant_epochs,
+            if c.lr_decay { "cosine-decayed to lr / 20 over the run" } else { "constant" },
+            c.non_map_weight
+        );
         if c.label_history {
             let _ = writeln!(
                 s,
@@ -1733,6 +1903,46 @@ mod tests {
         assert!(l1[4] < l1[0], "loss {l1:?}");
         assert_eq!(l1, l2);
         assert!(m1 == m2, "same seed, same weights");
+    }
+
+    /// The circulant parameterisation: the exported weight is circulant (row o is row 0 shifted
+    /// by o), training steps keep it so, and switching back to full matrices changes nothing.
+    #[test]
+    fn circulant_training_exports_a_circulant_matrix() {
+        let ep = toy_episode(10);
+        let mut init = pytorch_init(4);
+        init.norm.range_encoding = RangeEncoding::Inverse;
+        init.norm.range_max_mm = 500;
+        let mut net = LabelPoseNet::from_float(&init, &Device::Cpu).unwrap();
+        net.scan.make_circulant().unwrap();
+        net.label.make_circulant().unwrap();
+        let mut opt = AdamW::new(net.vars(), ParamsAdamW { lr: 1e-3, weight_decay: 0.0, ..ParamsAdamW::default() }).unwrap();
+        let mut b = Batch::new();
+        fill_sample(&ep, 9, &net.norm, &mut LabelHistory::True, &mut b);
+        let target = Tensor::from_slice(&b.target, (b.n, BEAMS), &Device::Cpu).unwrap();
+        let mask = Tensor::from_slice(&b.mask, (b.n, BEAMS), &Device::Cpu).unwrap();
+        for _ in 0..2 {
+            let loss = masked_mse(&net.forward_batch(&b).unwrap(), &target, &mask).unwrap();
+            opt.backward_step(&loss).unwrap();
+        }
+        let m = net.to_float().unwrap();
+        for o in [1usize, 100, 896] {
+            for i in [0usize, 5, 450, 896] {
+                assert_eq!(m.scan.fc_w[o * BEAMS + i], m.scan.fc_w[(i + BEAMS - o) % BEAMS], "W[{o}][{i}] = c[(i − o) mod 897]");
+            }
+        }
+        let before = net.forward_batch(&b).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
+        net.scan.make_full().unwrap();
+        net.label.make_full().unwrap();
+        let after = net.forward_batch(&b).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
+        assert_eq!(before, after);
+        assert_eq!(net.to_float().unwrap(), m);
+        // The inverse range encoding survives a checkpoint.
+        let path = std::env::temp_dir().join(format!("lives-train-circ-{}.safetensors", std::process::id()));
+        save_checkpoint(&m, None, &path).unwrap();
+        let (back, _) = load_checkpoint(&path).unwrap();
+        assert_eq!(back.norm, m.norm);
+        let _ = std::fs::remove_file(&path);
     }
 
     #[test]

@@ -113,3 +113,54 @@ fn a_corrupt_model_blob_is_refused_with_a_clear_error() {
     assert!(!stderr.contains("panicked"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn eval_writes_the_table_json_csv_and_plots() {
+    let dir = std::env::temp_dir().join(format!("lives-eval-{}", std::process::id()));
+    let out = lives()
+        .args(["eval", "--trials", "2", "--worlds", "apartment", "--scenarios", "easy", "--planners", "nearest,lives-gt", "--threads", "2"])
+        .arg("--out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let table = std::fs::read_to_string(dir.join("table.md")).unwrap();
+    assert!(table.contains("| setting | limit | nearest | lives-gt |"), "{table}");
+    assert!(table.contains("| apartment easy | 120 s |"), "{table}");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("results.json")).unwrap()).unwrap();
+    assert_eq!(json["trials"].as_array().unwrap().len(), 4);
+    assert_eq!(json["summary"].as_array().unwrap().len(), 2);
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 3, "{csv}");
+    for png in ["times.png", "trajectories/apartment-easy-nearest.png", "trajectories/apartment-easy-lives-gt.png"] {
+        assert_eq!(&std::fs::read(dir.join(png)).unwrap()[..8], b"\x89PNG\r\n\x1a\n", "{png}");
+    }
+    // The same trials give the same numbers (the summary, not the wall time).
+    let again = lives()
+        .args(["eval", "--trials", "2", "--worlds", "apartment", "--scenarios", "easy", "--planners", "nearest,lives-gt", "--threads", "1", "--no-pictures"])
+        .arg("--out")
+        .arg(dir.join("again"))
+        .output()
+        .unwrap();
+    assert!(again.status.success());
+    assert_eq!(std::fs::read_to_string(dir.join("again/results.csv")).unwrap(), csv);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn tune_rejects_unknown_parameters_before_running_and_ranks_a_grid() {
+    let out = lives().args(["tune", "--grid", "no_such_knob=1,2"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown parameter `no_such_knob`"));
+    let path = std::env::temp_dir().join(format!("lives-tune-{}.json", std::process::id()));
+    let out = lives()
+        .args(["tune", "--worlds", "1", "--planners", "nearest", "--grid", "replan_interval_s=2,3", "--out"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let ranking: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(ranking.as_array().unwrap().len(), 2);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("best on random worlds 1..=1"));
+    let _ = std::fs::remove_file(&path);
+}

@@ -8,8 +8,8 @@ use firmware::node::TimeMode;
 use firmware::protocol::GoalMsg;
 use firmware::Config;
 use host::link::{
-    run_bridge, BridgeEventKind, BridgeOptions, BridgeResult, FaultConfig, FaultHandle, FaultyLink, Link, NodeOptions, NodeProcess,
-    NodeReport, SerialLink, Source,
+    mem_pair, run_bridge, BridgeEventKind, BridgeOptions, BridgeResult, FaultConfig, FaultHandle, FaultStats, FaultyLink, Link,
+    NodeOptions, NodeProcess, NodeReport, SerialLink, Source,
 };
 use host::search::{self, PlannerChoice, SearchSpec};
 use host::sim::{Scenario, World};
@@ -75,7 +75,7 @@ fn figures(label: &str, r: &BridgeResult, n: &NodeReport) {
         ticks * 0.2 / r.wall_s
     );
     eprintln!(
-        "[{label}] host->core {} frames {} B ({:.1} frames/tick, {:.0} B/tick = {:.1} kB/s at 5 Hz); core->host {} frames {} B ({:.1} frames/tick, {:.0} B/tick = {:.2} kB/s at 5 Hz); scan frame {} B",
+        "[{label}] host->core {} frames {} B ({:.1} frames/tick, {:.0} B/tick = {:.1} kB/s at 5 Hz); core->host {} frames {} B ({:.1} frames/tick, {:.0} B/tick = {:.2} kB/s at 5 Hz); scan {} B in {} frame(s)",
         st.frames_sent,
         st.bytes_sent,
         st.frames_sent as f64 / ticks,
@@ -86,7 +86,8 @@ fn figures(label: &str, r: &BridgeResult, n: &NodeReport) {
         st.frames_received as f64 / ticks,
         st.bytes_received as f64 / ticks,
         st.bytes_received as f64 / ticks * 5.0 / 1000.0,
-        st.scan_frame_bytes
+        st.scan_frame_bytes,
+        st.scan_frames
     );
     eprintln!(
         "[{label}] node: {} frames in / {:.0} frames/s over the run; tick {:.2} ms mean, {:.2} ms p95, {:.2} ms max",
@@ -107,7 +108,7 @@ fn figures(label: &str, r: &BridgeResult, n: &NodeReport) {
         st.batch_rtt_us.max / 1e3
     );
     eprintln!(
-        "[{label}] bridge rejected {} {:?}; node rejected {} {:?}; retries {}, hellos {}, losses {}, reconnects {}, io errors {}; node incomplete {} repeats {} goals sent {}",
+        "[{label}] bridge rejected {} {:?}; node rejected {} {:?}; retries {}, hellos {}, losses {}, reconnects {}, io errors {}; node incomplete {} partial {} repeats {} goals sent {}",
         st.rejected,
         st.decoder,
         n.link.dropped(),
@@ -118,6 +119,7 @@ fn figures(label: &str, r: &BridgeResult, n: &NodeReport) {
         st.reconnects,
         st.io_errors,
         n.counters.lockstep_incomplete,
+        n.counters.lockstep_partial,
         n.counters.lockstep_repeats,
         n.counters.goals_sent
     );
@@ -172,52 +174,110 @@ fn faulty_run(
     (r, n, ns, bs)
 }
 
-#[test]
-fn under_corruption_and_dropped_frames_the_search_still_finds_the_target() {
-    let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
-    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
-    // 1 % of frames get a corrupted byte, plus a 1e-4 per-byte error rate (a 2.7 kB scan frame is
-    // hit 24 % of the time), and 5 % of frames are lost — in both directions.
-    let faults = FaultConfig { corrupt_frame_prob: 0.01, corrupt_byte_prob: 1e-4, drop_frame_prob: 0.05, ..FaultConfig::default() };
-    let (r, n, ns, bs) = faulty_run(&sp, faults.clone(), faults, Duration::from_secs(400));
-    figures("faulty pty", &r, &n);
-    eprintln!("[faulty pty] faults on the node's input {ns:?}");
-    eprintln!("[faulty pty] faults on the bridge's input {bs:?}");
+/// Node and bridge on the two ends of an in-memory line (no pty: fast, for CI), each end reading
+/// through a fault injector with `faults`; the bridge sends scans in segments of `segment_beams`.
+fn mem_run(
+    sp: &SearchSpec,
+    faults: FaultConfig,
+    segment_beams: usize,
+    nopts: NodeOptions,
+    max_wall: Duration,
+) -> (BridgeResult, NodeReport, FaultStats, FaultStats) {
+    let (a, b) = mem_pair();
+    let node_end = FaultyLink::new(a, faults.clone(), 21);
+    let bridge_end = FaultyLink::new(b, faults, 22);
+    let (ns, bs) = (node_end.stats_handle(), bridge_end.stats_handle());
+    // An in-memory line answers in well under a millisecond: retry a batch after 5 ms without an
+    // answer (a lost heartbeat or echo; a retry is harmless, the node ticks a time once).
+    let bopts = BridgeOptions {
+        max_wall: Some(max_wall),
+        retry_timeout: Duration::from_millis(5),
+        scan_segment_beams: segment_beams,
+        ..BridgeOptions::new(TimeMode::Lockstep)
+    };
+    let (r, n) = run_pair(Box::new(node_end), Box::new(bridge_end), sp, &bopts, nopts);
+    let (ns, bs) = (*ns.lock().unwrap(), *bs.lock().unwrap());
+    (r, n, ns, bs)
+}
 
-    assert!(r.result.found, "{:?}", r.result);
-    assert!(ns.frames_damaged > 20 && bs.frames_damaged > 5 && ns.frames_dropped > 50, "the faults happened: {ns:?} {bs:?}");
-    // Every damaged frame was counted as rejected, on both sides, and nothing else was.
-    assert_eq!(n.link.dropped() as u64, ns.frames_damaged, "node: {:?} vs {ns:?}", n.link);
-    assert_eq!(r.stats.rejected, bs.frames_damaged, "bridge: {:?} vs {bs:?}", r.stats.decoder);
-    // No goal from a damaged frame: every goal the bridge took is one the node sent.
-    assert_goals_came_from_the_node(&r, &n);
-    assert!(r.stats.retries > 0);
-    // Retries resend the same batch and the node ticks each time once: the decisions match the
-    // clean run unless a lost Detection/BaseStatus frame changed an input (reported, not required).
-    let inproc = search::run(&sp, |_| {});
-    eprintln!(
-        "[faulty pty] goal sequence equal to the in-process run: {} ({} vs {} goals; {:.1} s vs {:.1} s)",
-        r.goals == inproc.goals,
-        r.goals.len(),
-        inproc.goals.len(),
-        r.result.time_s,
-        inproc.result.time_s
-    );
+/// Every frame the fault injector damaged on its way to a receiver — damaged bytes, a piece of a
+/// frame split by a byte turned into 0x00, frames merged by a corrupted delimiter — was rejected
+/// by that receiver, and every intact frame taken: per non-empty 0x00-delimited run the receiver
+/// saw (the injector sorts them as it hands them out; see `host::link::fault`).
+fn assert_every_damaged_frame_rejected(r: &BridgeResult, n: &NodeReport, ns: &FaultStats, bs: &FaultStats) {
+    assert_eq!(n.link.dropped() as u64, ns.rx_frames_damaged, "node: {:?} vs {ns:?}", n.link);
+    assert_eq!(n.link.frames_ok as u64, ns.rx_frames_intact, "node: {:?} vs {ns:?}", n.link);
+    assert_eq!(r.stats.rejected, bs.rx_frames_damaged, "bridge: {:?} vs {bs:?}", r.stats.decoder);
+    assert_eq!(r.stats.decoder.frames_ok as u64, bs.rx_frames_intact, "bridge: {:?} vs {bs:?}", r.stats.decoder);
 }
 
 #[test]
-fn one_percent_of_all_bytes_corrupted_is_rejected_frame_by_frame_and_moves_nothing() {
+fn segmented_scans_on_a_clean_line_change_nothing() {
+    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    let inproc = search::run(&sp, |_| {});
+    let (r, n, ns, _) = mem_run(&sp, FaultConfig::default(), 16, node_opts(TimeMode::Lockstep), Duration::from_secs(120));
+    figures("clean mem, 16-beam segments", &r, &n);
+    assert!(r.result.found, "{:?}", r.result);
+    assert_eq!(r.goals, inproc.goals, "the goal sequence differs from the in-process run");
+    assert_eq!(r.trajectory, inproc.trajectory);
+    assert_eq!(r.result, inproc.result);
+    assert_eq!(r.stats.scan_frames, 57, "897 beams in 16-beam segments");
+    assert_eq!((n.counters.lockstep_partial, n.counters.lockstep_incomplete, r.stats.retries), (0, 0, 0));
+    assert_eq!((n.link.dropped(), r.stats.rejected, ns.rx_frames_damaged), (0, 0, 0));
+}
+
+/// Issue 5's acceptance, literally: 1 % of all bytes corrupted (delimiters included, to any
+/// value) and 5 % of frames dropped, both ways. Scans go in 16-beam segments (76-byte frames,
+/// 0.99^76 ≈ 47 % arrive intact per attempt); the node assembles each scan across the attempts at
+/// its batch and ticks when it is complete, or with what arrived after eight heartbeats; the bridge
+/// keeps the last good goal. (Found at 109.8 s of 120 vs 85.6 s clean; the same with 24 heartbeats
+/// and no partial scan at all, so the drift is not the partial scans.)
+#[test]
+fn under_one_percent_byte_corruption_and_five_percent_dropped_frames_the_search_finds_the_target() {
+    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    let faults = FaultConfig { corrupt_byte_prob: 0.01, line_noise: true, drop_frame_prob: 0.05, ..FaultConfig::default() };
+    let nopts = node_opts(TimeMode::Lockstep);
+    let (r, n, ns, bs) = mem_run(&sp, faults, 16, nopts, Duration::from_secs(300));
+    figures("1% bytes + 5% frames, mem, 16-beam segments", &r, &n);
+    eprintln!("[1% bytes + 5% frames] faults on the node's input {ns:?}");
+    eprintln!("[1% bytes + 5% frames] faults on the bridge's input {bs:?}");
+    assert!(r.result.found, "{:?}", r.result);
+    // The faults happened, of every kind, both ways.
+    for st in [&ns, &bs] {
+        assert!(st.frames_dropped > 20 && st.frames_damaged > 100 && st.delimiters_corrupted + st.zeros_made > 5, "{st:?}");
+    }
+    assert_every_damaged_frame_rejected(&r, &n, &ns, &bs);
+    // No goal from a corrupted frame: every goal the bridge received (and so every one it
+    // applied) is byte-for-byte one the node sent.
+    assert_goals_came_from_the_node(&r, &n);
+    // The segments did their job: scans were assembled across retried attempts, and some ticked
+    // partial after eight.
+    assert!(n.counters.lockstep_incomplete > 100 && r.stats.retries > 100 && n.counters.lockstep_partial > 0);
+    let inproc = search::run(&sp, |_| {});
+    eprintln!(
+        "[1% bytes + 5% frames] found in {:.1} s with {} goals (in-process, clean: {:.1} s, {} goals); {} of {} ticks with a partial scan",
+        r.result.time_s,
+        r.goals.len(),
+        inproc.result.time_s,
+        inproc.goals.len(),
+        n.counters.lockstep_partial,
+        n.counters.ticks
+    );
+}
+
+/// Why scans go in segments on a noisy line: with whole scans, 1 % of bytes corrupted leaves a
+/// 2.7 kB scan frame intact with probability 0.99^2720 ≈ 10⁻¹², so no scan ever reaches the node
+/// and the search cannot start. Over the pty, with line noise (merges and splits): every damaged
+/// frame is rejected and nothing is produced from one.
+#[test]
+fn whole_scans_do_not_survive_one_percent_byte_corruption_and_every_damaged_frame_is_rejected() {
     let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
     let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
-    // 1 % of *bytes*: a 2.7 kB scan frame survives with probability 0.99^2700 ≈ 2e-12, so no scan
-    // ever reaches the node and the search cannot run; what must hold is that every damaged frame
-    // is rejected and nothing is produced from one.
-    let faults = FaultConfig { corrupt_byte_prob: 0.01, drop_frame_prob: 0.05, ..FaultConfig::default() };
+    let faults = FaultConfig { corrupt_byte_prob: 0.01, line_noise: true, drop_frame_prob: 0.05, ..FaultConfig::default() };
     let (r, n, ns, bs) = faulty_run(&sp, faults.clone(), faults, Duration::from_secs(4));
-    figures("1% bytes", &r, &n);
-    assert_eq!(n.link.dropped() as u64, ns.frames_damaged);
-    assert_eq!(r.stats.rejected, bs.frames_damaged);
+    figures("1% bytes, whole scans, pty", &r, &n);
     assert!(ns.frames_damaged > 10, "{ns:?}");
+    assert_every_damaged_frame_rejected(&r, &n, &ns, &bs);
     assert_eq!(n.counters.ticks, 0, "no complete batch ever arrived, so the node never ticked");
     for g in &r.goals_received {
         assert!(n.goals_sent.contains(g));
@@ -260,7 +320,9 @@ fn closing_the_nodes_end_stops_the_base_at_once_and_reopening_resumes_the_search
             (p.report(), pulled_at, replugged_at, ticks_at_pull, ticks_at_replug)
         });
         s.spawn(|| {
-            while progress.load(Ordering::Relaxed) < 60 {
+            // (Mid-search: the clean run takes ~110 ticks. If the run ends first, give up: the
+            // assertions below then fail instead of the test hanging.)
+            while progress.load(Ordering::Relaxed) < 40 && !done.load(Ordering::Relaxed) {
                 std::thread::sleep(Duration::from_millis(1));
             }
             pause.store(true, Ordering::Relaxed);
@@ -308,11 +370,15 @@ fn a_silent_link_stops_the_base_within_one_watchdog_period_and_the_search_resume
         progress: Some(progress.clone()),
         ..BridgeOptions::new(TimeMode::Lockstep)
     };
+    // (Mid-search: the clean run takes ~110 ticks. If the run ends first, the watcher gives up and
+    // the assertions below fail instead of the test hanging.)
+    let over = Arc::new(AtomicBool::new(false));
     let watch = std::thread::spawn({
         let cable = cable.clone();
         let progress = progress.clone();
+        let over = over.clone();
         move || {
-            while progress.load(Ordering::Relaxed) < 80 {
+            while progress.load(Ordering::Relaxed) < 30 && !over.load(Ordering::Relaxed) {
                 std::thread::sleep(Duration::from_millis(1));
             }
             // The far end goes quiet (frames lost, ports still open) ...
@@ -321,7 +387,7 @@ fn a_silent_link_stops_the_base_within_one_watchdog_period_and_the_search_resume
             std::thread::sleep(Duration::from_millis(2000));
             cable.blackhole(false);
             let back_at = Instant::now();
-            while progress.load(Ordering::Relaxed) < 120 {
+            while progress.load(Ordering::Relaxed) < 60 && !over.load(Ordering::Relaxed) {
                 std::thread::sleep(Duration::from_millis(1));
             }
             // ... then the cable is pulled out: the ports fail.
@@ -333,6 +399,7 @@ fn a_silent_link_stops_the_base_within_one_watchdog_period_and_the_search_resume
         }
     });
     let (r, n) = run_pair(Box::new(node_end), Box::new(bridge_end), &sp, &bopts, node_opts(TimeMode::Lockstep));
+    over.store(true, Ordering::Relaxed);
     let (quiet_at, back_at, pulled_at) = watch.join().unwrap();
     figures("silent+pulled", &r, &n);
     let lost: Vec<_> = r.events.iter().filter(|e| matches!(e.kind, BridgeEventKind::LinkLost { .. })).collect();

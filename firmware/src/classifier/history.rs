@@ -6,8 +6,10 @@
 //! the first k calls see zero rows where no scan has arrived yet.
 //!
 //! Normalisation (all integer, rounding half away from zero; `docs/model-format.md` has the table):
-//! - range `r` mm: `0` (invalid) → 0; `65 535` (no return) → 127; otherwise
-//!   `round(127 · min(r, range_max_mm) / range_max_mm)`, so 0 .. 30 m → 0 .. 127;
+//! - range `r` mm, [`RangeEncoding::Linear`]: `0` (invalid) → 0; `65 535` (no return) → 127;
+//!   otherwise `round(127 · min(r, range_max_mm) / range_max_mm)`, so 0 .. 30 m → 0 .. 127;
+//!   [`RangeEncoding::Inverse`]: no return → 0; otherwise `min(127, round(127 · range_max_mm / r))`;
+//!   an invalid beam takes the value of the nearest valid beam before it (wrapping), 0 if none;
 //! - pose of row `t`: `rel = newest⁻¹ ∘ pose_t` (the older pose in the newest pose's frame), then
 //!   `x, y → round(127 · metres · 1000 / pose_scale_mm)` clamped to ±127 and
 //!   `θ → round(127 · θ / π)` with θ wrapped into [−π, π), clamped to ±127;
@@ -15,7 +17,7 @@
 //! - labels are the network's own int8 outputs (scale 1/127), or their signs (±127), see
 //!   [`super::LabelFeedback`]; the extra label row is their linear-weighted average.
 
-use super::model::Normalisation;
+use super::model::{Normalisation, RangeEncoding};
 use super::{HISTORY, POSE_FEATURES};
 use crate::capacity::BEAMS;
 use crate::scan::{RANGE_INVALID, RANGE_NO_RETURN};
@@ -36,14 +38,41 @@ pub(crate) const fn div_round(n: i64, d: i64) -> i64 {
     }
 }
 
-/// One range in millimetres → int8 (scale 1/127 of `range_max_mm`).
+/// One range in millimetres → int8 (scale 1/127). Linear: `min(r, range_max_mm) /
+/// range_max_mm`. Inverse: `min(1, range_max_mm / r)`, and an invalid range gives −1, which no
+/// valid range does ([`normalise_scan`] replaces it).
 #[inline]
 pub fn normalise_range(r_mm: u16, norm: &Normalisation) -> i8 {
     let max = norm.range_max_mm.max(1) as i64;
-    match r_mm {
-        RANGE_INVALID => 0,
-        RANGE_NO_RETURN => 127,
-        r => div_round(127 * (r as i64).min(max), max) as i8,
+    match (norm.range_encoding, r_mm) {
+        (RangeEncoding::Linear, RANGE_INVALID) => 0,
+        (RangeEncoding::Linear, RANGE_NO_RETURN) => 127,
+        (RangeEncoding::Linear, r) => div_round(127 * (r as i64).min(max), max) as i8,
+        (RangeEncoding::Inverse, RANGE_INVALID) => INVALID_MARK,
+        (RangeEncoding::Inverse, RANGE_NO_RETURN) => 0,
+        (RangeEncoding::Inverse, r) => div_round(127 * max, r as i64).min(127) as i8,
+    }
+}
+
+/// [`normalise_range`]'s mark for an invalid beam in the inverse encoding.
+const INVALID_MARK: i8 = -1;
+
+/// A whole scan → int8 inputs: [`normalise_range`] per beam; in the inverse encoding each invalid
+/// beam then takes the value of the nearest valid beam before it (beam 0 looks back from beam
+/// 896), or 0 when no beam is valid.
+pub fn normalise_scan(ranges_mm: &[u16; BEAMS], norm: &Normalisation, row: &mut [i8; BEAMS]) {
+    for (q, &r) in row.iter_mut().zip(ranges_mm.iter()) {
+        *q = normalise_range(r, norm);
+    }
+    if norm.range_encoding == RangeEncoding::Inverse {
+        let mut carry = row.iter().rev().copied().find(|&q| q != INVALID_MARK).unwrap_or(0);
+        for q in row.iter_mut() {
+            if *q == INVALID_MARK {
+                *q = carry;
+            } else {
+                carry = *q;
+            }
+        }
     }
 }
 
@@ -105,10 +134,7 @@ impl ScanHistory {
 
     /// Appends a scan taken at `pose`, normalised; the oldest row falls out.
     pub fn push_scan(&mut self, pose: &Pose2, ranges_mm: &[u16; BEAMS], norm: &Normalisation) {
-        let row = &mut self.scans[self.scan_head];
-        for (q, &r) in row.iter_mut().zip(ranges_mm.iter()) {
-            *q = normalise_range(r, norm);
-        }
+        normalise_scan(ranges_mm, norm, &mut self.scans[self.scan_head]);
         self.poses[self.scan_head] = *pose;
         self.scan_head = (self.scan_head + 1) % HISTORY;
         self.filled = (self.filled + 1).min(HISTORY);
@@ -193,6 +219,33 @@ mod tests {
         assert_eq!(normalise_range(118, &n), 0); // 0.4995
         assert_eq!(normalise_range(119, &n), 1); // 0.5037
         assert_eq!(normalise_range(10_000, &n), 42); // 42.33
+    }
+
+    #[test]
+    fn inverse_range_normalisation_fills_dropouts() {
+        let n = Normalisation { range_max_mm: 500, range_encoding: RangeEncoding::Inverse, ..Normalisation::DEFAULT };
+        assert_eq!(normalise_range(RANGE_NO_RETURN, &n), 0);
+        assert_eq!(normalise_range(100, &n), 127); // closer than the reference range: clamped
+        assert_eq!(normalise_range(500, &n), 127);
+        assert_eq!(normalise_range(1_000, &n), 64); // 63.5
+        assert_eq!(normalise_range(2_000, &n), 32); // 31.75
+        assert_eq!(normalise_range(65_534, &n), 1);
+        let mut ranges = [2_000u16; BEAMS];
+        ranges[0] = RANGE_INVALID; // looks back to beam 896
+        ranges[BEAMS - 1] = 1_000;
+        ranges[10] = 500;
+        ranges[11] = RANGE_INVALID;
+        ranges[12] = RANGE_INVALID;
+        ranges[13] = RANGE_NO_RETURN;
+        let mut row = [0i8; BEAMS];
+        normalise_scan(&ranges, &n, &mut row);
+        assert_eq!(&row[..3], &[64, 32, 32]);
+        assert_eq!(&row[10..15], &[127, 127, 127, 0, 32]);
+        normalise_scan(&[RANGE_INVALID; BEAMS], &n, &mut row);
+        assert!(row.iter().all(|&q| q == 0), "no valid beam: zeros");
+        // The linear encoding is per beam, as before.
+        normalise_scan(&ranges, &Normalisation::DEFAULT, &mut row);
+        assert_eq!(&row[10..14], &[2, 0, 0, 127]);
     }
 
     #[test]

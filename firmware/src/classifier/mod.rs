@@ -38,12 +38,15 @@
 
 mod history;
 mod kernels;
+/// The int8 inner product (public for the MCU self-test that checks the DSP path against the reference).
+#[doc(hidden)]
+pub use kernels::{dot, dot_reference, DotInput};
 pub mod model;
 #[cfg(test)]
 pub(crate) mod testing;
 
-pub use history::{normalise_angle, normalise_distance, normalise_range, ScanHistory, LABEL_ROWS, LABEL_WEIGHT_SUM};
-pub use model::{checksum, ChannelParams, HeadParams, Layer, ModelError, ModelView, ModelWriter, Normalisation, ShapeField};
+pub use history::{normalise_angle, normalise_distance, normalise_range, normalise_scan, ScanHistory, LABEL_ROWS, LABEL_WEIGHT_SUM};
+pub use model::{checksum, ChannelParams, HeadParams, Layer, ModelError, ModelView, ModelWriter, Normalisation, RangeEncoding, ShapeField};
 
 use crate::capacity::BEAMS;
 use crate::scan::{BeamLabel, BeamScan, RANGE_INVALID, RANGE_NO_RETURN};

@@ -59,8 +59,11 @@ pub mod field {
     pub const POSE_FEATURES: usize = 15;
     /// `u8`, tanh tables (7).
     pub const TANH_TABLES: usize = 16;
-    /// Bytes 17 ..= 19: reserved, zero.
-    pub const RESERVED_A: usize = 17;
+    /// `u8`, the range encoding ([`super::RangeEncoding`]: 0 linear, 1 inverse). Zero in blobs
+    /// written before it existed (then a reserved byte).
+    pub const RANGE_ENCODING: usize = 17;
+    /// Bytes 18 ..= 19: reserved, zero.
+    pub const RESERVED_A: usize = 18;
     /// `u32`, range that normalises to 1.0, millimetres.
     pub const RANGE_MAX_MM: usize = 20;
     /// `u32`, relative pose distance that normalises to 1.0, millimetres.
@@ -258,19 +261,52 @@ pub enum ModelError {
     },
 }
 
+/// How a range in millimetres becomes the network's scan input (header byte 17).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RangeEncoding {
+    /// `min(r, R) / R`: invalid → 0, no return → 1 (code 0).
+    Linear,
+    /// `min(1, R / r)` (inverse range, `R` = `range_max_mm` the reference range): no return → 0;
+    /// an invalid beam takes the value of the nearest valid beam before it (wrapping around the
+    /// scan; 0 if none is valid) (code 1).
+    Inverse,
+}
+
+impl RangeEncoding {
+    /// The header code.
+    pub const fn code(self) -> u8 {
+        match self {
+            RangeEncoding::Linear => 0,
+            RangeEncoding::Inverse => 1,
+        }
+    }
+
+    /// From the header code.
+    pub const fn from_code(c: u8) -> Option<Self> {
+        match c {
+            0 => Some(RangeEncoding::Linear),
+            1 => Some(RangeEncoding::Inverse),
+            _ => None,
+        }
+    }
+}
+
 /// How raw sensor integers become the network's inputs (see `docs/model-format.md`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Normalisation {
-    /// The range that maps to 1.0 (int8 127), millimetres; longer ranges clamp. 1 ..= 65 534.
-    pub range_max_mm: u32,
+    /// Linear: the range that maps to 1.0 (int8 127), longer ranges clamp. Inverse: the reference
+    /// range `R` of `min(1, R / r)`. Millimetres, 1 ..= 65 534 (a `u32` in the header).
+    pub range_max_mm: u16,
     /// The relative-pose distance that maps to 1.0 (int8 127), millimetres; larger clamp.
     /// 1 ..= 1 000 000.
     pub pose_scale_mm: u32,
+    /// How ranges are encoded.
+    pub range_encoding: RangeEncoding,
 }
 
 impl Normalisation {
-    /// The defaults the quantiser writes: 30 m ranges, 5 m relative poses.
-    pub const DEFAULT: Self = Self { range_max_mm: 30_000, pose_scale_mm: 5_000 };
+    /// The defaults the quantiser writes: 30 m ranges (linear), 5 m relative poses.
+    pub const DEFAULT: Self = Self { range_max_mm: 30_000, pose_scale_mm: 5_000, range_encoding: RangeEncoding::Linear };
 
     /// True when both constants are in range.
     pub const fn is_valid(&self) -> bool {
@@ -409,8 +445,9 @@ impl<'a> ModelView<'a> {
             return Err(ModelError::ChecksumMismatch { stored, computed });
         }
         let norm = Normalisation {
-            range_max_mm: get_u32(h, field::RANGE_MAX_MM).ok_or(truncated)?,
+            range_max_mm: u16::try_from(get_u32(h, field::RANGE_MAX_MM).ok_or(truncated)?).map_err(|_| ModelError::BadNormalisation)?,
             pose_scale_mm: get_u32(h, field::POSE_SCALE_MM).ok_or(truncated)?,
+            range_encoding: RangeEncoding::from_code(h[field::RANGE_ENCODING]).ok_or(ModelError::BadNormalisation)?,
         };
         if !norm.is_valid() {
             return Err(ModelError::BadNormalisation);
@@ -578,7 +615,8 @@ impl<'a> ModelWriter<'a> {
         h[field::POSE_CHANNELS] = POSE_CHANNELS as u8;
         h[field::POSE_FEATURES] = POSE_FEATURES as u8;
         h[field::TANH_TABLES] = TANH_TABLES as u8;
-        h[field::RANGE_MAX_MM..field::RANGE_MAX_MM + 4].copy_from_slice(&self.norm.range_max_mm.to_le_bytes());
+        h[field::RANGE_ENCODING] = self.norm.range_encoding.code();
+        h[field::RANGE_MAX_MM..field::RANGE_MAX_MM + 4].copy_from_slice(&(self.norm.range_max_mm as u32).to_le_bytes());
         h[field::POSE_SCALE_MM..field::POSE_SCALE_MM + 4].copy_from_slice(&self.norm.pose_scale_mm.to_le_bytes());
         h[field::PAYLOAD_LEN..field::PAYLOAD_LEN + 4].copy_from_slice(&(layout::PAYLOAD_LEN as u32).to_le_bytes());
         let buf = self.buf;
@@ -609,7 +647,8 @@ mod tests {
         9, 0, // k
         0x81, 0x03, // 897 beams
         9, 9, 9, 3, 7, // kernels, pose channels, pose features, tanh tables
-        0, 0, 0, // reserved
+        0, // range encoding: linear
+        0, 0, // reserved
         0x30, 0x75, 0, 0, // range_max_mm 30 000
         0x88, 0x13, 0, 0, // pose_scale_mm 5 000
         0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, // reserved
@@ -712,6 +751,16 @@ mod tests {
         let mut b = good.clone();
         b[field::RANGE_MAX_MM..field::RANGE_MAX_MM + 4].copy_from_slice(&0u32.to_le_bytes());
         assert_eq!(parse(&with_crc(b)), Err(ModelError::BadNormalisation));
+        let mut b = good.clone();
+        b[field::RANGE_ENCODING] = 2;
+        assert_eq!(parse(&with_crc(b)), Err(ModelError::BadNormalisation));
+        let mut b = good.clone();
+        b[field::RANGE_ENCODING] = 1;
+        let b = with_crc(b);
+        assert_eq!(ModelView::parse(&b).map(|m| m.normalisation().range_encoding), Ok(RangeEncoding::Inverse));
+        let mut b = good.clone();
+        b[field::RESERVED_A] = 1;
+        assert_eq!(parse(&b), Err(ModelError::ReservedNotZero));
         let mut b = good.clone();
         let off = layout::channels_of(Layer::PoseFc) + 5 * CHANNEL_RECORD_LEN + 8;
         b[off..off + 4].copy_from_slice(&40i32.to_le_bytes());

@@ -362,10 +362,11 @@ mod tests {
             blacklisted: u32::MAX,
             retired: u32::MAX,
             watchdog_trips: u32::MAX,
-            cost: StageCostMsg { classify: u32::MAX, lidar: u32::MAX, visual: u32::MAX, nonmap: u32::MAX, plan: u32::MAX },
+            cost: StageCostMsg { classify: u32::MAX, lidar: u32::MAX, visual: u32::MAX, nonmap: u32::MAX, plan: u32::MAX, gaze: u32::MAX },
             overruns: [u32::MAX; 5],
             heap_overflows: u32::MAX,
             link,
+            gaze: Some(i32::MIN),
         };
         let mut buf = [0u8; MAX_FRAME_LEN];
         let goal = CoreToHost::Goal(goal);

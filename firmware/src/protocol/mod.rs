@@ -20,7 +20,10 @@
 //! **Robustness.** Decoding never allocates and never panics: a frame with bad COBS, a bad CRC,
 //! an undecodable body or too many bytes is dropped and counted ([`LinkCounters`]), and decoding
 //! resumes after the next `0x00`. The largest frame is [`MAX_FRAME_LEN`] bytes: a scan of
-//! [`MAX_WIRE_BEAMS`] beams with labels; larger scans are refused at the sender.
+//! [`MAX_WIRE_BEAMS`] beams with labels; larger scans are refused at the sender. On a noisy line
+//! the host sends scans in [`ScanSegmentMsg`]s of a few dozen beams instead (protocol v2), small
+//! frames that mostly survive, and the [`Inbox`] assembles them; lost segments cost beams, not
+//! the scan.
 //!
 //! **In the core** a node owns a [`CoreDecoder`], a [`Session`], an [`Inbox`] and the controller:
 //! bytes in → messages → admitted → the next tick's [`crate::Inputs`]; the tick's
@@ -30,6 +33,8 @@
 //! clock or touch a port.
 
 pub mod frame;
+#[cfg(test)]
+mod fuzz;
 #[cfg(test)]
 mod golden;
 pub mod inbox;
@@ -43,7 +48,7 @@ pub use frame::{
 pub use inbox::{Accepted, Inbox};
 pub use message::{
     output_messages, AckReason, BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, ErrorCode, ErrorMsg, GoalMsg, Heartbeat, Hello, HelloAck,
-    HostToCore, IncompatiblePeer, LabelsMsg, PoseMsg, Role, ScanMsg, StatusMsg, StopMsg, WireCommand, WireError, WireMode, MAX_WIRE_BEAMS,
-    PROTOCOL_VERSION,
+    HostToCore, IncompatiblePeer, LabelsMsg, PoseMsg, Role, ScanMsg, ScanSegmentMsg, SegmentError, StatusMsg, StopMsg, WireCommand, WireError,
+    WireMode, MAX_SEGMENT_BEAMS, MAX_WIRE_BEAMS, PROTOCOL_VERSION,
 };
 pub use session::{Admission, Session, SessionState};

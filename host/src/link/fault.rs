@@ -10,7 +10,20 @@
 //!   byte of the frame with `corrupt_frame_prob` (the delimiter is never touched and no `0x00` is
 //!   made, so every damaged frame stays exactly one frame and the receiver's counters can be
 //!   checked against [`FaultStats::frames_damaged`] exactly);
+//! * with `line_noise`, `corrupt_byte_prob` hits every byte on the line instead, delimiters
+//!   included, and a byte may become any other value, `0x00` included — as on a real line: a
+//!   corrupted delimiter merges two frames into one, a byte turned into `0x00` splits one in two;
 //! * holds every frame for `delay` before the reader sees it.
+//!
+//! **Accounting.** Merges and splits make "damaged frames" the wrong unit, so the link also counts
+//! what the *reader* sees: it cuts the bytes it hands out at `0x00`, as a decoder does, and sorts
+//! each non-empty run ([`FaultStats::rx_frames`]) into *intact* — exactly one frame as it came in,
+//! every byte and its delimiter unchanged, starting right after a delimiter (or at the start) — and
+//! *damaged* (everything else: a damaged frame, a piece of a split frame, a merge of frames).
+//! A receiver that decodes every intact run and rejects every damaged one has
+//! `frames_ok == rx_frames_intact` and `dropped() == rx_frames_damaged`, exactly — up to a
+//! damaged run that passes the CRC-32 by chance (2⁻³² each), which would show as a mismatch. A
+//! run still open when the reader stops (its delimiter not yet read) is counted by neither.
 //!
 //! A [`FaultHandle`] shared by both wrapped ends pulls the cable: [`FaultHandle::disconnect`]
 //! makes reads and writes fail (the port vanished) and loses whatever was on the line;
@@ -38,6 +51,9 @@ pub struct FaultConfig {
     pub drop_byte_prob: f64,
     /// Per frame: lost whole.
     pub drop_frame_prob: f64,
+    /// `corrupt_byte_prob` applies to every byte, delimiters included, and a corrupted byte may
+    /// become `0x00`: frames merge and split (see the module docs).
+    pub line_noise: bool,
     /// Every frame arrives this much later.
     pub delay: Duration,
 }
@@ -64,6 +80,16 @@ pub struct FaultStats {
     pub bytes_dropped: u64,
     /// Bytes lost on a pulled cable (partial frames, reads while disconnected).
     pub bytes_lost_disconnected: u64,
+    /// Delivered delimiters replaced by another value (`line_noise`): merged frames.
+    pub delimiters_corrupted: u64,
+    /// Delivered bytes turned into `0x00` (`line_noise`): split frames.
+    pub zeros_made: u64,
+    /// Non-empty `0x00`-delimited runs the reader was handed: the frames its decoder sees.
+    pub rx_frames: u64,
+    /// Of those, runs that are exactly one original frame, unchanged: a decoder takes each.
+    pub rx_frames_intact: u64,
+    /// Of those, every other run: a decoder must reject each (`dropped()` equals this).
+    pub rx_frames_damaged: u64,
 }
 
 #[derive(Default)]
@@ -107,8 +133,13 @@ pub struct FaultyLink<L: Link> {
     handle: FaultHandle,
     stats: Arc<Mutex<FaultStats>>,
     partial: Vec<u8>,
-    held: VecDeque<(Instant, Vec<u8>)>,
-    out: VecDeque<u8>,
+    /// Frames on their way: due time, bytes (delimiter or what it became included), intact.
+    held: VecDeque<(Instant, Vec<u8>, bool)>,
+    /// Bytes ready for the reader, and whether each is the first byte of an intact frame.
+    out: VecDeque<(u8, bool)>,
+    /// The reader's current run: its length, and whether it started with an intact frame.
+    run_len: usize,
+    run_intact: bool,
 }
 
 impl<L: Link> FaultyLink<L> {
@@ -123,6 +154,8 @@ impl<L: Link> FaultyLink<L> {
             partial: Vec::new(),
             held: VecDeque::new(),
             out: VecDeque::new(),
+            run_len: 0,
+            run_intact: false,
         }
     }
 
@@ -157,6 +190,16 @@ impl<L: Link> FaultyLink<L> {
         }
     }
 
+    /// Any value but `b`, `0x00` included (line noise).
+    fn any_other_byte(&mut self, b: u8) -> u8 {
+        let v = self.rng.gen_range(0..=254u8);
+        if v >= b {
+            v + 1
+        } else {
+            v
+        }
+    }
+
     /// Applies the faults to one complete frame (without its delimiter).
     fn damage(&mut self, mut frame: Vec<u8>) {
         let mut st = *self.stats.lock().unwrap_or_else(|e| e.into_inner());
@@ -182,18 +225,31 @@ impl<L: Link> FaultyLink<L> {
             }
         }
         let mut corrupted = 0u64;
+        let noise = self.cfg.line_noise;
+        frame.push(DELIMITER);
+        let body = frame.len() - 1;
         if self.cfg.corrupt_byte_prob > 0.0 {
             let p = self.cfg.corrupt_byte_prob.clamp(0.0, 1.0);
-            for b in frame.iter_mut() {
+            // Line noise reaches the delimiter too.
+            let reach = if noise { frame.len() } else { body };
+            for i in 0..reach {
                 if self.rng.gen_bool(p) {
-                    *b = self.other_byte(*b);
+                    let b = frame[i];
+                    frame[i] = if noise { self.any_other_byte(b) } else { self.other_byte(b) };
                     corrupted += 1;
+                    if i == body {
+                        st.delimiters_corrupted += 1;
+                    } else if frame[i] == 0 {
+                        st.zeros_made += 1;
+                    }
                 }
             }
         }
-        if !frame.is_empty() && self.rng.gen_bool(self.cfg.corrupt_frame_prob.clamp(0.0, 1.0)) {
-            let i = self.rng.gen_range(0..frame.len());
-            frame[i] = self.other_byte(frame[i]);
+        if body > 0 && self.rng.gen_bool(self.cfg.corrupt_frame_prob.clamp(0.0, 1.0)) {
+            let i = self.rng.gen_range(0..body);
+            let b = frame[i];
+            // A byte already turned into 0x00 by line noise is any byte's equal here.
+            frame[i] = if b == 0 { self.any_other_byte(b) } else { self.other_byte(b) };
             corrupted += 1;
         }
         st.bytes_corrupted += corrupted;
@@ -202,8 +258,36 @@ impl<L: Link> FaultyLink<L> {
         st.frames_damaged += (corrupted > 0 || truncated) as u64;
         st.frames_delivered += 1;
         *self.stats.lock().unwrap_or_else(|e| e.into_inner()) = st;
-        frame.push(DELIMITER);
-        self.held.push_back((Instant::now() + self.cfg.delay, frame));
+        let intact = corrupted == 0 && !truncated;
+        self.held.push_back((Instant::now() + self.cfg.delay, frame, intact));
+    }
+
+    /// Hands up to `buf.len()` ready bytes to the reader, sorting the runs it completes.
+    fn deliver(&mut self, buf: &mut [u8]) -> usize {
+        let n = buf.len().min(self.out.len());
+        let (mut runs, mut intact) = (0u64, 0u64);
+        for (d, (b, starts_intact)) in buf.iter_mut().zip(self.out.drain(..n)) {
+            *d = b;
+            if self.run_len == 0 {
+                self.run_intact = starts_intact;
+            }
+            if b == DELIMITER {
+                if self.run_len > 0 {
+                    // An intact frame has no 0x00 inside and its own delimiter: if the run began
+                    // with one, this 0x00 is that frame's delimiter and the run is the frame.
+                    runs += 1;
+                    intact += self.run_intact as u64;
+                }
+                self.run_len = 0;
+            } else {
+                self.run_len += 1;
+            }
+        }
+        let mut st = self.stats.lock().unwrap_or_else(|e| e.into_inner());
+        st.rx_frames += runs;
+        st.rx_frames_intact += intact;
+        st.rx_frames_damaged += runs - intact;
+        n
     }
 
     fn take_bytes(&mut self, bytes: &[u8]) {
@@ -223,12 +307,12 @@ impl<L: Link> FaultyLink<L> {
     /// Moves due frames to the output queue; returns how long until the next one is due.
     fn release(&mut self) -> Option<Duration> {
         let now = Instant::now();
-        while let Some((due, _)) = self.held.front() {
+        while let Some((due, _, _)) = self.held.front() {
             if *due > now {
                 return Some(*due - now);
             }
-            if let Some((_, f)) = self.held.pop_front() {
-                self.out.extend(f);
+            if let Some((_, f, intact)) = self.held.pop_front() {
+                self.out.extend(f.iter().enumerate().map(|(i, &b)| (b, intact && i == 0)));
             }
         }
         None
@@ -241,6 +325,8 @@ impl<L: Link> FaultyLink<L> {
         self.partial.clear();
         self.held.clear();
         self.out.clear();
+        // The reader drops its partial frame when its port fails: so does the run count.
+        self.run_len = 0;
     }
 }
 
@@ -262,11 +348,7 @@ impl<L: Link> Link for FaultyLink<L> {
             }
             let next_due = self.release();
             if !self.out.is_empty() {
-                let n = buf.len().min(self.out.len());
-                for (d, b) in buf.iter_mut().zip(self.out.drain(..n)) {
-                    *d = b;
-                }
-                return Ok(n);
+                return Ok(self.deliver(buf));
             }
             let now = Instant::now();
             if now >= deadline {
@@ -349,10 +431,33 @@ mod tests {
         assert!(st.frames_damaged > 1000 && st.frames_dropped > 500, "{st:?}");
         assert_eq!(rx.dropped() as u64, st.frames_damaged, "{rx:?} vs {st:?}");
         assert_eq!(rx.frames_ok as u64, st.frames_delivered - st.frames_damaged);
+        // Without line noise a damaged frame stays one frame: the two accountings agree.
+        assert_eq!((st.rx_frames_damaged, st.rx_frames_intact), (st.frames_damaged, st.frames_delivered - st.frames_damaged));
         // What got through is the original, in order.
         assert!(seqs.windows(2).all(|w| w[0] < w[1]));
         // Same seed, same damage.
         assert_eq!(pump(cfg, 7, 20_000).0, st);
+    }
+
+    #[test]
+    fn with_line_noise_frames_merge_and_split_and_the_reader_side_count_is_exact() {
+        // 1 % of all bytes, delimiters included, to any value: merged and split frames.
+        let cfg = FaultConfig { corrupt_byte_prob: 0.01, line_noise: true, drop_frame_prob: 0.05, ..Default::default() };
+        let (st, rx, seqs) = pump(cfg.clone(), 3, 50_000);
+        // (A corrupted byte becomes 0x00 one time in 255.)
+        assert!(st.delimiters_corrupted > 100 && st.zeros_made > 10, "{st:?}");
+        // The reader's decoder rejected exactly the damaged runs and took exactly the intact ones.
+        assert_eq!(rx.dropped() as u64, st.rx_frames_damaged, "{rx:?} vs {st:?}");
+        assert_eq!(rx.frames_ok as u64, st.rx_frames_intact);
+        assert_eq!(seqs.len() as u64, st.rx_frames_intact);
+        // A frame's worth of damage: merges make fewer runs than damaged frames, splits more.
+        assert_ne!(st.rx_frames_damaged, st.frames_damaged);
+        // An undamaged frame is not intact only when merged into the run of the frame before,
+        // whose delimiter was corrupted (a frame with a corrupted delimiter counts as damaged).
+        let undamaged = st.frames_delivered - st.frames_damaged;
+        assert!(st.rx_frames_intact <= undamaged && st.rx_frames_intact + st.delimiters_corrupted >= undamaged, "{st:?}");
+        assert!(seqs.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(pump(cfg, 3, 50_000).0, st);
     }
 
     #[test]

@@ -27,6 +27,9 @@ pub struct NodeOptions {
     pub reconnect_every: Duration,
     /// The classifier's int8 model blob, installed at start (for `lives` without labels).
     pub model: Option<&'static [u8]>,
+    /// Lockstep: a batch whose segmented scan is still incomplete ticks on this many-th heartbeat
+    /// closing it ([`NodeConfig::lockstep_partial_after`]).
+    pub lockstep_partial_after: u8,
 }
 
 impl NodeOptions {
@@ -38,6 +41,7 @@ impl NodeOptions {
             record_goals: false,
             reconnect_every: Duration::from_millis(100),
             model: None,
+            lockstep_partial_after: NodeConfig::new(mode).lockstep_partial_after,
         }
     }
 }
@@ -91,7 +95,7 @@ impl NodeProcess {
             ctl.set_model(blob)?;
         }
         Ok(NodeProcess {
-            node: Box::new(Node::new(NodeConfig::new(opts.mode))),
+            node: Box::new(Node::new(NodeConfig { lockstep_partial_after: opts.lockstep_partial_after, ..NodeConfig::new(opts.mode) })),
             ctl,
             opts,
             start: Instant::now(),

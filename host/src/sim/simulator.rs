@@ -190,6 +190,7 @@ pub struct Sim {
     time_s: f64,
     path: VecDeque<P2>,
     final_yaw: Option<f64>,
+    gaze: Option<f64>,
     status: BaseStatus,
     driven_m: f64,
     sensor_rng: ChaCha8Rng,
@@ -263,6 +264,7 @@ impl Sim {
             time_s: 0.0,
             path: VecDeque::new(),
             final_yaw: None,
+            gaze: None,
             status: BaseStatus::Idle,
             driven_m: 0.0,
             sensor_rng: rng_for(seed, STREAM_SENSOR),
@@ -427,6 +429,14 @@ impl Sim {
         self.status = if self.path.is_empty() && self.final_yaw.is_none() { BaseStatus::Arrived } else { BaseStatus::Moving };
     }
 
+    /// Which way the body (and camera) should face while walking the path: `Some(yaw)` walks
+    /// holonomically (Spot can walk one way and face another) turning towards `yaw`; `None`
+    /// faces the direction of travel. A non-finite yaw counts as `None`. At the end of the path
+    /// the final yaw of [`Sim::set_path`] applies either way.
+    pub fn set_gaze(&mut self, yaw: Option<f64>) {
+        self.gaze = yaw.filter(|y| y.is_finite()).map(wrap_angle);
+    }
+
     /// Drop the path and stand still.
     pub fn stop_base(&mut self) {
         self.path.clear();
@@ -512,7 +522,24 @@ impl Sim {
                 break;
             }
         }
-        if let Some(&w) = self.path.front() {
+        if let (Some(&w), Some(g)) = (self.path.front(), self.gaze) {
+            // Holonomic: walk towards the waypoint whichever way the body faces, turning
+            // towards the gaze heading at the turn rate.
+            let v = sub(w, p);
+            let d = norm(v);
+            let e = wrap_angle(g - self.pose[2]);
+            let yaw = wrap_angle(self.pose[2] + e.clamp(-turn * h, turn * h));
+            let step = (speed * h).min(d);
+            let to = if d > 0.0 { [p[0] + step * v[0] / d, p[1] + step * v[1] / d] } else { p };
+            if step > 0.0 && self.motion_blocked(p, to) {
+                self.pose[2] = yaw;
+                self.status = BaseStatus::Blocked;
+                return;
+            }
+            self.pose = [to[0], to[1], yaw];
+            self.driven_m += step;
+            self.status = BaseStatus::Moving;
+        } else if let Some(&w) = self.path.front() {
             let v = sub(w, p);
             let d = norm(v);
             let e = wrap_angle(v[1].atan2(v[0]) - self.pose[2]);

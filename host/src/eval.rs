@@ -1,0 +1,357 @@
+//! `lives eval` and `lives tune`: many simulated searches run in parallel and summarised.
+//!
+//! * [`run_batch`] runs a list of [`SearchSpec`]s on a fixed number of worker threads; the
+//!   results come back in the order of the list, whatever the threads did, so a batch's output
+//!   depends only on its specs.
+//! * [`summarise`] groups results by planner, world and scenario: success rate, mean time to
+//!   find with a failure counted as the time limit (as in the paper's Table I), its 95 %
+//!   confidence interval (Student's t), and the mean path length.
+//! * [`markdown_table`] lays the summary out like the paper's Table I (one row per setting, one
+//!   column per planner, `mean s (success %)`); [`csv`] and the JSON form are for tools.
+//! * [`tune`] scores parameter assignments on procedurally generated worlds only (never the
+//!   built-in ones, which are the evaluation's unseen buildings).
+
+use crate::search::{self, PlannerChoice, SearchResult, SearchSpec};
+use crate::sim::{Scenario, World};
+use serde::Serialize;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// Runs every spec (each to detection, exhaustion or its time limit) on `threads` workers.
+/// `done` is called after each finished search with the number finished so far. A spec whose
+/// model blob does not validate is an error naming it.
+pub fn run_batch(specs: &[SearchSpec], threads: usize, done: impl Fn(usize) + Sync) -> Result<Vec<SearchResult>, String> {
+    let next = AtomicUsize::new(0);
+    let finished = AtomicUsize::new(0);
+    let slots: Mutex<Vec<Option<Result<SearchResult, String>>>> = Mutex::new(vec![None; specs.len()]);
+    std::thread::scope(|s| {
+        for _ in 0..threads.clamp(1, specs.len().max(1)) {
+            s.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(spec) = specs.get(i) else { break };
+                let r = search::try_run(spec, |_| {}).map(|run| run.result).map_err(|e| {
+                    format!("{} {} {} seed {}: the model does not validate: {e:?}", spec.world_name, spec.scenario, spec.planner, spec.seed)
+                });
+                if let Ok(mut v) = slots.lock() {
+                    v[i] = Some(r);
+                }
+                done(finished.fetch_add(1, Ordering::Relaxed) + 1);
+            });
+        }
+    });
+    let slots = slots.into_inner().map_err(|_| "a search thread panicked".to_string())?;
+    slots.into_iter().map(|r| r.unwrap_or_else(|| Err("a search thread panicked".into()))).collect()
+}
+
+/// One planner in one setting, over its trials.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CellSummary {
+    /// Planner name.
+    pub planner: String,
+    /// World name.
+    pub world: String,
+    /// `easy` or `hard`.
+    pub scenario: String,
+    /// Trials run.
+    pub trials: usize,
+    /// Trials that found the target.
+    pub found: usize,
+    /// `found / trials`.
+    pub success_rate: f64,
+    /// Mean time to find, a failure counted as the time limit (s).
+    pub mean_time_s: f64,
+    /// Half-width of the 95 % confidence interval of the mean (Student's t; 0 for one trial).
+    pub ci95_s: f64,
+    /// Mean distance driven (m).
+    pub mean_path_m: f64,
+    /// The setting's time limit (s).
+    pub time_limit_s: f64,
+    /// Every trial's time (s), in seed order (for plots).
+    pub times_s: Vec<f64>,
+}
+
+/// The two-sided 97.5 % quantile of Student's t with `dof` degrees of freedom.
+pub fn t975(dof: usize) -> f64 {
+    const T: [f64; 30] = [
+        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093,
+        2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042,
+    ];
+    match dof {
+        0 => f64::NAN,
+        1..=30 => T[dof - 1],
+        31..=60 => 2.00,
+        61..=120 => 1.98,
+        _ => 1.96,
+    }
+}
+
+/// Mean and 95 % confidence half-width of `xs` (half-width 0 for fewer than two values).
+pub fn mean_ci(xs: &[f64]) -> (f64, f64) {
+    let n = xs.len();
+    if n == 0 {
+        return (f64::NAN, 0.0);
+    }
+    let mean = xs.iter().sum::<f64>() / n as f64;
+    if n < 2 {
+        return (mean, 0.0);
+    }
+    let var = xs.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1) as f64;
+    (mean, t975(n - 1) * (var / n as f64).sqrt())
+}
+
+/// Groups `results` by (planner, world, scenario), in order of first appearance.
+pub fn summarise(results: &[SearchResult]) -> Vec<CellSummary> {
+    let mut keys: Vec<(String, String, String)> = Vec::new();
+    for r in results {
+        let k = (r.planner.clone(), r.world.clone(), r.scenario.clone());
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    keys.into_iter()
+        .map(|(planner, world, scenario)| {
+            let rs: Vec<&SearchResult> = results.iter().filter(|r| r.planner == planner && r.world == world && r.scenario == scenario).collect();
+            let times: Vec<f64> = rs.iter().map(|r| if r.found { r.time_s } else { r.time_limit_s }).collect();
+            let (mean, ci) = mean_ci(&times);
+            let found = rs.iter().filter(|r| r.found).count();
+            CellSummary {
+                trials: rs.len(),
+                found,
+                success_rate: found as f64 / rs.len() as f64,
+                mean_time_s: mean,
+                ci95_s: ci,
+                mean_path_m: rs.iter().map(|r| r.path_m).sum::<f64>() / rs.len() as f64,
+                time_limit_s: rs.first().map_or(f64::NAN, |r| r.time_limit_s),
+                times_s: times,
+                planner,
+                world,
+                scenario,
+            }
+        })
+        .collect()
+}
+
+/// The summary shaped like the paper's Table I: a row per setting, a column per planner, each
+/// entry `mean s (success %)`; then the same cells in detail (CI and path length).
+pub fn markdown_table(cells: &[CellSummary]) -> String {
+    let mut planners: Vec<&str> = Vec::new();
+    let mut settings: Vec<(&str, &str, f64)> = Vec::new();
+    for c in cells {
+        if !planners.contains(&c.planner.as_str()) {
+            planners.push(&c.planner);
+        }
+        if !settings.iter().any(|s| s.0 == c.world && s.1 == c.scenario) {
+            settings.push((&c.world, &c.scenario, c.time_limit_s));
+        }
+    }
+    let find = |p: &str, w: &str, s: &str| cells.iter().find(|c| c.planner == p && c.world == w && c.scenario == s);
+    let mut out = String::new();
+    out.push_str(&format!("| setting | limit | {} |\n", planners.join(" | ")));
+    out.push_str(&format!("|---|---|{}\n", "---|".repeat(planners.len())));
+    for (w, s, limit) in &settings {
+        let entries: Vec<String> = planners
+            .iter()
+            .map(|p| match find(p, w, s) {
+                Some(c) => format!("{:.1} ({:.0} %)", c.mean_time_s, 100.0 * c.success_rate),
+                None => "—".into(),
+            })
+            .collect();
+        out.push_str(&format!("| {w} {s} | {limit:.0} s | {} |\n", entries.join(" | ")));
+    }
+    out.push_str("\nMean time to find in seconds (a failure counts as the time limit) and success rate.\n\n");
+    out.push_str("| planner | setting | trials | found | mean time (s) | 95 % CI (s) | mean path (m) |\n|---|---|---|---|---|---|---|\n");
+    for c in cells {
+        out.push_str(&format!(
+            "| {} | {} {} | {} | {} | {:.1} | ± {:.1} | {:.1} |\n",
+            c.planner, c.world, c.scenario, c.trials, c.found, c.mean_time_s, c.ci95_s, c.mean_path_m
+        ));
+    }
+    out
+}
+
+/// The summary as CSV (one line per planner and setting).
+pub fn csv(cells: &[CellSummary]) -> String {
+    let mut out = String::from("planner,world,scenario,trials,found,success_rate,mean_time_s,ci95_s,mean_path_m,time_limit_s\n");
+    for c in cells {
+        out.push_str(&format!(
+            "{},{},{},{},{},{:.4},{:.3},{:.3},{:.3},{:.1}\n",
+            c.planner, c.world, c.scenario, c.trials, c.found, c.success_rate, c.mean_time_s, c.ci95_s, c.mean_path_m, c.time_limit_s
+        ));
+    }
+    out
+}
+
+/// The specs of an evaluation: every planner × world × scenario × trial (seeds `1..=trials`).
+/// `lives` runs the int8 classifier (`model`); the others their own label source.
+pub fn eval_specs(
+    worlds: &[String],
+    scenarios: &[Scenario],
+    planners: &[PlannerChoice],
+    trials: u64,
+    model: &'static [u8],
+    configure: impl Fn(&mut SearchSpec) -> Result<(), String>,
+) -> Result<Vec<SearchSpec>, String> {
+    let mut specs = Vec::new();
+    for w in worlds {
+        for &s in scenarios {
+            let world = World::builtin(w, s).ok_or_else(|| format!("unknown built-in world `{w}` (expected {})", World::builtin_names().join(", ")))?;
+            for &p in planners {
+                for seed in 1..=trials {
+                    let mut spec = SearchSpec::new(w, world.clone(), s, p, seed);
+                    if p == PlannerChoice::Lives {
+                        spec.model = Some(model);
+                    }
+                    configure(&mut spec)?;
+                    specs.push(spec);
+                }
+            }
+        }
+    }
+    Ok(specs)
+}
+
+/// One parameter assignment's score in [`tune`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TuneScore {
+    /// The `--set` assignments.
+    pub sets: Vec<String>,
+    /// Mean over worlds (and planners) of time to find / time limit (failures count 1).
+    pub mean_normalised_time: f64,
+    /// Its 95 % confidence half-width.
+    pub ci95: f64,
+    /// Fraction of searches that found the target.
+    pub success_rate: f64,
+    /// Searches run.
+    pub searches: usize,
+}
+
+/// Every combination of the grid's values: `[("a", ["1","2"]), ("b", ["x"])]` →
+/// `[["a=1","b=x"], ["a=2","b=x"]]`.
+pub fn grid_assignments(grid: &[(String, Vec<String>)]) -> Vec<Vec<String>> {
+    let mut out: Vec<Vec<String>> = vec![Vec::new()];
+    for (name, values) in grid {
+        out = out.iter().flat_map(|prefix| values.iter().map(move |v| [prefix.clone(), vec![format!("{name}={v}")]].concat())).collect();
+    }
+    out
+}
+
+/// Parses `name=v1,v2,...`.
+pub fn parse_grid_axis(s: &str) -> Result<(String, Vec<String>), String> {
+    let (name, values) = s.split_once('=').ok_or_else(|| format!("`--grid {s}`: expected name=v1,v2,..."))?;
+    let values: Vec<String> = values.split(',').map(|v| v.trim().to_string()).filter(|v| !v.is_empty()).collect();
+    if values.is_empty() {
+        return Err(format!("`--grid {s}`: no values"));
+    }
+    Ok((name.trim().to_string(), values))
+}
+
+/// Scores every assignment of `grid` with `planners` on procedurally generated worlds
+/// (`World::random(seed)` for `seeds`), best (lowest mean normalised time) first.
+pub fn tune(
+    grid: &[(String, Vec<String>)],
+    planners: &[PlannerChoice],
+    seeds: std::ops::RangeInclusive<u64>,
+    threads: usize,
+    done: impl Fn(usize, usize) + Sync,
+) -> Result<Vec<TuneScore>, String> {
+    let assignments = grid_assignments(grid);
+    let mut specs = Vec::new();
+    for sets in &assignments {
+        for seed in seeds.clone() {
+            let world = World::random(seed);
+            for &p in planners {
+                let mut spec = SearchSpec::new(&format!("random-{seed}"), world.clone(), Scenario::Easy, p, seed);
+                for a in sets {
+                    crate::overrides::apply(&mut spec.controller, a)?;
+                }
+                specs.push(spec);
+            }
+        }
+    }
+    let total = specs.len();
+    let results = run_batch(&specs, threads, |n| done(n, total))?;
+    let per = results.len() / assignments.len().max(1);
+    let mut scores: Vec<TuneScore> = assignments
+        .into_iter()
+        .zip(results.chunks(per.max(1)))
+        .map(|(sets, rs)| {
+            let xs: Vec<f64> = rs.iter().map(|r| if r.found { r.time_s / r.time_limit_s } else { 1.0 }).collect();
+            let (m, ci) = mean_ci(&xs);
+            TuneScore {
+                sets,
+                mean_normalised_time: m,
+                ci95: ci,
+                success_rate: rs.iter().filter(|r| r.found).count() as f64 / rs.len() as f64,
+                searches: rs.len(),
+            }
+        })
+        .collect();
+    scores.sort_by(|a, b| a.mean_normalised_time.total_cmp(&b.mean_normalised_time));
+    Ok(scores)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn result(planner: &str, found: bool, t: f64) -> SearchResult {
+        SearchResult {
+            world: "apartment".into(),
+            scenario: "easy".into(),
+            planner: planner.into(),
+            seed: 1,
+            found,
+            time_s: if found { t } else { 120.0 },
+            path_m: 10.0,
+            ticks: 1,
+            time_limit_s: 120.0,
+            outcome: if found { "found" } else { "time-limit" }.into(),
+            goals: 1,
+            blacklisted: 0,
+            blocked: 0,
+            collisions: 0,
+            labels: "none".into(),
+            targets: vec![],
+        }
+    }
+
+    #[test]
+    fn failures_count_as_the_limit_and_the_ci_uses_students_t() {
+        let rs = [result("a", true, 30.0), result("a", false, 0.0), result("a", true, 60.0), result("b", true, 10.0)];
+        let cells = summarise(&rs);
+        assert_eq!(cells.len(), 2);
+        let a = &cells[0];
+        assert_eq!((a.trials, a.found), (3, 2));
+        assert!((a.mean_time_s - 70.0).abs() < 1e-9);
+        // sd of [30, 120, 60] = 45.83; t(2) = 4.303; 4.303 · 45.83 / √3 = 113.85
+        assert!((a.ci95_s - 113.85).abs() < 0.05, "{}", a.ci95_s);
+        assert_eq!(cells[1].ci95_s, 0.0);
+        let md = markdown_table(&cells);
+        assert!(md.contains("| apartment easy | 120 s | 70.0 (67 %) | 10.0 (100 %) |"), "{md}");
+        assert!(csv(&cells).lines().nth(1).unwrap().starts_with("a,apartment,easy,3,2,0.6667,70.000"));
+    }
+
+    #[test]
+    fn grids_expand_to_every_combination() {
+        let g = vec![parse_grid_axis("a=1,2").unwrap(), parse_grid_axis("b=x").unwrap()];
+        assert_eq!(grid_assignments(&g), vec![vec!["a=1".to_string(), "b=x".into()], vec!["a=2".into(), "b=x".into()]]);
+        assert!(parse_grid_axis("a").is_err());
+        assert!(parse_grid_axis("a=").is_err());
+    }
+
+    #[test]
+    fn a_batch_returns_results_in_spec_order_whatever_the_threads() {
+        let world = World::random(3);
+        let specs: Vec<SearchSpec> = (1..=4)
+            .map(|seed| {
+                let mut s = SearchSpec::new("random-3", world.clone(), Scenario::Easy, PlannerChoice::Nearest, seed);
+                s.world.time_limit_s = 10.0;
+                s
+            })
+            .collect();
+        let one = run_batch(&specs, 1, |_| {}).unwrap();
+        let two = run_batch(&specs, 2, |_| {}).unwrap();
+        assert_eq!(one, two);
+        assert_eq!(one.iter().map(|r| r.seed).collect::<Vec<_>>(), vec![1, 2, 3, 4]);
+    }
+}
