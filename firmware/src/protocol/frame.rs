@@ -268,23 +268,7 @@ mod tests {
     use crate::scan::BeamLabel;
     use fixed_point::BinaryAngle;
 
-    /// Seeded xorshift64*: the tests' only source of randomness.
-    struct Rng(u64);
-
-    impl Rng {
-        fn next(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-        }
-        fn byte(&mut self) -> u8 {
-            (self.next() >> 56) as u8
-        }
-        fn below(&mut self, n: usize) -> usize {
-            (self.next() % n as u64) as usize
-        }
-    }
+    use crate::protocol::fuzz::Rng;
 
     fn pose_msg() -> HostToCore {
         HostToCore::Pose(PoseMsg { t_us: 1_500_000, x: 98_304, y: -147_456, theta: 1 << 30 })
