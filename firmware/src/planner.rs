@@ -623,7 +623,16 @@ impl Planner {
         let mut best: Option<(BinaryAngle, i64)> = None;
         for i in 0..GAZE_HEADINGS {
             let heading = BinaryAngle((i as u32).wrapping_mul(u32::MAX / GAZE_HEADINGS as u32 + 1) as i32);
-            let view = visual.unseen_in_cone(lidar, robot.0, robot.1, heading, cfg.camera_fov, range_cells, SCORE_RAYS, cfg.unseen_unknown_eighths);
+            let view = visual.unseen_in_cone(
+                lidar,
+                robot.0,
+                robot.1,
+                heading,
+                cfg.camera_fov,
+                range_cells,
+                SCORE_RAYS,
+                cfg.unseen_unknown_eighths,
+            );
             work += view.work;
             let nm = if w_nonmap != Weight::ZERO { self.in_cone(heading, cfg.camera_fov, cfg.nonmap_block_cap) } else { 0 };
             let gain = cfg.w_unknown_per_cell.to_bits() as i64 * view.unseen_cells as i64

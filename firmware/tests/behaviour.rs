@@ -435,7 +435,10 @@ fn the_gaze_turns_to_what_is_unseen_and_to_non_map_points() {
     let cfg = Config { planner: PlannerKind::Multisensor, ..Config::DEFAULT };
     let (gaze, work) = planner.gaze(&cfg, &lidar, &vis, &store, &robot);
     let (h, _) = gaze.expect("half the room unseen is worth a look");
-    assert!((h - firmware::BinaryAngle::HALF).unsigned_abs() <= firmware::BinaryAngle::from_degrees(45).unsigned_abs(), "looks west: {h:?}");
+    assert!(
+        (h - firmware::BinaryAngle::HALF).unsigned_abs() <= firmware::BinaryAngle::from_degrees(45).unsigned_abs(),
+        "looks west: {h:?}"
+    );
     assert!(work > 0);
 
     // Everything seen: nothing is worth turning for (the camera faces the way it walks).
@@ -454,6 +457,9 @@ fn the_gaze_turns_to_what_is_unseen_and_to_non_map_points() {
     let lives = Config { planner: PlannerKind::Lives, ..Config::DEFAULT };
     let (g, _) = planner.gaze(&lives, &lidar, &vis, &store, &robot);
     let (h, _) = g.expect("points in view are worth a look");
-    assert!((h - firmware::BinaryAngle::QUARTER).unsigned_abs() <= firmware::BinaryAngle::from_degrees(45).unsigned_abs(), "looks north: {h:?}");
+    assert!(
+        (h - firmware::BinaryAngle::QUARTER).unsigned_abs() <= firmware::BinaryAngle::from_degrees(45).unsigned_abs(),
+        "looks north: {h:?}"
+    );
     assert_eq!(planner.gaze(&cfg, &lidar, &vis, &store, &robot).0, None);
 }

@@ -73,8 +73,8 @@ pub struct CellSummary {
 /// The two-sided 97.5 % quantile of Student's t with `dof` degrees of freedom.
 pub fn t975(dof: usize) -> f64 {
     const T: [f64; 30] = [
-        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093,
-        2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042,
+        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101,
+        2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042,
     ];
     match dof {
         0 => f64::NAN,
@@ -110,7 +110,8 @@ pub fn summarise(results: &[SearchResult]) -> Vec<CellSummary> {
     }
     keys.into_iter()
         .map(|(planner, world, scenario)| {
-            let rs: Vec<&SearchResult> = results.iter().filter(|r| r.planner == planner && r.world == world && r.scenario == scenario).collect();
+            let rs: Vec<&SearchResult> =
+                results.iter().filter(|r| r.planner == planner && r.world == world && r.scenario == scenario).collect();
             let times: Vec<f64> = rs.iter().map(|r| if r.found { r.time_s } else { r.time_limit_s }).collect();
             let (mean, ci) = mean_ci(&times);
             let found = rs.iter().filter(|r| r.found).count();
@@ -194,7 +195,8 @@ pub fn eval_specs(
     let mut specs = Vec::new();
     for w in worlds {
         for &s in scenarios {
-            let world = World::builtin(w, s).ok_or_else(|| format!("unknown built-in world `{w}` (expected {})", World::builtin_names().join(", ")))?;
+            let world = World::builtin(w, s)
+                .ok_or_else(|| format!("unknown built-in world `{w}` (expected {})", World::builtin_names().join(", ")))?;
             for &p in planners {
                 for seed in 1..=trials {
                     let mut spec = SearchSpec::new(w, world.clone(), s, p, seed);

@@ -469,9 +469,16 @@ fn eval_cmd(
             continue;
         }
         seen.push(key);
-        let columns =
-            cells.iter().filter(|d| d.world == c.world && d.scenario == c.scenario).map(|d| (d.planner.as_str(), d.times_s.clone())).collect();
-        panels.push(host::render::StripPanel { title: format!("{} {} (limit {:.0} s)", c.world, c.scenario, c.time_limit_s), y_max: c.time_limit_s, columns });
+        let columns = cells
+            .iter()
+            .filter(|d| d.world == c.world && d.scenario == c.scenario)
+            .map(|d| (d.planner.as_str(), d.times_s.clone()))
+            .collect();
+        panels.push(host::render::StripPanel {
+            title: format!("{} {} (limit {:.0} s)", c.world, c.scenario, c.time_limit_s),
+            y_max: c.time_limit_s,
+            columns,
+        });
     }
     let times_png = out.join("times.png");
     host::render::write_strip_plot(&times_png, &format!("time to find, {trials} trials (failure = limit)"), "s", &panels)
@@ -483,13 +490,23 @@ fn eval_cmd(
         for spec in specs.iter().filter(|s| s.seed == 1) {
             let run = search::try_run(spec, |_| {}).map_err(|e| format!("{e:?}"))?;
             let r = &run.result;
-            let title = format!("{} {} · {} · seed 1 · {}", r.world, r.scenario, r.planner, if r.found { format!("FOUND in {:.1} s", r.time_s) } else { "NOT FOUND".into() });
+            let title = format!(
+                "{} {} · {} · seed 1 · {}",
+                r.world,
+                r.scenario,
+                r.planner,
+                if r.found { format!("FOUND in {:.1} s", r.time_s) } else { "NOT FOUND".into() }
+            );
             let path = dir.join(format!("{}-{}-{}.png", r.world, r.scenario, r.planner));
             host::picture::write_png(&run, &path, &title).map_err(|e| format!("{}: {e}", path.display()))?;
         }
     }
     say!("{md}");
-    say!("written: {0}/table.md, {0}/results.json, {0}/results.csv, {0}/times.png{1}", out.display(), if no_pictures { "" } else { ", trajectories/" });
+    say!(
+        "written: {0}/table.md, {0}/results.json, {0}/results.csv, {0}/times.png{1}",
+        out.display(),
+        if no_pictures { "" } else { ", trajectories/" }
+    );
     Ok(ExitCode::SUCCESS)
 }
 
@@ -870,7 +887,14 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             pb.finish_and_clear();
             say!("| rank | assignment | mean time / limit | 95 % CI | found |\n|---|---|---|---|---|");
             for (i, sc) in scores.iter().enumerate() {
-                say!("| {} | {} | {:.3} | ± {:.3} | {:.0} % |", i + 1, sc.sets.join(" "), sc.mean_normalised_time, sc.ci95, 100.0 * sc.success_rate);
+                say!(
+                    "| {} | {} | {:.3} | ± {:.3} | {:.0} % |",
+                    i + 1,
+                    sc.sets.join(" "),
+                    sc.mean_normalised_time,
+                    sc.ci95,
+                    100.0 * sc.success_rate
+                );
             }
             if let Some(best) = scores.first() {
                 say!(

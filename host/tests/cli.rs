@@ -137,7 +137,20 @@ fn eval_writes_the_table_json_csv_and_plots() {
     }
     // The same trials give the same numbers (the summary, not the wall time).
     let again = lives()
-        .args(["eval", "--trials", "2", "--worlds", "apartment", "--scenarios", "easy", "--planners", "nearest,lives-gt", "--threads", "1", "--no-pictures"])
+        .args([
+            "eval",
+            "--trials",
+            "2",
+            "--worlds",
+            "apartment",
+            "--scenarios",
+            "easy",
+            "--planners",
+            "nearest,lives-gt",
+            "--threads",
+            "1",
+            "--no-pictures",
+        ])
         .arg("--out")
         .arg(dir.join("again"))
         .output()
