@@ -14,8 +14,8 @@
 
 use firmware::capacity::BEAMS;
 use firmware::classifier::{
-    model::layout, ChannelParams, HeadParams, Layer, ModelWriter, Normalisation, RangeEncoding, ENC_KERNEL, ENC_PAD, HISTORY, LABEL_ROWS, POSE_CHANNELS,
-    POSE_FEATURES, POSE_FLAT,
+    model::layout, ChannelParams, HeadParams, Layer, ModelWriter, Normalisation, RangeEncoding, ENC_KERNEL, ENC_PAD, HISTORY, LABEL_ROWS,
+    POSE_CHANNELS, POSE_FEATURES, POSE_FLAT,
 };
 use firmware::scan::{RANGE_INVALID, RANGE_NO_RETURN};
 use fixed_point::{Pose2, QuantizedMultiplier};

@@ -38,8 +38,8 @@ use candle_core::{Device, Tensor, Var};
 use candle_nn::{AdamW, Optimizer, ParamsAdamW};
 use firmware::capacity::BEAMS;
 use firmware::classifier::{
-    Classifier, ClassifierConfig, LabelFeedback, ModelView, Normalisation, RangeEncoding, ENC_KERNEL, ENC_PAD, HISTORY, LABEL_ROWS, LABEL_WEIGHT_SUM,
-    POSE_CHANNELS, POSE_FEATURES, POSE_FLAT,
+    Classifier, ClassifierConfig, LabelFeedback, ModelView, Normalisation, RangeEncoding, ENC_KERNEL, ENC_PAD, HISTORY, LABEL_ROWS,
+    LABEL_WEIGHT_SUM, POSE_CHANNELS, POSE_FEATURES, POSE_FLAT,
 };
 use fixed_point::Pose2;
 use rand::seq::SliceRandom;
@@ -1146,7 +1146,8 @@ pub fn load_checkpoint(path: &Path) -> Result<(FloatModel, Option<TrainLog>)> {
         Some("inverse") => RangeEncoding::Inverse,
         Some(other) => return Err(TrainError(format!("{}: unknown range_encoding `{other}`", path.display()))),
     };
-    let range_max_mm = u16::try_from(num("range_max_mm")?).map_err(|_| TrainError(format!("{}: range_max_mm out of range", path.display())))?;
+    let range_max_mm =
+        u16::try_from(num("range_max_mm")?).map_err(|_| TrainError(format!("{}: range_max_mm out of range", path.display())))?;
     let norm = Normalisation { range_max_mm, pose_scale_mm: num("pose_scale_mm")?, range_encoding };
     let st = safetensors::SafeTensors::deserialize(&bytes)?;
     let mut m = FloatModel::random(0);
@@ -1346,6 +1347,10 @@ pub struct SetEval {
     pub int8_ar_raw: ArAccuracy,
     /// int8, sign feedback.
     pub int8_ar_sign: ArAccuracy,
+    /// int8 (raw feedback) against float (raw feedback), both autoregressive, each on its own
+    /// fed-back outputs: `accuracy()` is the fraction of labelled beams where their signs agree.
+    #[serde(default)]
+    pub int8_float_agreement: ArAccuracy,
 }
 
 /// Evaluates a float model and its blob on `episodes`.
@@ -1360,7 +1365,46 @@ pub fn evaluate_set(model: &FloatModel, blob: &[u8], episodes: &[Episode]) -> Re
         float_ar_sign: evaluate_float_autoregressive(model, episodes, Feedback::Sign),
         int8_ar_raw: evaluate_int8(blob, episodes, LabelFeedback::Raw)?,
         int8_ar_sign: evaluate_int8(blob, episodes, LabelFeedback::Sign)?,
+        int8_float_agreement: int8_float_agreement(model, blob, episodes)?,
     })
+}
+
+/// Per-point sign agreement of the int8 blob (firmware classifier, raw feedback) with the float
+/// model (raw feedback), both run autoregressively over `episodes` from the zero bootstrap, each fed
+/// its own outputs — as they would run on the robot. Counted over beams the labeller labelled;
+/// `accuracy()` of the result is the agreement (the float model's sign plays the label).
+pub fn int8_float_agreement(model: &FloatModel, blob: &[u8], episodes: &[Episode]) -> Result<ArAccuracy> {
+    let view = ModelView::parse(blob).map_err(|e| TrainError(format!("the firmware refuses the blob: {e:?}")))?;
+    Ok(par_episodes(episodes, |ep| {
+        let mut c = Box::new(Classifier::with_model(view, ClassifierConfig { feedback: LabelFeedback::Raw }));
+        let mut h = FloatHistory::new(model.norm);
+        let mut acc = ArAccuracy::default();
+        let mut out = Box::new([firmware::scan::BeamLabel::Unlabelled; BEAMS]);
+        for (i, st) in ep.steps.iter().enumerate() {
+            h.push_scan(&st.pose, &st.ranges_mm);
+            let y = model.forward(&h.inputs());
+            h.push_labels(&y);
+            let ranges: &[u16; BEAMS] = st.ranges_mm.as_slice().try_into().expect("897 beams");
+            c.classify_ranges(&st.pose, ranges, &mut out);
+            let scores: Vec<f32> = c.scores().iter().map(|&s| s as f32).collect();
+            let float_sign: Vec<u8> = st
+                .labels
+                .iter()
+                .zip(&y)
+                .map(|(&l, &v)| {
+                    if l == 0 {
+                        0
+                    } else if v >= 0.0 {
+                        1
+                    } else {
+                        2
+                    }
+                })
+                .collect();
+            acc.add_row(i, &scores, &float_sign);
+        }
+        acc
+    }))
 }
 
 /// Everything [`quantise_and_evaluate`] measured.
@@ -1651,6 +1695,13 @@ pub fn model_card(r: &QuantiseReport) -> String {
         let _ = writeln!(s, "{}", cls("built-in worlds", &u.int8_ar_raw.all));
     }
     let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "int8 against float, both autoregressive (raw feedback, each fed its own outputs), sign agreement per \
+         labelled beam: **{}** on validation{}.\n",
+        pct(&r.val.int8_float_agreement.all),
+        r.unseen.as_ref().map(|u| format!(", **{}** in the built-in worlds", pct(&u.int8_float_agreement.all))).unwrap_or_default()
+    );
     if let Some(u) = &r.unseen {
         let _ = writeln!(
             s,
