@@ -28,6 +28,26 @@ MSG
     exit 2
 fi
 
+say "Python mcap reader (tests/python/check_mcap.py reads run recordings back)"
+PYMCAP=target/py-mcap
+if "$PYMCAP/bin/python" -c "import mcap" 2>/dev/null; then
+    echo "installed ($PYMCAP)"
+else
+    need python3 "apt-get install -y python3 python3-venv (Debian/Ubuntu)"
+    if ! python3 -m venv "$PYMCAP" >/dev/null 2>&1; then
+        rm -rf "$PYMCAP"
+        if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+            echo "installing python3-venv (apt-get)"
+            apt-get update -qq && apt-get install -y -qq python3-venv >/dev/null
+        fi
+        python3 -m venv "$PYMCAP" >/dev/null || { echo "missing: python3-venv (apt-get install -y python3-venv)" >&2; exit 2; }
+    fi
+    "$PYMCAP/bin/python" -m pip install -q --disable-pip-version-check mcap \
+        || { echo "missing: the PyPI package mcap ($PYMCAP/bin/python -m pip install mcap failed)" >&2; exit 2; }
+    echo "installed now ($PYMCAP)"
+fi
+export LIVES_PYTHON="$PWD/$PYMCAP/bin/python"
+
 say "host tests (cargo test --workspace --release)"
 cargo test --workspace --release
 

@@ -91,6 +91,16 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
     println!("{:<36} {:>12.3} {:>14}", "visual update (camera cone)", t_visual, visual_work);
     println!("{:<36} {:>12.3} {:>14}", "frontiers (both maps)", t_frontiers, "");
     println!("{:<36} {:>12.3} {:>14}", "full planning step (frontiers+plan)", t_plan, plan_work);
+    let vlp = crate::sensors::vlp16::default_recording();
+    match crate::sensors::vlp16::bench_decode(&vlp, reps) {
+        Some(b) => println!(
+            "{:<36} {:>12.3} {:>14}",
+            format!("VLP-16 decode+bin ({} packets)", b.packets),
+            b.median_ms,
+            format!("{:.0} pkt/s", b.packets_per_s)
+        ),
+        None => println!("{:<36} {:>12} {:>14}", "VLP-16 decode+bin", "no data", vlp.display()),
+    }
     println!("({reps} repetitions each; median)");
 
     if searches {

@@ -9,8 +9,11 @@ pub mod link;
 pub mod model;
 pub mod overrides;
 pub mod picture;
+pub mod record;
 pub mod render;
+pub mod replay;
 pub mod search;
+pub mod sensors;
 pub mod sim;
 pub mod trace;
 #[cfg(feature = "train")]

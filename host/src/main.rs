@@ -55,6 +55,10 @@ enum Cmd {
         /// Override a controller parameter, e.g. `--set w_dist_per_m=2` (repeatable; `lives params` lists them).
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
+        /// Record the run (scans, pose, both grids, frontiers, candidates, goals, detection) to an
+        /// MCAP file that Foxglove opens (docs/recording.md).
+        #[arg(long, value_name = "FILE.mcap")]
+        record: Option<PathBuf>,
     },
     /// Generate the scan-classification dataset (docs/dataset.md) from procedural worlds only.
     Dataset {
@@ -110,9 +114,21 @@ enum Cmd {
         /// Baud rate (a real UART only).
         #[arg(long, default_value_t = 921_600)]
         baud: u32,
-        /// Where the data comes from: `sim` (the simulator; sensors and logs come later).
+        /// Where the data comes from: `sim` (the simulator) or `robot` (a real base through the
+        /// base adapter, docs/base-adapter.md; real time only).
         #[arg(long, default_value = "sim")]
         source: String,
+        /// `--source robot`: where the base adapter listens (JSON lines over TCP; keep it on localhost).
+        #[arg(long, default_value = "127.0.0.1:7100", value_name = "ADDR")]
+        base_listen: String,
+        /// `--source robot`: scans from the adapter's client (`adapter`) or a VLP-16 on UDP
+        /// (`vlp16-udp`, or `vlp16-udp=ADDR`; default 0.0.0.0:2368).
+        #[arg(long, default_value = "adapter")]
+        lidar: String,
+        /// `--source robot`: the grid's lower-left corner `X,Y` in the odometry frame, metres
+        /// (default: a 51.2 m grid centred on the first odometry pose).
+        #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+        origin: Option<String>,
         #[command(flatten)]
         run: RunArgs,
         /// Override a controller parameter sent to the node, e.g. `--set w_dist_per_m=2`.
@@ -129,6 +145,10 @@ enum Cmd {
         /// Print one JSON object (result and link health).
         #[arg(long)]
         json: bool,
+        /// Record what crosses the link (pose, scan, the node's labels, goals, detection, status)
+        /// to an MCAP file that Foxglove opens (docs/recording.md).
+        #[arg(long, value_name = "FILE.mcap")]
+        record: Option<PathBuf>,
     },
     /// Train the map-free scan classifier (LabelPoseNet, f32, CPU) on a dataset; writes a safetensors checkpoint.
     /// (Built with `--features train`.)
@@ -283,6 +303,9 @@ enum Cmd {
     },
     /// List the controller parameters `--set` accepts, with their defaults.
     Params,
+    /// Replay a recorded log through the controller (no base to move): CARMEN logs (FLASER,
+    /// ROBOTLASER1, ODOM; plain or gzip) and ROS 2 bags (MCAP or sqlite3) (docs/replay.md).
+    Replay(host::replay::ReplayArgs),
     /// List the built-in worlds, or print one as a world file.
     Worlds {
         /// Print this built-in world (or `random`) as TOML.
@@ -305,6 +328,9 @@ enum Cmd {
         #[arg(long)]
         searches: bool,
     },
+    /// VLP-16 LiDAR: decode a capture (.pcap or raw payloads) or listen on UDP (docs/vlp16.md).
+    #[command(subcommand)]
+    Lidar(host::sensors::LidarCmd),
 }
 
 #[derive(Subcommand)]
@@ -523,7 +549,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<ExitCode, String> {
     match cli.command {
-        Cmd::Search { run: RunArgs { world, scenario, planner, seed }, png, json, trace, model, set } => {
+        Cmd::Search { run: RunArgs { world, scenario, planner, seed }, png, json, trace, model, set, record } => {
             let (name, w) = load_world(&world, scenario, seed)?;
             let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
             spec.trace = trace;
@@ -536,11 +562,17 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
                 spec.model = Some(Box::leak(bytes.into_boxed_slice()));
             }
-            let run = search::try_run(&spec, |t| pb.set_position(t as u64)).map_err(|e| {
+            let mut recorder =
+                record.as_ref().map(|p| host::record::Recorder::create(p, Default::default())).transpose().map_err(|e| e.to_string())?;
+            let (run, recorded) = host::record::record_search(&spec, recorder.as_mut(), |t| pb.set_position(t as u64)).map_err(|e| {
                 format!("{}: the model does not validate: {e:?}", model.as_ref().map(|p| p.display().to_string()).unwrap_or_default())
             })?;
             let wall = t0.elapsed().as_secs_f64();
             pb.finish_and_clear();
+            let mut recording = None;
+            if let (Some(rec), Some(path)) = (recorder, &record) {
+                recording = Some(recorded.and_then(|()| rec.finish()).map_err(|e| format!("{}: {e}", path.display()))?);
+            }
             let r = &run.result;
             if let Some(path) = &png {
                 let title = format!(
@@ -568,6 +600,9 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 }
                 if let Some(p) = &png {
                     say!("picture: {}", p.display());
+                }
+                if let (Some(p), Some(s)) = (&record, &recording) {
+                    say!("recording: {} ({} messages on {} topics)", p.display(), s.total_messages(), s.messages.len());
                 }
             }
             Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
@@ -692,10 +727,27 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             );
             Ok(ExitCode::SUCCESS)
         }
-        Cmd::Bridge { port, baud, source, run: RunArgs { world, scenario, planner, seed }, set, lockstep, scan_segment_beams, json } => {
+        Cmd::Bridge {
+            port,
+            baud,
+            source,
+            run: RunArgs { world, scenario, planner, seed },
+            set,
+            lockstep,
+            scan_segment_beams,
+            json,
+            record,
+            base_listen,
+            lidar,
+            origin,
+        } => {
             use host::link::{run_bridge, BridgeOptions, SerialLink, Source, TimeMode};
+            if source == "robot" {
+                let opts = host::link::robot::CliOptions { port, baud, planner, set, lockstep, json, record, base_listen, lidar, origin };
+                return host::link::robot::run_cli(opts);
+            }
             if source != "sim" {
-                return Err(format!("unknown source `{source}` (only `sim` for now)"));
+                return Err(format!("unknown source `{source}` (`sim` or `robot`)"));
             }
             let (name, w) = load_world(&world, scenario, seed)?;
             let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
@@ -708,8 +760,17 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 SerialLink::by_path(&port, baud)
             });
             let stop = std::sync::atomic::AtomicBool::new(false);
-            let opts = BridgeOptions { scan_segment_beams: scan_segment_beams as usize, ..BridgeOptions::new(mode) };
+            let recording = record.as_ref().map(|p| host::record::SharedRecording::create(p)).transpose().map_err(|e| e.to_string())?;
+            let opts = BridgeOptions {
+                scan_segment_beams: scan_segment_beams as usize,
+                want_labels: recording.is_some(),
+                observer: recording.as_ref().map(|r| r.observer()),
+                ..BridgeOptions::new(mode)
+            };
             let run = run_bridge(&mut link, Source::Sim(spec), &opts, &stop).map_err(|e| e.to_string())?;
+            if let (Some(rec), Some(path)) = (recording, &record) {
+                rec.finish().map_err(|e| format!("{}: {e}", path.display()))?;
+            }
             let (r, st) = (&run.result, &run.stats);
             if json {
                 let goals: Vec<_> = run.goals.iter().map(|((x, y), h)| serde_json::json!([x, y, h.0])).collect();
@@ -908,6 +969,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             say!("ranking: {}", out.display());
             Ok(ExitCode::SUCCESS)
         }
+        Cmd::Replay(args) => host::replay::run_command(&args),
         Cmd::Params => {
             say!("{:#?}", firmware::Config::DEFAULT);
             say!();
@@ -920,5 +982,6 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             host::bench::run(reps, explore_s, searches);
             Ok(ExitCode::SUCCESS)
         }
+        Cmd::Lidar(cmd) => host::sensors::run(cmd),
     }
 }

@@ -328,6 +328,11 @@ enum Swatch {
     Star,
 }
 
+/// Whether the input has a true world (a replayed log has none: no truth rows, no outcome).
+fn has_world(input: &RenderInput) -> bool {
+    !(input.walls.is_empty() && input.obstacles.is_empty() && input.people.is_empty() && input.targets.is_empty())
+}
+
 fn legend_rows(input: &RenderInput) -> Vec<LegendRow> {
     use palette::*;
     let mut rows = vec![
@@ -335,13 +340,19 @@ fn legend_rows(input: &RenderInput) -> Vec<LegendRow> {
         LegendRow { label: "Free (LiDAR)", swatch: Swatch::Fill(FREE) },
         LegendRow { label: "Seen by camera", swatch: Swatch::Fill(SEEN) },
         LegendRow { label: "Occupied (LiDAR)", swatch: Swatch::Fill(OCCUPIED) },
-        LegendRow { label: "True walls", swatch: Swatch::Line(WALL) },
-        LegendRow { label: "True furniture / clutter", swatch: Swatch::Outline(OBSTACLE) },
-        LegendRow { label: "People", swatch: Swatch::Circle(PERSON) },
-        LegendRow { label: "Target (true)", swatch: Swatch::Outline(TARGET) },
+    ];
+    if has_world(input) {
+        rows.extend([
+            LegendRow { label: "True walls", swatch: Swatch::Line(WALL) },
+            LegendRow { label: "True furniture / clutter", swatch: Swatch::Outline(OBSTACLE) },
+            LegendRow { label: "People", swatch: Swatch::Circle(PERSON) },
+            LegendRow { label: "Target (true)", swatch: Swatch::Outline(TARGET) },
+        ]);
+    }
+    rows.extend([
         LegendRow { label: "Non-map points", swatch: Swatch::Dots(NONMAP) },
         LegendRow { label: "Frontier cells", swatch: Swatch::Squares(FRONTIER) },
-    ];
+    ]);
     if !input.viewpoints.is_empty() {
         rows.push(LegendRow { label: "Candidate viewpoints", swatch: Swatch::Arrow(VIEWPOINT) });
     }
@@ -350,8 +361,10 @@ fn legend_rows(input: &RenderInput) -> Vec<LegendRow> {
         LegendRow { label: "Start", swatch: Swatch::Triangle(START) },
         LegendRow { label: "Robot + camera cone", swatch: Swatch::Robot },
         LegendRow { label: "Goal + planned path", swatch: Swatch::Goal },
-        LegendRow { label: "Target detected here", swatch: Swatch::Star },
     ]);
+    if has_world(input) {
+        rows.push(LegendRow { label: "Target detected here", swatch: Swatch::Star });
+    }
     rows
 }
 
@@ -992,12 +1005,13 @@ impl<'b, 'a> Canvas<'b, 'a> {
             y += LEGEND_ROW_H as i32;
         }
 
-        // Outcome.
+        // Outcome (a simulated world only).
         y += 6;
         let status = match input.found_at {
             Some(p) if finite(p) => format!("Target FOUND at ({:.1}, {:.1})", p[0], p[1]),
             Some(_) => "Target FOUND".to_string(),
-            None => "Target NOT found".to_string(),
+            None if has_world(input) => "Target NOT found".to_string(),
+            None => String::new(),
         };
         let colour = if input.found_at.is_some() { palette::FOUND } else { [90, 90, 90] };
         self.text(&status, (x0, y + 5), LEGEND_FONT_PX + 1.0, colour);

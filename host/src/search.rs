@@ -270,26 +270,54 @@ pub fn controller_config(base: &Config, world: &World, planner: PlannerChoice) -
     }
 }
 
+/// What an observer of [`try_run_observed`] sees right after each controller tick (for
+/// recordings, `host::record`). It reads; it cannot change the run.
+pub struct TickView<'a> {
+    /// The tick's time, microseconds.
+    pub t_us: u64,
+    /// What the controller was given.
+    pub inputs: &'a Inputs<'a>,
+    /// What it answered.
+    pub outputs: &'a firmware::Outputs,
+    /// The controller after the tick (maps, points, frontiers, candidates, goal).
+    pub controller: &'a Controller,
+}
+
 /// Runs one search to detection, exhaustion or the time limit. `progress` gets the virtual time.
 /// Fails only if the spec's model blob does not validate.
 pub fn try_run(spec: &SearchSpec, progress: impl FnMut(f64)) -> Result<SearchRun, firmware::classifier::ModelError> {
+    try_run_observed(spec, progress, |_| {})
+}
+
+/// [`try_run`], showing every tick to `observe` (which cannot change the run).
+pub fn try_run_observed(
+    spec: &SearchSpec,
+    progress: impl FnMut(f64),
+    observe: impl FnMut(&TickView<'_>),
+) -> Result<SearchRun, firmware::classifier::ModelError> {
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
     let mut ctrl = Box::new(Controller::new(cfg));
     let classifier = spec.planner == PlannerChoice::Lives && spec.model.is_some();
     if let (true, Some(blob)) = (classifier, spec.model) {
         ctrl.set_model(blob)?;
     }
-    Ok(run_with(spec, ctrl, classifier, progress))
+    Ok(run_with(spec, ctrl, classifier, progress, observe))
 }
 
 /// [`try_run`] for specs without a model (ground-truth or no labels): cannot fail.
 pub fn run(spec: &SearchSpec, progress: impl FnMut(f64)) -> SearchRun {
     let spec = SearchSpec { model: None, ..spec.clone() };
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
-    run_with(&spec, Box::new(Controller::new(cfg)), false, progress)
+    run_with(&spec, Box::new(Controller::new(cfg)), false, progress, |_| {})
 }
 
-fn run_with(spec: &SearchSpec, mut ctrl: Box<Controller>, classifier: bool, mut progress: impl FnMut(f64)) -> SearchRun {
+fn run_with(
+    spec: &SearchSpec,
+    mut ctrl: Box<Controller>,
+    classifier: bool,
+    mut progress: impl FnMut(f64),
+    mut observe: impl FnMut(&TickView<'_>),
+) -> SearchRun {
     let mut sim = Sim::new(spec.world.clone(), spec.sim.clone(), spec.seed);
     let start = sim.pose();
     let limit = spec.world.time_limit_s;
@@ -316,6 +344,7 @@ fn run_with(spec: &SearchSpec, mut ctrl: Box<Controller>, classifier: bool, mut 
             base_blocked,
         };
         let out = ctrl.tick(now_us, &inputs);
+        observe(&TickView { t_us: now_us, inputs: &inputs, outputs: &out, controller: &ctrl });
         ticks += 1;
         status = out.status;
         match out.status.mode {

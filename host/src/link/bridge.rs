@@ -1,6 +1,7 @@
 //! `lives bridge`: the host side of the serial link.
 //!
-//! The bridge owns the sources (for now the simulator, [`Source::Sim`]) and the base. Each tick it
+//! The bridge owns the sources (the simulator, [`Source::Sim`], or a robot behind the base
+//! adapter, [`Source::Robot`], whose loop is `super::robot`) and the base. Each tick it
 //! sends the robot's pose, the LiDAR scan, a detection (if any) and the base's state as frames;
 //! it drives the base with the goals that come back and stops it on `Stop`. It opens the session
 //! with `Hello` (sent again every `hello_interval` until a `HelloAck`, whose version it checks),
@@ -24,6 +25,7 @@
 //! cause), batch retries, `Hello`s, losses, reconnections, and the round-trip time of heartbeat
 //! echoes.
 
+use super::robot::Base;
 use super::{Link, Summary, TimeMode};
 use crate::search::{controller_config, encode_ranges, gt_label, step_base, PlannerChoice, SearchResult, SearchSpec, TICK_US};
 use crate::sim::Sim;
@@ -47,6 +49,8 @@ const SEQ_BASE: u32 = 0x8000_0000;
 pub enum Source {
     /// The simulator, with this search's world, scenario, planner and seed.
     Sim(SearchSpec),
+    /// A real robot behind the base adapter (`docs/base-adapter.md`): real time only.
+    Robot(super::robot::RobotSpec),
 }
 
 /// How the bridge runs.
@@ -78,6 +82,27 @@ pub struct BridgeOptions {
     /// where a 2.7 kB scan frame rarely arrives whole but 80-byte segments mostly do. `0`: whole
     /// scans.
     pub scan_segment_beams: usize,
+    /// Sees each tick's pose, scan and detection and every message from the node (recordings:
+    /// `host::record::SharedRecording`). It cannot change the run.
+    pub observer: Option<SharedObserver>,
+}
+
+/// Watches a bridge run's traffic (see [`BridgeOptions::observer`]).
+pub trait BridgeObserver: Send {
+    /// The pose, scan and detection of a tick, once per tick (a retried batch is not shown again).
+    fn tick(&mut self, pose: &PoseMsg, scan: &ScanMsg, detection: Option<&DetectionMsg>);
+    /// A message from the node.
+    fn received(&mut self, m: &CoreToHost);
+}
+
+/// A [`BridgeObserver`] shared with the caller, who gets it back after the run.
+#[derive(Clone)]
+pub struct SharedObserver(pub Arc<std::sync::Mutex<dyn BridgeObserver>>);
+
+impl fmt::Debug for SharedObserver {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("SharedObserver")
+    }
 }
 
 impl BridgeOptions {
@@ -95,6 +120,7 @@ impl BridgeOptions {
             max_wall: None,
             progress: None,
             scan_segment_beams: 0,
+            observer: None,
         }
     }
 }
@@ -170,6 +196,8 @@ pub enum BridgeError {
     Incompatible(IncompatiblePeer),
     /// Stopped (flag or `max_wall`) before a session was opened.
     NoSession,
+    /// The robot source could not start (e.g. the base adapter's address is taken).
+    Source(String),
 }
 
 impl fmt::Display for BridgeError {
@@ -177,6 +205,7 @@ impl fmt::Display for BridgeError {
         match self {
             BridgeError::Incompatible(e) => write!(f, "{e}"),
             BridgeError::NoSession => f.write_str("no answer from the node (no HelloAck)"),
+            BridgeError::Source(e) => f.write_str(e),
         }
     }
 }
@@ -202,46 +231,80 @@ pub struct BridgeResult {
     pub wall_s: f64,
 }
 
-struct Bridge<'l> {
+/// The session with the node, generic over the base it drives (the simulator's or a robot's).
+pub(super) struct Bridge<'l, B: Base = Sim> {
     link: &'l mut dyn Link,
     opts: BridgeOptions,
     stop: &'l AtomicBool,
-    started: Instant,
-    dec: HostDecoder,
+    pub(super) started: Instant,
+    pub(super) dec: HostDecoder,
     buf: Vec<u8>,
     enc: Vec<u8>,
-    st: LinkStats,
-    link_rtt: Vec<f64>,
-    batch_rtt: Vec<f64>,
+    pub(super) st: LinkStats,
+    pub(super) link_rtt: Vec<f64>,
+    pub(super) batch_rtt: Vec<f64>,
     probes: VecDeque<(u32, u64, Instant, bool)>,
     seq: u32,
-    events: Vec<BridgeEvent>,
-    open: bool,
+    pub(super) events: Vec<BridgeEvent>,
+    pub(super) open: bool,
     was_open: bool,
     lost: bool,
     down: bool,
     last_rx: Instant,
     last_hello: Option<Instant>,
     last_reopen: Instant,
-    incompatible: Option<IncompatiblePeer>,
-    sim: Sim,
+    pub(super) incompatible: Option<IncompatiblePeer>,
+    pub(super) sim: B,
     goal: Option<GoalMsg>,
     status: Option<StatusMsg>,
-    goals_received: Vec<GoalMsg>,
+    pub(super) goals_received: Vec<GoalMsg>,
     applied_seq: Option<u32>,
     /// The goal the base was driving to when the link was lost.
     interrupted_seq: Option<u32>,
 }
 
-impl<'l> Bridge<'l> {
-    fn frame(&mut self, m: &HostToCore) -> Vec<u8> {
+impl<'l, B: Base> Bridge<'l, B> {
+    /// A bridge on `link` driving `sim`, no session yet.
+    pub(super) fn new(link: &'l mut dyn Link, opts: &BridgeOptions, stop: &'l AtomicBool, sim: B) -> Self {
+        Bridge {
+            link,
+            opts: opts.clone(),
+            stop,
+            started: Instant::now(),
+            dec: HostDecoder::new(),
+            buf: vec![0u8; 16384],
+            enc: vec![0u8; MAX_FRAME_LEN],
+            st: LinkStats::default(),
+            link_rtt: Vec::new(),
+            batch_rtt: Vec::new(),
+            probes: VecDeque::new(),
+            seq: 0,
+            events: Vec::new(),
+            open: false,
+            was_open: false,
+            lost: false,
+            down: false,
+            last_rx: Instant::now(),
+            last_hello: None,
+            last_reopen: Instant::now(),
+            incompatible: None,
+            sim,
+            goal: None,
+            status: None,
+            goals_received: Vec::new(),
+            applied_seq: None,
+            interrupted_seq: None,
+        }
+    }
+
+    pub(super) fn frame(&mut self, m: &HostToCore) -> Vec<u8> {
         match encode(m, &mut self.enc) {
             Ok(f) => f.to_vec(),
             Err(e) => panic!("a host message must always fit a frame buffer: {e}"),
         }
     }
 
-    fn should_stop(&self) -> bool {
+    pub(super) fn should_stop(&self) -> bool {
         self.stop.load(Ordering::Relaxed) || self.opts.max_wall.is_some_and(|m| self.started.elapsed() >= m)
     }
 
@@ -263,7 +326,7 @@ impl<'l> Bridge<'l> {
         }
     }
 
-    fn send(&mut self, bytes: &[u8]) -> bool {
+    pub(super) fn send(&mut self, bytes: &[u8]) -> bool {
         if self.down {
             return false;
         }
@@ -284,7 +347,7 @@ impl<'l> Bridge<'l> {
     }
 
     /// A heartbeat probe at `t_us`; `link_only` if no tick answers it.
-    fn probe(&mut self, t_us: u64, link_only: bool) -> (u32, Vec<u8>) {
+    pub(super) fn probe(&mut self, t_us: u64, link_only: bool) -> (u32, Vec<u8>) {
         self.seq = self.seq.wrapping_add(1);
         let seq = SEQ_BASE | (self.seq & !SEQ_BASE);
         if self.probes.len() >= 64 {
@@ -295,6 +358,9 @@ impl<'l> Bridge<'l> {
     }
 
     fn handle(&mut self, m: &CoreToHost) {
+        if let Some(Ok(mut o)) = self.opts.observer.as_ref().map(|o| o.0.lock()) {
+            o.received(m);
+        }
         match m {
             CoreToHost::HelloAck(a) => match a.check() {
                 Ok(()) => {
@@ -329,7 +395,7 @@ impl<'l> Bridge<'l> {
     }
 
     /// Reads for up to `wait`, handles what came, watches the link. Returns the messages.
-    fn poll(&mut self, wait: Duration) -> Vec<CoreToHost> {
+    pub(super) fn poll(&mut self, wait: Duration) -> Vec<CoreToHost> {
         let mut got = Vec::new();
         let now = Instant::now();
         if self.down {
@@ -426,7 +492,7 @@ impl<'l> Bridge<'l> {
 
     /// Drives the base to `g` unless it already is. The goal interrupted by a lost link resumes
     /// from the path segment nearest the robot, not from the path's start (already driven).
-    fn apply_goal(&mut self, g: &GoalMsg) -> bool {
+    pub(super) fn apply_goal(&mut self, g: &GoalMsg) -> bool {
         if self.applied_seq == Some(g.seq) {
             return false;
         }
@@ -449,7 +515,7 @@ impl<'l> Bridge<'l> {
 }
 
 /// The rest of `path` for a robot at `p`: from the end of the segment nearest to it.
-fn resume_from(path: &[[f64; 2]], p: [f64; 2]) -> Vec<[f64; 2]> {
+pub(super) fn resume_from(path: &[[f64; 2]], p: [f64; 2]) -> Vec<[f64; 2]> {
     let seg_dist = |a: [f64; 2], b: [f64; 2]| {
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
         let len2 = dx * dx + dy * dy;
@@ -479,39 +545,14 @@ fn round3(v: f64) -> f64 {
 /// Runs the search of `source` through the node at the other end of `link` until the target is
 /// found, the search is exhausted, the time limit passes, or `stop` is set.
 pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, stop: &AtomicBool) -> Result<BridgeResult, BridgeError> {
-    let Source::Sim(spec) = source;
+    let spec = match source {
+        Source::Sim(spec) => spec,
+        Source::Robot(robot) => return super::robot::run_robot(link, robot, opts, stop).map(|r| r.bridge),
+    };
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
     let geom = GridGeometry { origin_x: cfg.origin_x_m, origin_y: cfg.origin_y_m };
     let sim = Sim::new(spec.world.clone(), spec.sim.clone(), spec.seed);
-    let mut b = Bridge {
-        link,
-        opts: opts.clone(),
-        stop,
-        started: Instant::now(),
-        dec: HostDecoder::new(),
-        buf: vec![0u8; 16384],
-        enc: vec![0u8; MAX_FRAME_LEN],
-        st: LinkStats::default(),
-        link_rtt: Vec::new(),
-        batch_rtt: Vec::new(),
-        probes: VecDeque::new(),
-        seq: 0,
-        events: Vec::new(),
-        open: false,
-        was_open: false,
-        lost: false,
-        down: false,
-        last_rx: Instant::now(),
-        last_hello: None,
-        last_reopen: Instant::now(),
-        incompatible: None,
-        sim,
-        goal: None,
-        status: None,
-        goals_received: Vec::new(),
-        applied_seq: None,
-        interrupted_seq: None,
-    };
+    let mut b = Bridge::new(link, opts, stop, sim);
     let config_msg = ConfigMsg::from_config(&cfg);
     b.setup(&config_msg)?;
 
@@ -609,6 +650,10 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         batch.extend(b.frame(&HostToCore::Pose(PoseMsg::from_pose(now_us, &pose))));
         if detected {
             batch.extend(b.frame(&HostToCore::Detection(DetectionMsg { t_us: now_us, position: None })));
+        }
+        if let Some(Ok(mut o)) = opts.observer.as_ref().map(|o| o.0.lock()) {
+            let detection = detected.then_some(DetectionMsg { t_us: now_us, position: None });
+            o.tick(&PoseMsg::from_pose(now_us, &pose), &scan_msg, detection.as_ref());
         }
         let before = batch.len();
         if opts.scan_segment_beams > 0 {

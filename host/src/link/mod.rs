@@ -7,6 +7,9 @@
 //!   dropped frames, delays, a pulled cable — seeded and deterministic, with exact counts of what
 //!   it did, so a test can check every damaged frame was rejected.
 //! * [`run_node`]: the controller core as a process on a link (`lives node`).
+//! * [`adapter`]: the base adapter, a versioned JSON-lines TCP interface through which a robot's
+//!   own program supplies odometry, scans and detections and receives goals and stops
+//!   (`docs/base-adapter.md`); [`run_robot`] runs the bridge on it.
 //! * [`run_bridge`]: the host side (`lives bridge`): owns the simulator and its base, feeds the
 //!   node, drives the base with the goals that come back, keeps link-health counters, stops the
 //!   base when the link is lost and picks the search up again when it returns.
@@ -14,14 +17,17 @@
 //! The wire format and the node's two time modes (real time, lockstep) are described in
 //! `docs/protocol.md` and `firmware::node`.
 
+pub mod adapter;
 pub mod bridge;
 pub mod fault;
 pub mod node;
+pub mod robot;
 
 pub use bridge::{run_bridge, BridgeError, BridgeEvent, BridgeEventKind, BridgeOptions, BridgeResult, LinkStats, Source};
 pub use fault::{FaultConfig, FaultHandle, FaultStats, FaultyLink};
 pub use firmware::node::TimeMode;
 pub use node::{run_node, NodeOptions, NodeProcess, NodeReport};
+pub use robot::{run_robot, LidarSource, RobotRun, RobotSpec};
 
 use serialport::{SerialPort, TTYPort};
 use std::collections::VecDeque;

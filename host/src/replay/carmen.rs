@@ -1,0 +1,351 @@
+//! CARMEN text logs: `FLASER`, `ROBOTLASER1` and `ODOM` lines, plain or gzip-compressed.
+//!
+//! A CARMEN log is one message per line, tokens separated by white space, the last three tokens of
+//! every message being `ipc_timestamp hostname logger_timestamp`. Replay reads:
+//!
+//! - `FLASER n r1..rn x y θ odom_x odom_y odom_θ ts host ts`: a front laser scan. The line carries
+//!   no angles: the scan covers 180° starting at −π/2 (to the robot's right), in steps of π/n for
+//!   an even n (180, 360 beams) and π/(n−1) for an odd n (181, 361: both ends included). `x y θ`
+//!   is the laser's pose in the world.
+//! - `ROBOTLASER1 type start_angle fov resolution max_range accuracy remission_mode n r1..rn
+//!   n_rem rem1..rem_n_rem laser_x laser_y laser_θ robot_x robot_y robot_θ tv rv fwd_safety
+//!   side_safety turn_axis ts host ts`: a scan with its own angles and the laser's pose.
+//! - `ODOM x y θ tv rv accel ts host ts`: the robot's pose (counted and timed; the scans carry
+//!   their own laser pose, which is what the map is built from).
+//!
+//! `#` lines, `PARAM` lines and other message types (`NEFF`, `RLASER`, `TRUEPOS`, …) are skipped.
+//! Ranges at or beyond the laser's maximum (80 m for `FLASER`, whose line has no maximum, the SICK
+//! LMS's "no return" value being ≈ 81.9 m; the line's own `max_range` for `ROBOTLASER1`) become
+//! `+inf` (no return), zero or negative ranges NaN (invalid): the ROS conventions the rest of
+//! replay uses.
+//!
+//! What this module must not do: know about the controller or pictures.
+
+use std::fmt;
+
+/// `FLASER` scans: readings at or beyond this are "no return".
+pub const FLASER_MAX_RANGE_M: f64 = 80.0;
+
+/// The kinds of line replay reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LineKind {
+    /// `FLASER`.
+    Flaser,
+    /// `ROBOTLASER1`.
+    RobotLaser1,
+    /// `ODOM`.
+    Odom,
+}
+
+impl fmt::Display for LineKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            LineKind::Flaser => "FLASER",
+            LineKind::RobotLaser1 => "ROBOTLASER1",
+            LineKind::Odom => "ODOM",
+        })
+    }
+}
+
+/// One laser scan from a CARMEN line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CarmenScan {
+    /// `FLASER` or `ROBOTLASER1`.
+    pub kind: LineKind,
+    /// `ipc_timestamp`, seconds.
+    pub t_s: f64,
+    /// The laser's pose in the world: x, y (metres), θ (radians).
+    pub laser_pose: [f64; 3],
+    /// The robot's pose (`odom_*` of `FLASER`, `robot_*` of `ROBOTLASER1`).
+    pub robot_pose: [f64; 3],
+    /// First beam's angle in the laser frame, radians.
+    pub angle_min: f64,
+    /// Angle between beams, radians.
+    pub angle_increment: f64,
+    /// Ranges, metres: `+inf` no return, NaN invalid.
+    pub ranges_m: Vec<f32>,
+}
+
+/// One message replay uses.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CarmenRecord {
+    /// A scan.
+    Scan(CarmenScan),
+    /// `ODOM`: time and robot pose.
+    Odom {
+        /// `ipc_timestamp`, seconds.
+        t_s: f64,
+        /// x, y, θ.
+        pose: [f64; 3],
+    },
+}
+
+impl CarmenRecord {
+    /// The record's time stamp.
+    pub fn t_s(&self) -> f64 {
+        match self {
+            CarmenRecord::Scan(s) => s.t_s,
+            CarmenRecord::Odom { t_s, .. } => *t_s,
+        }
+    }
+}
+
+/// Why a line could not be read.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum LineError {
+    /// The line ended before `field` (a truncated line).
+    MissingField {
+        /// Line type.
+        kind: LineKind,
+        /// The first missing field.
+        field: &'static str,
+    },
+    /// `field` is not a number (or not a finite one where that is required).
+    BadNumber {
+        /// Line type.
+        kind: LineKind,
+        /// The field.
+        field: &'static str,
+        /// What was there.
+        token: String,
+    },
+    /// A beam count of zero or more than the core takes ([`firmware::capacity::MAX_INPUT_BEAMS`]).
+    BadBeamCount {
+        /// Line type.
+        kind: LineKind,
+        /// The count.
+        count: String,
+    },
+    /// More tokens than the line type has (two lines run together, or a corrupt count).
+    ExtraFields {
+        /// Line type.
+        kind: LineKind,
+        /// Tokens expected.
+        expected: usize,
+        /// Tokens found.
+        found: usize,
+    },
+}
+
+impl fmt::Display for LineError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LineError::MissingField { kind, field } => write!(f, "{kind} line ends before its {field} (truncated line)"),
+            LineError::BadNumber { kind, field, token } => write!(f, "{kind} {field} `{token}` is not a valid number"),
+            LineError::BadBeamCount { kind, count } => {
+                write!(f, "{kind} beam count `{count}` is not between 1 and {}", firmware::capacity::MAX_INPUT_BEAMS)
+            }
+            LineError::ExtraFields { kind, expected, found } => {
+                write!(f, "{kind} line has {found} fields where its counts say {expected}")
+            }
+        }
+    }
+}
+
+/// A cursor over a line's tokens.
+struct Tokens<'a> {
+    kind: LineKind,
+    toks: Vec<&'a str>,
+    i: usize,
+}
+
+impl<'a> Tokens<'a> {
+    fn next(&mut self, field: &'static str) -> Result<&'a str, LineError> {
+        let t = self.toks.get(self.i).copied().ok_or(LineError::MissingField { kind: self.kind, field })?;
+        self.i += 1;
+        Ok(t)
+    }
+
+    /// A finite number.
+    fn num(&mut self, field: &'static str) -> Result<f64, LineError> {
+        let t = self.next(field)?;
+        match t.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(LineError::BadNumber { kind: self.kind, field, token: t.to_string() }),
+        }
+    }
+
+    /// A range reading (any number; non-finite ones become invalid later).
+    fn range(&mut self, field: &'static str) -> Result<f64, LineError> {
+        let t = self.next(field)?;
+        t.parse::<f64>().map_err(|_| LineError::BadNumber { kind: self.kind, field, token: t.to_string() })
+    }
+
+    fn count(&mut self, field: &'static str, max: usize) -> Result<usize, LineError> {
+        let t = self.next(field)?;
+        match t.parse::<usize>() {
+            Ok(n) if n <= max => Ok(n),
+            _ => Err(LineError::BadNumber { kind: self.kind, field, token: t.to_string() }),
+        }
+    }
+
+    fn beams(&mut self) -> Result<usize, LineError> {
+        let t = self.next("beam count")?;
+        match t.parse::<usize>() {
+            Ok(n) if (1..=firmware::capacity::MAX_INPUT_BEAMS).contains(&n) => Ok(n),
+            _ => Err(LineError::BadBeamCount { kind: self.kind, count: t.to_string() }),
+        }
+    }
+
+    fn pose(&mut self, names: [&'static str; 3]) -> Result<[f64; 3], LineError> {
+        Ok([self.num(names[0])?, self.num(names[1])?, self.num(names[2])?])
+    }
+
+    /// `ipc_timestamp hostname logger_timestamp`, and nothing after.
+    fn stamp(&mut self) -> Result<f64, LineError> {
+        let t = self.num("ipc_timestamp")?;
+        self.next("hostname")?;
+        self.num("logger_timestamp")?;
+        if self.i != self.toks.len() {
+            return Err(LineError::ExtraFields { kind: self.kind, expected: self.i, found: self.toks.len() });
+        }
+        Ok(t)
+    }
+}
+
+/// A range in the log's convention to the ROS one: `≥ max` → `+inf`, `≤ 0` or not finite → NaN.
+fn ros_range(r: f64, max_range_m: f64) -> f32 {
+    if !r.is_finite() || r <= 0.0 {
+        f32::NAN
+    } else if r >= max_range_m {
+        f32::INFINITY
+    } else {
+        r as f32
+    }
+}
+
+/// Parses one line. `Ok(None)`: a line replay does not use (comment, `PARAM`, other types, blank).
+pub fn parse_line(line: &str) -> Result<Option<CarmenRecord>, LineError> {
+    let mut it = line.split_ascii_whitespace();
+    let kind = match it.next() {
+        Some("FLASER") => LineKind::Flaser,
+        Some("ROBOTLASER1") => LineKind::RobotLaser1,
+        Some("ODOM") => LineKind::Odom,
+        _ => return Ok(None),
+    };
+    let mut t = Tokens { kind, toks: it.collect(), i: 0 };
+    let rec = match kind {
+        LineKind::Odom => {
+            let pose = t.pose(["x", "y", "theta"])?;
+            for f in ["tv", "rv", "accel"] {
+                t.num(f)?;
+            }
+            CarmenRecord::Odom { t_s: t.stamp()?, pose }
+        }
+        LineKind::Flaser => {
+            let n = t.beams()?;
+            let ranges_m = (0..n).map(|_| t.range("range").map(|r| ros_range(r, FLASER_MAX_RANGE_M))).collect::<Result<_, _>>()?;
+            let laser_pose = t.pose(["x", "y", "theta"])?;
+            let robot_pose = t.pose(["odom_x", "odom_y", "odom_theta"])?;
+            let t_s = t.stamp()?;
+            let steps = if n % 2 == 0 { n } else { n - 1 }.max(1);
+            CarmenRecord::Scan(CarmenScan {
+                kind,
+                t_s,
+                laser_pose,
+                robot_pose,
+                angle_min: -std::f64::consts::FRAC_PI_2,
+                angle_increment: std::f64::consts::PI / steps as f64,
+                ranges_m,
+            })
+        }
+        LineKind::RobotLaser1 => {
+            t.next("laser_type")?;
+            let angle_min = t.num("start_angle")?;
+            t.num("fov")?;
+            let angle_increment = t.num("angular_resolution")?;
+            let max_range = t.num("max_range")?;
+            t.num("accuracy")?;
+            t.next("remission_mode")?;
+            let n = t.beams()?;
+            let ranges_m = (0..n).map(|_| t.range("range").map(|r| ros_range(r, max_range))).collect::<Result<_, _>>()?;
+            let n_rem = t.count("remission count", t.toks.len())?;
+            for _ in 0..n_rem {
+                t.range("remission")?;
+            }
+            let laser_pose = t.pose(["laser_x", "laser_y", "laser_theta"])?;
+            let robot_pose = t.pose(["robot_x", "robot_y", "robot_theta"])?;
+            for f in ["tv", "rv", "forward_safety_dist", "side_safety_dist", "turn_axis"] {
+                t.num(f)?;
+            }
+            let t_s = t.stamp()?;
+            CarmenRecord::Scan(CarmenScan { kind, t_s, laser_pose, robot_pose, angle_min, angle_increment, ranges_m })
+        }
+    };
+    Ok(Some(rec))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The first `ODOM` line of `intel-corrected.log.gz` whose pose is not zero.
+    const INTEL_ODOM: &str = "ODOM -0.322783 -0.0967671 0.00578343 0 0 0 2690.89 pippo 2690.89";
+
+    #[test]
+    fn odom_line_values() {
+        assert_eq!(parse_line(INTEL_ODOM).unwrap(), Some(CarmenRecord::Odom { t_s: 2690.89, pose: [-0.322783, -0.0967671, 0.00578343] }));
+    }
+
+    #[test]
+    fn flaser_line_values_and_angles() {
+        // 4 beams (even: step π/4 from −π/2), one "no return" (81.91 ≥ 80) and one zero (invalid).
+        let line = "FLASER 4 1.09 81.91 0 2.5 0.600266 -0.0320327 -0.354665 0.61 -0.03 -0.35 32.9068 pippo 32.9068";
+        let Some(CarmenRecord::Scan(s)) = parse_line(line).unwrap() else { panic!("not a scan") };
+        assert_eq!(s.kind, LineKind::Flaser);
+        assert_eq!(s.t_s, 32.9068);
+        assert_eq!(s.laser_pose, [0.600266, -0.0320327, -0.354665]);
+        assert_eq!(s.robot_pose, [0.61, -0.03, -0.35]);
+        assert_eq!(s.angle_min, -std::f64::consts::FRAC_PI_2);
+        assert_eq!(s.angle_increment, std::f64::consts::PI / 4.0);
+        assert_eq!(s.ranges_m[0], 1.09);
+        assert_eq!(s.ranges_m[1], f32::INFINITY);
+        assert!(s.ranges_m[2].is_nan());
+        assert_eq!(s.ranges_m[3], 2.5);
+        // Odd beam counts include both ends: 181 beams → 1°.
+        let line181 = format!("FLASER 181 {} 0 0 0 0 0 0 1.0 h 1.0", vec!["1"; 181].join(" "));
+        let Some(CarmenRecord::Scan(s)) = parse_line(&line181).unwrap() else { panic!("not a scan") };
+        assert!((s.angle_increment - 1f64.to_radians()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn robotlaser1_line_values() {
+        // type 0, start −90°, fov 180°, 1° resolution (values as CARMEN writes them), max 50 m,
+        // 3 beams (the last beyond max → no return), 2 remissions.
+        let line = "ROBOTLASER1 0 -1.5708 3.14159 0.0174533 50.0 0.01 0 3 1.5 2.25 50.0 2 0.1 0.2 \
+                    1.0 2.0 0.5 0.9 2.1 0.45 0.3 0.01 1.2 0.4 0.0 105.25 host 105.26";
+        let Some(CarmenRecord::Scan(s)) = parse_line(line).unwrap() else { panic!("not a scan") };
+        assert_eq!(s.kind, LineKind::RobotLaser1);
+        assert_eq!((s.angle_min, s.angle_increment), (-1.5708, 0.0174533));
+        assert_eq!(s.ranges_m, vec![1.5, 2.25, f32::INFINITY]);
+        assert_eq!(s.laser_pose, [1.0, 2.0, 0.5]);
+        assert_eq!(s.robot_pose, [0.9, 2.1, 0.45]);
+        assert_eq!(s.t_s, 105.25);
+    }
+
+    #[test]
+    fn skipped_and_broken_lines() {
+        for l in ["", "# comment", "PARAM robot_length 0.47 nohost 0", "NEFF 8.39921", "RLASER 1 2 3"] {
+            assert_eq!(parse_line(l).unwrap(), None, "{l}");
+        }
+        // Cut in the middle of the pose.
+        assert_eq!(
+            parse_line("FLASER 2 1.0 2.0 0.5 0.25").unwrap_err(),
+            LineError::MissingField { kind: LineKind::Flaser, field: "theta" }
+        );
+        assert_eq!(
+            parse_line("ODOM 1 2 x 0 0 0 1 h 1").unwrap_err(),
+            LineError::BadNumber { kind: LineKind::Odom, field: "theta", token: "x".into() }
+        );
+        assert_eq!(
+            parse_line("FLASER 0 0 0 0 0 0 0 1 h 1").unwrap_err(),
+            LineError::BadBeamCount { kind: LineKind::Flaser, count: "0".into() }
+        );
+        assert_eq!(
+            parse_line("ODOM 1 2 3 0 0 0 1 h 1 ODOM").unwrap_err(),
+            LineError::ExtraFields { kind: LineKind::Odom, expected: 9, found: 10 }
+        );
+        assert!(matches!(parse_line("FLASER 99999 1"), Err(LineError::BadBeamCount { .. })));
+    }
+}

@@ -1,0 +1,916 @@
+//! Log replay (`lives replay FILE`): the controller run on recorded LiDAR data, with no base to
+//! move, to see the maps, labels and goals it would have produced.
+//!
+//! Formats (detected from the file's first bytes, not its name):
+//!
+//! | format | reader | |
+//! |---|---|---|
+//! | CARMEN text log, plain or gzip | [`carmen`] | `FLASER`, `ROBOTLASER1`, `ODOM` |
+//! | ROS 2 bag, MCAP | [`rosbag::read_mcap`] | `LaserScan`, `Odometry`, `tf`, `tf_static` (CDR) |
+//! | ROS 2 bag, sqlite3 `.db3` | [`rosbag::read_db3`] | the same |
+//!
+//! A bag directory (`rosbag2_…/` with `metadata.yaml`) is read file by file in name order.
+//!
+//! Every reader turns its log into [`ScanRecord`]s: the laser's pose in the world frame, the scan
+//! in the laser frame with its own first angle and increment, and ranges by the ROS conventions
+//! (`+inf` no return, NaN invalid). The core assumes the LiDAR sits at the robot's origin, so
+//! replay gives it the laser's pose as the robot pose.
+//!
+//! [`replay`] then makes a first pass over the poses to centre the controller's 51.2 m grid on the
+//! trajectory (and says if the trajectory does not fit), and ticks the controller once per scan
+//! at the log's own time stamps, with `Command::Start` on the first tick (and again whenever it
+//! reports `Exhausted`, at most once per replan interval, since new scans may open new frontiers),
+//! the embedded int8 classifier installed unless told otherwise. Each goal it chooses is recorded
+//! with its time. Damage (a truncated gzip stream, a corrupt line, a cut MCAP record, a bad
+//! sqlite page, a message that does not decode) stops reading; everything before it is replayed
+//! and the damage is reported with the file and the line, byte offset or row.
+//!
+//! What this module must not do: decide anything the robot does (that is the core's job) or read
+//! a clock on the controller's behalf (only the replay's own wall time is measured).
+
+pub mod carmen;
+pub mod cdr;
+pub mod picture;
+pub mod rosbag;
+
+use crate::search::encode_range;
+use firmware::classifier::ModelError;
+use firmware::{BinaryAngle, Command, Config, Controller, Inputs, Mode, Pose2, ScanInput};
+use serde::Serialize;
+use std::fmt;
+use std::io::{BufRead, Read};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Where in a file something came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Location {
+    /// A line (1-based) of a text log.
+    Line(usize),
+    /// A byte offset in a binary file (for a message inside an MCAP chunk, the chunk's offset).
+    Offset(u64),
+    /// A row id of a sqlite3 bag's `messages` table.
+    Row(i64),
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Location::Line(n) => write!(f, "line {n}"),
+            Location::Offset(o) => write!(f, "byte {o}"),
+            Location::Row(r) => write!(f, "messages row {r}"),
+        }
+    }
+}
+
+/// One scan ready for the controller.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScanRecord {
+    /// The log's time stamp, seconds.
+    pub t_s: f64,
+    /// The laser's pose in the world frame: x, y (metres), yaw (radians).
+    pub pose: [f64; 3],
+    /// First beam's angle in the laser frame, radians (counter-clockwise).
+    pub angle_min: f64,
+    /// Angle between beams, radians (negative: clockwise order).
+    pub angle_increment: f64,
+    /// Ranges, metres: `+inf` no return, NaN invalid.
+    pub ranges_m: Vec<f32>,
+    /// Where it came from.
+    pub at: Location,
+}
+
+/// Log formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LogFormat {
+    /// CARMEN text log.
+    Carmen,
+    /// CARMEN text log, gzip-compressed.
+    CarmenGzip,
+    /// ROS 2 bag, MCAP storage.
+    Ros2Mcap,
+    /// ROS 2 bag, sqlite3 storage.
+    Ros2Sqlite3,
+}
+
+impl fmt::Display for LogFormat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            LogFormat::Carmen => "carmen",
+            LogFormat::CarmenGzip => "carmen-gzip",
+            LogFormat::Ros2Mcap => "ros2-mcap",
+            LogFormat::Ros2Sqlite3 => "ros2-sqlite3",
+        })
+    }
+}
+
+/// Why a log could not be read (whole or in part).
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum ReplayError {
+    /// The file or directory could not be opened or read.
+    Io {
+        /// The file.
+        file: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// Not a log replay knows (nor a bag directory with one).
+    UnknownFormat {
+        /// The file.
+        file: PathBuf,
+    },
+    /// The gzip stream is truncated or corrupt.
+    Gzip {
+        /// The file.
+        file: PathBuf,
+        /// Complete lines read before it.
+        lines: usize,
+        /// Compressed bytes consumed when it failed.
+        offset: u64,
+        /// The decoder's message.
+        reason: String,
+    },
+    /// A log line is not valid text.
+    NotText {
+        /// The file.
+        file: PathBuf,
+        /// The line (1-based).
+        line: usize,
+    },
+    /// A CARMEN line could not be read.
+    CarmenLine {
+        /// The file.
+        file: PathBuf,
+        /// The line (1-based).
+        line: usize,
+        /// Why.
+        error: carmen::LineError,
+    },
+    /// An MCAP record is truncated or damaged.
+    Mcap {
+        /// The file.
+        file: PathBuf,
+        /// Byte offset of the record (or of where the file ends).
+        offset: u64,
+        /// Why.
+        reason: String,
+    },
+    /// sqlite could not read the bag.
+    Sqlite {
+        /// The file.
+        file: PathBuf,
+        /// The last `messages` row read before the failure.
+        after_row: Option<i64>,
+        /// sqlite's message.
+        reason: String,
+    },
+    /// A bag message does not decode.
+    Message {
+        /// The file.
+        file: PathBuf,
+        /// Where the message is.
+        at: Location,
+        /// Its topic.
+        topic: String,
+        /// Why.
+        error: cdr::CdrError,
+    },
+    /// The classifier blob did not validate.
+    Model(ModelError),
+    /// The `--record` file could not be created.
+    Record {
+        /// The file.
+        file: PathBuf,
+        /// Why.
+        reason: String,
+    },
+    /// The log held no scan the controller could use.
+    NoScans {
+        /// The file.
+        file: PathBuf,
+    },
+}
+
+impl fmt::Display for ReplayError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ReplayError::Io { file, source } => write!(f, "{}: {source}", file.display()),
+            ReplayError::UnknownFormat { file } => {
+                write!(f, "{}: not a CARMEN log (plain or gzip), an MCAP file or a sqlite3 bag", file.display())
+            }
+            ReplayError::Gzip { file, lines, offset, reason } => {
+                write!(f, "{}: gzip stream damaged at compressed byte {offset} (after line {lines}): {reason}", file.display())
+            }
+            ReplayError::NotText { file, line } => write!(f, "{}:{line}: not UTF-8 text", file.display()),
+            ReplayError::CarmenLine { file, line, error } => write!(f, "{}:{line}: {error}", file.display()),
+            ReplayError::Mcap { file, offset, reason } => write!(f, "{}: byte {offset}: {reason}", file.display()),
+            ReplayError::Sqlite { file, after_row, reason } => match after_row {
+                Some(r) => write!(f, "{}: sqlite error after messages row {r}: {reason}", file.display()),
+                None => write!(f, "{}: sqlite error before any message: {reason}", file.display()),
+            },
+            ReplayError::Message { file, at, topic, error } => write!(f, "{}: {at}: message on {topic}: {error}", file.display()),
+            ReplayError::Model(e) => write!(f, "classifier model: {e:?}"),
+            ReplayError::Record { file, reason } => write!(f, "{}: cannot record: {reason}", file.display()),
+            ReplayError::NoScans { file } => write!(f, "{}: no laser scans to replay", file.display()),
+        }
+    }
+}
+
+impl std::error::Error for ReplayError {}
+
+/// A log read into memory.
+#[derive(Debug)]
+pub struct LogData {
+    /// The file (or bag directory).
+    pub file: PathBuf,
+    /// Its format.
+    pub format: LogFormat,
+    /// Scans, time order.
+    pub scans: Vec<ScanRecord>,
+    /// Odometry messages read.
+    pub odometry: usize,
+    /// Scans that could not be given a pose (bag frames not connected).
+    pub no_pose: usize,
+    /// Time span of everything time-stamped that was read, seconds.
+    pub span_s: Option<(f64, f64)>,
+    /// Topics or line types used.
+    pub sources: Vec<String>,
+    /// Assumptions made, for the user.
+    pub warnings: Vec<String>,
+    /// The damage reading stopped at.
+    pub error: Option<ReplayError>,
+}
+
+fn widen(span: &mut Option<(f64, f64)>, t: f64) {
+    *span = Some(match *span {
+        None => (t, t),
+        Some((a, b)) => (a.min(t), b.max(t)),
+    });
+}
+
+/// Counts the bytes a reader hands out (the compressed offset of a gzip failure).
+struct Counting<R> {
+    inner: R,
+    n: std::rc::Rc<std::cell::Cell<u64>>,
+}
+
+impl<R: Read> Read for Counting<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let k = self.inner.read(buf)?;
+        self.n.set(self.n.get() + k as u64);
+        Ok(k)
+    }
+}
+
+fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
+    let mut log = LogData {
+        file: file.to_path_buf(),
+        format,
+        scans: Vec::new(),
+        odometry: 0,
+        no_pose: 0,
+        span_s: None,
+        sources: Vec::new(),
+        warnings: Vec::new(),
+        error: None,
+    };
+    let counter = std::rc::Rc::new(std::cell::Cell::new(0u64));
+    let mut reader: Box<dyn BufRead> = match format {
+        LogFormat::CarmenGzip => {
+            let src = Counting { inner: std::io::Cursor::new(bytes), n: counter.clone() };
+            Box::new(std::io::BufReader::new(flate2::read::MultiGzDecoder::new(src)))
+        }
+        _ => Box::new(std::io::Cursor::new(bytes)),
+    };
+    let mut line_no = 0usize;
+    let mut buf = Vec::new();
+    let mut seen = [false; 3];
+    loop {
+        buf.clear();
+        match reader.read_until(b'\n', &mut buf) {
+            Ok(0) => break,
+            Ok(_) => {}
+            // Only the gzip decoder can fail here (plain text is read from memory).
+            Err(e) => {
+                log.error =
+                    Some(ReplayError::Gzip { file: file.to_path_buf(), lines: line_no, offset: counter.get(), reason: e.to_string() });
+                break;
+            }
+        }
+        line_no += 1;
+        let Ok(text) = std::str::from_utf8(&buf) else {
+            log.error = Some(ReplayError::NotText { file: file.to_path_buf(), line: line_no });
+            break;
+        };
+        match carmen::parse_line(text) {
+            Ok(None) => {}
+            Ok(Some(rec)) => {
+                widen(&mut log.span_s, rec.t_s());
+                match rec {
+                    carmen::CarmenRecord::Odom { .. } => {
+                        log.odometry += 1;
+                        seen[2] = true;
+                    }
+                    carmen::CarmenRecord::Scan(s) => {
+                        seen[(s.kind == carmen::LineKind::RobotLaser1) as usize] = true;
+                        log.scans.push(ScanRecord {
+                            t_s: s.t_s,
+                            pose: s.laser_pose,
+                            angle_min: s.angle_min,
+                            angle_increment: s.angle_increment,
+                            ranges_m: s.ranges_m,
+                            at: Location::Line(line_no),
+                        });
+                    }
+                }
+            }
+            Err(error) => {
+                log.error = Some(ReplayError::CarmenLine { file: file.to_path_buf(), line: line_no, error });
+                break;
+            }
+        }
+    }
+    for (i, name) in ["FLASER", "ROBOTLASER1", "ODOM"].iter().enumerate() {
+        if seen[i] {
+            log.sources.push(name.to_string());
+        }
+    }
+    // Logs are written in time order; a stable sort mends small reorderings between line types.
+    log.scans.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+    log
+}
+
+fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -> LogData {
+    let contents = match (format, bytes) {
+        (LogFormat::Ros2Mcap, Some(b)) => rosbag::read_mcap(file, &b),
+        _ => rosbag::read_db3(file),
+    };
+    let mut warnings = Vec::new();
+    if !contents.skipped_encodings.is_empty() {
+        warnings.push(format!("skipped topics not encoded as CDR: {}", contents.skipped_encodings.join(", ")));
+    }
+    let scans = rosbag::scans_from_messages(file, contents.messages);
+    warnings.extend(scans.warnings);
+    LogData {
+        file: file.to_path_buf(),
+        format,
+        scans: scans.scans,
+        odometry: scans.odometry,
+        no_pose: scans.no_pose,
+        span_s: contents.span_ns.map(|(a, b)| (a as f64 / 1e9, b as f64 / 1e9)),
+        sources: contents.topics.iter().map(|(t, ty)| format!("{t} ({ty})")).collect(),
+        warnings,
+        // Container damage comes first in the file's order of reading; a message that does not
+        // decode stops the replay where it is.
+        error: contents.error.or(scans.error),
+    }
+}
+
+fn io_err(file: &Path) -> impl Fn(std::io::Error) -> ReplayError + '_ {
+    move |source| ReplayError::Io { file: file.to_path_buf(), source }
+}
+
+/// The format of a file from its first bytes.
+pub fn detect(head: &[u8]) -> Option<LogFormat> {
+    if head.starts_with(&[0x1f, 0x8b]) {
+        Some(LogFormat::CarmenGzip)
+    } else if head.starts_with(rosbag::MCAP_MAGIC) {
+        Some(LogFormat::Ros2Mcap)
+    } else if head.starts_with(b"SQLite format 3\0") {
+        Some(LogFormat::Ros2Sqlite3)
+    } else if head.iter().take(4096).all(|&b| b == b'\t' || b == b'\n' || b == b'\r' || (0x20..0x7f).contains(&b) || b >= 0x80) {
+        Some(LogFormat::Carmen)
+    } else {
+        None
+    }
+}
+
+fn read_one(file: &Path) -> Result<LogData, ReplayError> {
+    let bytes = std::fs::read(file).map_err(io_err(file))?;
+    let format = detect(&bytes).ok_or_else(|| ReplayError::UnknownFormat { file: file.to_path_buf() })?;
+    Ok(match format {
+        LogFormat::Carmen | LogFormat::CarmenGzip => read_carmen(file, format, bytes),
+        LogFormat::Ros2Mcap => read_bag(file, format, Some(bytes)),
+        LogFormat::Ros2Sqlite3 => {
+            drop(bytes);
+            read_bag(file, format, None)
+        }
+    })
+}
+
+/// Reads a log file, or a rosbag2 directory (its `.mcap` / `.db3` files in name order, stopping
+/// at the first damaged one).
+pub fn read_log(path: &Path) -> Result<LogData, ReplayError> {
+    if !path.is_dir() {
+        return read_one(path);
+    }
+    let mut files: Vec<PathBuf> = std::fs::read_dir(path)
+        .map_err(io_err(path))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "mcap" || e == "db3"))
+        .collect();
+    files.sort();
+    let mut all: Option<LogData> = None;
+    for f in files {
+        let part = read_one(&f)?;
+        let stop = part.error.is_some();
+        all = Some(match all.take() {
+            None => part,
+            Some(mut a) => {
+                a.scans.extend(part.scans);
+                a.odometry += part.odometry;
+                a.no_pose += part.no_pose;
+                if let Some((lo, hi)) = part.span_s {
+                    widen(&mut a.span_s, lo);
+                    widen(&mut a.span_s, hi);
+                }
+                for s in part.sources {
+                    if !a.sources.contains(&s) {
+                        a.sources.push(s);
+                    }
+                }
+                a.warnings.extend(part.warnings);
+                a.error = part.error;
+                a
+            }
+        });
+        if stop {
+            break;
+        }
+    }
+    let mut log = all.ok_or_else(|| ReplayError::UnknownFormat { file: path.to_path_buf() })?;
+    log.file = path.to_path_buf();
+    log.scans.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+    Ok(log)
+}
+
+/// How to replay.
+#[derive(Clone, Debug)]
+pub struct ReplayOptions {
+    /// Controller settings (the grid origin is set by [`replay`]).
+    pub config: Config,
+    /// Run the embedded int8 classifier on the scans (the logs carry no labels).
+    pub classifier: bool,
+    /// Record every tick to this MCAP file ([`crate::record`], Foxglove's schemas).
+    pub record: Option<PathBuf>,
+}
+
+impl Default for ReplayOptions {
+    fn default() -> Self {
+        ReplayOptions { config: Config::DEFAULT, classifier: true, record: None }
+    }
+}
+
+/// A goal the controller would have sent.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GoalRecord {
+    /// Seconds since the first scan.
+    pub t_s: f64,
+    /// Goal position, metres.
+    pub x: f64,
+    /// Goal position, metres.
+    pub y: f64,
+    /// Heading to look along, degrees counter-clockwise from +x.
+    pub heading_deg: f64,
+    /// What the viewpoint came from (`LidarFrontier`, `VisualFrontier`, `NonMapCluster`, `Here`).
+    pub source: String,
+    /// Its utility.
+    pub utility: f64,
+    /// Path length from the robot, metres.
+    pub path_m: f64,
+    /// Where the robot (laser) was, metres.
+    pub robot: [f64; 2],
+}
+
+/// Grid cell counts at the end.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct GridCounts {
+    /// LiDAR-occupied cells.
+    pub occupied: u32,
+    /// LiDAR-free cells.
+    pub free: u32,
+    /// Cells the camera has seen.
+    pub camera_seen: u32,
+}
+
+/// Why scans were not used.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct Rejected {
+    /// The laser's pose lies outside the 51.2 m grid.
+    pub outside_grid: u32,
+    /// No pose (bag frames not connected) or a non-finite pose or angle.
+    pub no_pose: u32,
+    /// Refused by the controller (empty, too many beams, zero increment).
+    pub controller: u32,
+}
+
+/// The machine-readable result (`--json`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ReplayReport {
+    /// The log.
+    pub file: String,
+    /// Its format.
+    pub format: LogFormat,
+    /// Line types or topics used.
+    pub sources: Vec<String>,
+    /// Scans read from the log.
+    pub scans_read: u32,
+    /// Scans the controller integrated.
+    pub scans_used: u32,
+    /// Scans not used.
+    pub scans_rejected: u32,
+    /// Why.
+    pub rejected: Rejected,
+    /// Odometry messages read.
+    pub odometry: u32,
+    /// Time span of the log (everything time-stamped that was read), seconds.
+    pub duration_s: f64,
+    /// Wall time to read and replay (pictures excluded), seconds.
+    pub wall_s: f64,
+    /// Of which reading the log.
+    pub read_s: f64,
+    /// `wall_s / duration_s`.
+    pub ratio: f64,
+    /// `int8-classifier` or `none`.
+    pub labels: String,
+    /// Planning steps run.
+    pub plans: u32,
+    /// Goals it would have sent, in order.
+    pub goals: Vec<GoalRecord>,
+    /// Goals blacklisted by the controller (no progress towards them: nobody drives).
+    pub blacklisted: u32,
+    /// Cells at the end.
+    pub grid: GridCounts,
+    /// Non-map points pooled at the end.
+    pub nonmap_points: u32,
+    /// Lower-left corner of the grid, metres.
+    pub grid_origin: [f64; 2],
+    /// Grid side, metres.
+    pub grid_size_m: f64,
+    /// Bounding box of the laser's trajectory `[[min x, min y], [max x, max y]]`, metres.
+    pub trajectory_bounds: [[f64; 2]; 2],
+    /// The trajectory does not fit in the grid (scans outside it are not used).
+    pub exceeds_grid: bool,
+    /// Assumptions and notes.
+    pub warnings: Vec<String>,
+    /// The damage reading stopped at (the scans before it were replayed).
+    pub error: Option<String>,
+    /// The `--record` file, if one was written.
+    pub record: Option<RecordInfo>,
+}
+
+/// What `--record` wrote.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct RecordInfo {
+    /// The MCAP file.
+    pub file: String,
+    /// Messages written.
+    pub messages: u64,
+    /// The first recording error (recording stops there; the replay does not).
+    pub error: Option<String>,
+}
+
+/// A finished replay: the report and what a picture needs.
+pub struct ReplayRun {
+    /// The report.
+    pub report: ReplayReport,
+    /// The controller at the end.
+    pub controller: Box<Controller>,
+    /// Laser positions, one per scan used.
+    pub trajectory: Vec<[f64; 2]>,
+    /// First and last laser pose used.
+    pub first_pose: [f64; 3],
+    /// See `first_pose`.
+    pub last_pose: [f64; 3],
+    /// The damage reading stopped at, if any.
+    pub error: Option<ReplayError>,
+}
+
+/// Grid side, metres.
+pub fn grid_size_m() -> f64 {
+    firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64
+}
+
+/// Bounds of the scans' laser positions.
+pub fn trajectory_bounds(scans: &[ScanRecord]) -> Option<[[f64; 2]; 2]> {
+    let mut it = scans.iter().map(|s| s.pose).filter(|p| p[0].is_finite() && p[1].is_finite());
+    let first = it.next()?;
+    let mut b = [[first[0], first[1]], [first[0], first[1]]];
+    for p in it {
+        b[0] = [b[0][0].min(p[0]), b[0][1].min(p[1])];
+        b[1] = [b[1][0].max(p[0]), b[1][1].max(p[1])];
+    }
+    Some(b)
+}
+
+/// The grid origin (lower-left corner, on the 0.1 m lattice) that centres the grid on `bounds`.
+pub fn grid_origin(bounds: [[f64; 2]; 2]) -> [f64; 2] {
+    let half = grid_size_m() / 2.0;
+    let c = [(bounds[0][0] + bounds[1][0]) / 2.0, (bounds[0][1] + bounds[1][1]) / 2.0];
+    [((c[0] - half) * 10.0).round() / 10.0, ((c[1] - half) * 10.0).round() / 10.0]
+}
+
+fn round3(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0
+}
+
+/// Reads `path` and replays it. Fails when the log cannot be opened, is not a known format, or
+/// holds no usable scan before its damage (the damage is then the error).
+pub fn replay(path: &Path, opts: &ReplayOptions) -> Result<ReplayRun, ReplayError> {
+    let t_start = Instant::now();
+    let log = read_log(path)?;
+    let read_s = t_start.elapsed().as_secs_f64();
+    replay_log(log, opts, t_start, read_s)
+}
+
+/// Replays a log already read ([`read_log`]); `t_start` is when reading began.
+pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: f64) -> Result<ReplayRun, ReplayError> {
+    let Some(bounds) = trajectory_bounds(&log.scans) else {
+        return Err(log.error.unwrap_or(ReplayError::NoScans { file: log.file }));
+    };
+    let origin = grid_origin(bounds);
+    let size = grid_size_m();
+    let exceeds =
+        bounds[0][0] < origin[0] || bounds[0][1] < origin[1] || bounds[1][0] >= origin[0] + size || bounds[1][1] >= origin[1] + size;
+    let cfg = Config {
+        origin_x_m: fixed_point::meters_from_f64(origin[0]).unwrap_or_default(),
+        origin_y_m: fixed_point::meters_from_f64(origin[1]).unwrap_or_default(),
+        ..opts.config
+    };
+    let mut ctrl = Box::new(Controller::new(cfg));
+    if opts.classifier {
+        ctrl.set_model(firmware::classifier::EMBEDDED_MODEL).map_err(ReplayError::Model)?;
+    }
+    let mut recorder = match &opts.record {
+        Some(p) => Some(
+            crate::record::Recorder::create(p, crate::record::RecordOptions::default())
+                .map_err(|e| ReplayError::Record { file: p.clone(), reason: e.to_string() })?,
+        ),
+        None => None,
+    };
+    let mut record_error: Option<String> = None;
+    let min_range_m = cfg.lidar_min_range_m.to_num::<f64>();
+    let geom = ctrl.lidar.geom;
+    let t0 = log.scans[0].t_s;
+    // Time stamps that do not advance (the CSAIL log prints them with 6 significant digits, i.e.
+    // in steps of 10 000 s) cannot drive the controller's clock: replay one scan per tick instead.
+    let distinct = 1 + log.scans.windows(2).filter(|w| w[1].t_s != w[0].t_s).count();
+    let synthetic_time = log.scans.len() > 1 && 2 * distinct < log.scans.len();
+    let mut rejected = Rejected { no_pose: log.no_pose as u32, ..Rejected::default() };
+    let mut goals = Vec::new();
+    let mut trajectory = Vec::new();
+    let (mut first_pose, mut last_pose) = (None, [0.0; 3]);
+    let mut last_us = 0u64;
+    let mut last_start: Option<u64> = None;
+    let mut ranges_mm: Vec<u16> = Vec::new();
+    let mut status = firmware::Status::default();
+    for (i, s) in log.scans.iter().enumerate() {
+        let t_us = if synthetic_time { i as u64 * crate::search::TICK_US } else { ((s.t_s - t0) * 1e6).round().max(0.0) as u64 };
+        let now_us = last_us.max(t_us);
+        last_us = now_us;
+        let (Some(pose), Some(angle_min), Some(angle_increment)) = (
+            Pose2::from_f64(s.pose[0], s.pose[1], s.pose[2]),
+            BinaryAngle::from_radians(s.angle_min),
+            BinaryAngle::from_radians(s.angle_increment),
+        ) else {
+            rejected.no_pose += 1;
+            continue;
+        };
+        let (cx, cy) = geom.cell_of(pose.x, pose.y);
+        if !firmware::grid::PackedGrid::in_bounds(cx, cy) {
+            // The core would keep its last pose and draw this scan from there: skip it instead.
+            rejected.outside_grid += 1;
+            continue;
+        }
+        ranges_mm.clear();
+        ranges_mm.extend(s.ranges_m.iter().map(|&r| encode_range(r as f64, min_range_m)));
+        let start = match last_start {
+            None => true,
+            Some(t) => ctrl.mode() == Mode::Exhausted && now_us.saturating_sub(t) >= cfg.replan_interval_us,
+        };
+        if start {
+            last_start = Some(now_us);
+        }
+        let inputs = Inputs {
+            pose: Some(pose),
+            scan: Some(ScanInput { angle_min, angle_increment, ranges_mm: &ranges_mm, labels: None }),
+            detection: None,
+            command: start.then_some(Command::Start),
+            base_blocked: false,
+        };
+        let out = ctrl.tick(now_us, &inputs);
+        status = out.status;
+        if let (Some(rec), None) = (recorder.as_mut(), &record_error) {
+            if let Err(e) = rec.record_controller_tick(now_us, &inputs, &out, &ctrl) {
+                record_error = Some(e.to_string());
+            }
+        }
+        trajectory.push([s.pose[0], s.pose[1]]);
+        first_pose.get_or_insert(s.pose);
+        last_pose = s.pose;
+        if let (true, Some(g)) = (out.new_goal, &out.goal) {
+            goals.push(GoalRecord {
+                t_s: round3(now_us as f64 / 1e6),
+                x: round3(g.pose.x.to_num::<f64>()),
+                y: round3(g.pose.y.to_num::<f64>()),
+                heading_deg: round3(g.pose.theta.to_radians().to_degrees()),
+                source: format!("{:?}", g.viewpoint.source),
+                utility: round3(g.viewpoint.utility as f64 / 65536.0),
+                path_m: round3(g.path_length_m.to_num::<f64>()),
+                robot: [round3(s.pose[0]), round3(s.pose[1])],
+            });
+        }
+    }
+    rejected.controller = status.scans_rejected;
+    let record = recorder.zip(opts.record.as_ref()).map(|(rec, path)| {
+        let messages = rec.summary().total_messages();
+        let finished = rec.finish();
+        RecordInfo {
+            file: path.display().to_string(),
+            messages: finished.as_ref().map_or(messages, |s| s.total_messages()),
+            error: record_error.clone().or_else(|| finished.err().map(|e| e.to_string())),
+        }
+    });
+    let wall_s = t_start.elapsed().as_secs_f64();
+    let mut grid = GridCounts { occupied: 0, free: 0, camera_seen: 0 };
+    let n = firmware::capacity::GRID_CELLS as i32;
+    for y in 0..n {
+        for x in 0..n {
+            match ctrl.lidar.get(x, y) {
+                firmware::Cell::Occupied => grid.occupied += 1,
+                firmware::Cell::Free => grid.free += 1,
+                firmware::Cell::Unknown => {}
+            }
+            grid.camera_seen += ctrl.visual.seen(x, y) as u32;
+        }
+    }
+    let mut warnings = log.warnings;
+    let duration_s = if synthetic_time {
+        warnings.push(format!(
+            "the log's time stamps do not advance ({distinct} distinct among {} scans): replayed at one scan per {} ms, \
+             and the duration is that of the replayed scans",
+            log.scans.len(),
+            crate::search::TICK_US / 1000
+        ));
+        (log.scans.len() - 1) as f64 * crate::search::TICK_US as f64 / 1e6
+    } else {
+        log.span_s.map_or(0.0, |(a, b)| b - a)
+    };
+    if exceeds {
+        warnings.push(format!(
+            "the trajectory ({:.1} × {:.1} m) does not fit the controller's {size:.1} m grid: scans outside it are not used",
+            bounds[1][0] - bounds[0][0],
+            bounds[1][1] - bounds[0][1]
+        ));
+    }
+    let scans_read = log.scans.len() as u32 + log.no_pose as u32;
+    let scans_rejected = rejected.outside_grid + rejected.no_pose + rejected.controller;
+    let report = ReplayReport {
+        file: log.file.display().to_string(),
+        format: log.format,
+        sources: log.sources,
+        scans_read,
+        scans_used: status.scans,
+        scans_rejected,
+        rejected,
+        odometry: log.odometry as u32,
+        duration_s: round3(duration_s),
+        wall_s: round3(wall_s),
+        read_s: round3(read_s),
+        ratio: if duration_s > 0.0 { (wall_s / duration_s * 1e4).round() / 1e4 } else { f64::NAN },
+        labels: if opts.classifier { "int8-classifier" } else { "none" }.to_string(),
+        plans: status.plans,
+        goals,
+        blacklisted: status.blacklisted,
+        grid,
+        nonmap_points: ctrl.nonmap.points().len() as u32,
+        grid_origin: origin,
+        grid_size_m: size,
+        trajectory_bounds: bounds.map(|p| p.map(round3)),
+        exceeds_grid: exceeds,
+        warnings,
+        error: log.error.as_ref().map(|e| e.to_string()),
+        record,
+    };
+    let first_pose = first_pose.unwrap_or(log.scans[0].pose);
+    Ok(ReplayRun { report, controller: ctrl, trajectory, first_pose, last_pose, error: log.error })
+}
+
+/// The one-line summary `lives replay` prints.
+pub fn summary_line(r: &ReplayReport) -> String {
+    format!(
+        "{} ({}): {} scans read, {} used, {} rejected; {:.1} s of log replayed in {:.2} s ({:.2} % of its duration); \
+         {} goals; grid {} occupied / {} free cells; labels: {}",
+        r.file,
+        r.format,
+        r.scans_read,
+        r.scans_used,
+        r.scans_rejected,
+        r.duration_s,
+        r.wall_s,
+        100.0 * r.ratio,
+        r.goals.len(),
+        r.grid.occupied,
+        r.grid.free,
+        r.labels
+    )
+}
+
+/// `lives replay FILE` arguments.
+#[derive(clap::Args, Debug)]
+pub struct ReplayArgs {
+    /// The log: a CARMEN log (plain or .gz), an MCAP or sqlite3 (.db3) ROS 2 bag, or a bag directory.
+    pub file: PathBuf,
+    /// Write a picture of the maps, labels, trajectory and goals here.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Print one JSON object instead of the summary line.
+    #[arg(long)]
+    pub json: bool,
+    /// Do not run the embedded int8 classifier (no map / non-map labels).
+    #[arg(long)]
+    pub no_classifier: bool,
+    /// The controller's LiDAR range, metres: readings at or beyond it, and "no return" readings,
+    /// clear cells up to it and mark nothing (default: the core's 30 m).
+    #[arg(long, value_name = "METRES")]
+    pub max_range: Option<f64>,
+    /// Record every tick (pose, scan, labels, grids, frontiers, candidates, goals) to this MCAP
+    /// file, which Foxglove opens (docs/recording.md).
+    #[arg(long, value_name = "FILE.mcap")]
+    pub record: Option<PathBuf>,
+    /// Override a controller parameter, e.g. `--set replan_interval_s=6` (repeatable;
+    /// `lives params` lists them).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+}
+
+/// Runs `lives replay`: exit status 0, 1 when the log is damaged (what came before it was
+/// replayed and is reported), `Err` (status 2) when nothing could be replayed.
+pub fn run_command(args: &ReplayArgs) -> Result<std::process::ExitCode, String> {
+    use std::io::Write as _;
+    let mut opts = ReplayOptions { classifier: !args.no_classifier, record: args.record.clone(), ..ReplayOptions::default() };
+    for a in &args.set {
+        crate::overrides::apply(&mut opts.config, a)?;
+    }
+    if let Some(m) = args.max_range {
+        opts.config.lidar_max_range_m = fixed_point::meters_from_f64(m)
+            .filter(|v| *v > opts.config.lidar_min_range_m && m <= 65.0)
+            .ok_or_else(|| format!("--max-range {m}: expected metres above the minimum range and at most 65"))?;
+    }
+    let run = replay(&args.file, &opts).map_err(|e| e.to_string())?;
+    let r = &run.report;
+    if let Some(path) = &args.png {
+        let name = args.file.file_name().map_or_else(|| r.file.clone(), |n| n.to_string_lossy().into_owned());
+        let title = format!(
+            "replay {name}: {} scans, {:.0} s of log in {:.1} s, {} goals (dots: goals it would have sent), labels: {}",
+            r.scans_used,
+            r.duration_s,
+            r.wall_s,
+            r.goals.len(),
+            r.labels
+        );
+        picture::write_png(&run, path, &title).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    let mut stdout = std::io::stdout();
+    if args.json {
+        let text = serde_json::to_string_pretty(r).map_err(|e| e.to_string())?;
+        let _ = writeln!(stdout, "{text}");
+    } else {
+        let _ = writeln!(stdout, "{}", summary_line(r));
+        for w in &r.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    if let Some(e) = &run.error {
+        eprintln!("error: {e} (the {} scans before it were replayed)", r.scans_read);
+        return Ok(std::process::ExitCode::from(1));
+    }
+    Ok(std::process::ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_are_detected_from_content() {
+        assert_eq!(detect(&[0x1f, 0x8b, 8, 0]), Some(LogFormat::CarmenGzip));
+        assert_eq!(detect(b"\x89MCAP0\r\n\x01"), Some(LogFormat::Ros2Mcap));
+        assert_eq!(detect(b"SQLite format 3\0rest"), Some(LogFormat::Ros2Sqlite3));
+        assert_eq!(detect(b"# CARMEN\nODOM 0 0 0 0 0 0 1 h 1\n"), Some(LogFormat::Carmen));
+        assert_eq!(detect(&[0u8, 1, 2, 3]), None);
+    }
+
+    #[test]
+    fn the_grid_is_centred_on_the_trajectory() {
+        // The intel log's trajectory: centre (3.65, -9.1), the grid 25.6 m to either side of it.
+        let o = grid_origin([[-9.2, -22.1], [16.5, 3.9]]);
+        assert!((o[0] + grid_size_m() / 2.0 - 3.65).abs() <= 0.05 && (o[1] + grid_size_m() / 2.0 + 9.1).abs() <= 0.05, "{o:?}");
+        for v in o {
+            assert!(((v * 10.0).round() - v * 10.0).abs() < 1e-9, "on the 0.1 m lattice: {v}");
+        }
+    }
+}

@@ -1,0 +1,508 @@
+//! `lives replay` end to end (issue 8 part 2): the real CARMEN logs in `../shared/data/carmen/`,
+//! damaged copies of them, and ROS 2 bags (MCAP and sqlite3) made here with the same crates
+//! replay reads them with.
+
+use firmware::Cell;
+use host::replay::cdr::{self, Header, LaserScan, Odometry, Time, Transform, TransformStamped};
+use host::replay::{self, Location, LogFormat, ReplayError, ReplayOptions, ReplayRun};
+use std::collections::BTreeMap;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+fn carmen(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/carmen").join(name)
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lives-replay-tests-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn no_classifier() -> ReplayOptions {
+    ReplayOptions { classifier: false, ..ReplayOptions::default() }
+}
+
+fn gunzip(path: &Path) -> String {
+    let mut text = String::new();
+    flate2::read::MultiGzDecoder::new(std::fs::File::open(path).unwrap()).read_to_string(&mut text).unwrap();
+    text
+}
+
+fn gzip(text: &str) -> Vec<u8> {
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    e.write_all(text.as_bytes()).unwrap();
+    e.finish().unwrap()
+}
+
+/// The state of the cell holding world point (x, y).
+fn cell_at(run: &ReplayRun, x: f64, y: f64) -> Cell {
+    let geom = run.controller.lidar.geom;
+    let (cx, cy) = geom.cell_of(fixed_point::meters_from_f64(x).unwrap(), fixed_point::meters_from_f64(y).unwrap());
+    run.controller.lidar.get(cx, cy)
+}
+
+/// The states of the 3 × 3 cells around world point (x, y) (a hit computed in fixed point may
+/// land in a neighbour of the cell the float geometry predicts).
+fn around(run: &ReplayRun, x: f64, y: f64) -> Vec<Cell> {
+    let mut out = Vec::new();
+    for dy in [-0.1, 0.0, 0.1] {
+        for dx in [-0.1, 0.0, 0.1] {
+            out.push(cell_at(run, x + dx, y + dy));
+        }
+    }
+    out
+}
+
+fn occupied_near(run: &ReplayRun, x: f64, y: f64) -> bool {
+    around(run, x, y).contains(&Cell::Occupied)
+}
+
+#[test]
+fn the_first_intel_flaser_line_reads_as_checked_by_hand() {
+    let text = gunzip(&carmen("intel-corrected.log.gz"));
+    let line = text.lines().find(|l| l.starts_with("FLASER")).unwrap();
+    let Some(replay::carmen::CarmenRecord::Scan(s)) = replay::carmen::parse_line(line).unwrap() else { panic!("not a scan") };
+    // `FLASER 180 1.09 1.08 1.08 … 1.23 0.600266 -0.0320327 -0.354665 0.600266 -0.0320327 -0.354665 32.9068 pippo 32.9068`
+    assert_eq!(s.ranges_m.len(), 180);
+    assert_eq!(&s.ranges_m[..4], &[1.09, 1.08, 1.08, 1.07]);
+    assert_eq!(s.ranges_m[179], 1.23);
+    assert_eq!(s.laser_pose, [0.600266, -0.0320327, -0.354665]);
+    assert_eq!(s.t_s, 32.9068);
+    assert_eq!(s.angle_min, -std::f64::consts::FRAC_PI_2);
+    assert!((s.angle_increment - 1f64.to_radians()).abs() < 1e-15);
+    // And the first ODOM line: the robot at the origin at t = 0.000246 s.
+    let odom = text.lines().find(|l| l.starts_with("ODOM")).unwrap();
+    assert_eq!(
+        replay::carmen::parse_line(odom).unwrap(),
+        Some(replay::carmen::CarmenRecord::Odom { t_s: 0.000246, pose: [0.0, 0.0, 0.0] })
+    );
+}
+
+#[test]
+fn intel_replays_into_a_building_map_faster_than_a_tenth_of_real_time() {
+    let run = replay::replay(&carmen("intel-corrected.log.gz"), &ReplayOptions::default()).unwrap();
+    let r = &run.report;
+    assert_eq!(r.format, LogFormat::CarmenGzip);
+    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (910, 910, 0), "{r:?}");
+    assert_eq!(r.odometry, 14_541);
+    assert!((r.duration_s - 2691.3).abs() < 0.01, "{}", r.duration_s);
+    assert!(r.ratio < 0.1, "replay took {} s for {} s of log", r.wall_s, r.duration_s);
+    // The Intel lab is ≈ 26 × 26 m; walls are thousands of cells, free space > 10 000 m²·100.
+    assert!((2_000..30_000).contains(&r.grid.occupied), "{:?}", r.grid);
+    assert!(r.grid.free > 50_000, "{:?}", r.grid);
+    assert!(r.goals.len() >= 20, "{} goals", r.goals.len());
+    assert!(!r.exceeds_grid && r.error.is_none());
+    assert_eq!(r.labels, "int8-classifier");
+    // The robot's own cells are free: it drove there.
+    let p = run.trajectory[run.trajectory.len() / 2];
+    assert_eq!(cell_at(&run, p[0], p[1]), Cell::Free);
+    // Goals are ordered in time within the log.
+    assert!(r.goals.windows(2).all(|w| w[0].t_s <= w[1].t_s) && r.goals.last().unwrap().t_s <= r.duration_s);
+}
+
+#[test]
+fn freiburg_079_replays_into_a_building_map_faster_than_a_tenth_of_real_time() {
+    let run = replay::replay(&carmen("freiburg-079-corrected.log.gz"), &ReplayOptions::default()).unwrap();
+    let r = &run.report;
+    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (4791, 4791, 0), "{r:?}");
+    assert!((r.duration_s - 1062.46).abs() < 0.01, "{}", r.duration_s);
+    assert!(r.ratio < 0.1, "replay took {} s for {} s of log", r.wall_s, r.duration_s);
+    assert!((1_000..30_000).contains(&r.grid.occupied), "{:?}", r.grid);
+    assert!(r.grid.free > 50_000, "{:?}", r.grid);
+    assert!(r.goals.len() >= 20, "{} goals", r.goals.len());
+    assert!(!r.exceeds_grid && r.error.is_none());
+}
+
+#[test]
+fn a_truncated_gzip_log_names_the_offset_and_keeps_the_scans_before() {
+    let bytes = std::fs::read(carmen("intel-corrected.log.gz")).unwrap();
+    let cut = bytes.len() / 3;
+    let path = tmp("intel-truncated.log.gz");
+    std::fs::write(&path, &bytes[..cut]).unwrap();
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let r = &run.report;
+    let Some(ReplayError::Gzip { file, lines, offset, .. }) = &run.error else { panic!("{:?}", run.error) };
+    assert_eq!(file, &path);
+    assert!(*offset <= cut as u64 && *offset > cut as u64 / 2, "offset {offset} of {cut}");
+    assert!(*lines > 1000, "{lines} lines before the damage");
+    // About a third of the scans, all of them used.
+    assert!((150..500).contains(&r.scans_read), "{}", r.scans_read);
+    assert_eq!(r.scans_used, r.scans_read);
+    assert!(r.grid.occupied > 500, "{:?}", r.grid);
+    let msg = r.error.as_deref().unwrap();
+    assert!(msg.contains("intel-truncated.log.gz") && msg.contains(&format!("byte {offset}")), "{msg}");
+}
+
+#[test]
+fn a_corrupt_line_names_the_file_and_line_and_keeps_the_scans_before() {
+    let text = gunzip(&carmen("intel-corrected.log.gz"));
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    // Break the 101st FLASER line: its x becomes `1.2.3`.
+    let (idx, _) = lines.iter().enumerate().filter(|(_, l)| l.starts_with("FLASER")).nth(100).unwrap();
+    let mut toks: Vec<&str> = lines[idx].split(' ').collect();
+    toks[2 + 180] = "1.2.3";
+    lines[idx] = toks.join(" ");
+    let path = tmp("intel-corrupt.log");
+    std::fs::write(&path, lines.join("\n")).unwrap();
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let Some(ReplayError::CarmenLine { file, line, error }) = &run.error else { panic!("{:?}", run.error) };
+    assert_eq!((file, *line), (&path, idx + 1));
+    assert_eq!(error, &replay::carmen::LineError::BadNumber { kind: replay::carmen::LineKind::Flaser, field: "x", token: "1.2.3".into() });
+    assert_eq!(run.report.format, LogFormat::Carmen);
+    assert_eq!((run.report.scans_read, run.report.scans_used), (100, 100));
+    assert!(run.report.error.as_deref().unwrap().contains(&format!("intel-corrupt.log:{}:", idx + 1)));
+    // The same log gzip-compressed, cut inside that line's neighbourhood, gives the same scans.
+    let gz = tmp("intel-corrupt.log.gz");
+    std::fs::write(&gz, gzip(&lines.join("\n"))).unwrap();
+    let run2 = replay::replay(&gz, &no_classifier()).unwrap();
+    assert!(matches!(run2.error, Some(ReplayError::CarmenLine { line, .. }) if line == idx + 1));
+    assert_eq!(run2.report.scans_used, 100);
+}
+
+#[test]
+fn damage_before_any_scan_is_an_error_naming_the_file() {
+    let path = tmp("broken-first.log");
+    std::fs::write(&path, "ODOM 0 0 0 0 0 0 1.0 h 1.0\nFLASER 3 1 2\n").unwrap();
+    let e = replay::replay(&path, &no_classifier()).err().expect("no scans");
+    assert!(matches!(&e, ReplayError::CarmenLine { line: 2, .. }), "{e:?}");
+    assert!(e.to_string().contains("broken-first.log:2:"), "{e}");
+    let missing = replay::replay(Path::new("/nonexistent/log.gz"), &no_classifier()).err().unwrap();
+    assert!(matches!(missing, ReplayError::Io { .. }));
+}
+
+#[test]
+fn robotlaser1_lines_replay_exactly_like_the_flaser_lines_they_restate() {
+    // The first 200 FLASER lines of the Intel log, and the same scans as ROBOTLASER1 lines
+    // (start −π/2, 1° resolution, 80 m maximum, no remissions): the same map, the same goals.
+    let text = gunzip(&carmen("intel-corrected.log.gz"));
+    let flaser: Vec<&str> = text.lines().filter(|l| l.starts_with("FLASER")).take(200).collect();
+    let mut robotlaser = Vec::new();
+    for l in &flaser {
+        let t: Vec<&str> = l.split_whitespace().collect();
+        let n: usize = t[1].parse().unwrap();
+        let ranges = t[2..2 + n].join(" ");
+        let pose = t[2 + n..5 + n].join(" ");
+        let (ts, host, lts) = (t[8 + n], t[9 + n], t[10 + n]);
+        robotlaser.push(format!(
+            "ROBOTLASER1 0 {} {} {} 80.0 0.01 0 {n} {ranges} 0 {pose} {pose} 0 0 0.5 0.2 0 {ts} {host} {lts}",
+            -std::f64::consts::FRAC_PI_2,
+            std::f64::consts::PI,
+            std::f64::consts::PI / 180.0
+        ));
+    }
+    let (a, b) = (tmp("flaser.log"), tmp("robotlaser1.log"));
+    std::fs::write(&a, flaser.join("\n")).unwrap();
+    std::fs::write(&b, robotlaser.join("\n")).unwrap();
+    let ra = replay::replay(&a, &no_classifier()).unwrap().report;
+    let rb = replay::replay(&b, &no_classifier()).unwrap().report;
+    assert_eq!(rb.sources, vec!["ROBOTLASER1".to_string()]);
+    assert_eq!((ra.scans_used, rb.scans_used), (200, 200));
+    assert_eq!(ra.grid, rb.grid);
+    assert_eq!(ra.goals, rb.goals);
+    assert!(ra.grid.occupied > 500 && !ra.goals.is_empty(), "{:?}", ra.grid);
+}
+
+#[test]
+fn time_stamps_that_do_not_advance_are_replaced_by_the_core_tick() {
+    // As in the CSAIL log, whose stamps are printed as `1.13486e+09`.
+    let text = gunzip(&carmen("intel-corrected.log.gz"));
+    let lines: Vec<String> = text
+        .lines()
+        .filter(|l| l.starts_with("FLASER"))
+        .take(50)
+        .map(|l| {
+            let mut t: Vec<&str> = l.split_whitespace().collect();
+            let k = t.len();
+            t[k - 3] = "1.13486e+09";
+            t[k - 1] = "1.13486e+09";
+            t.join(" ")
+        })
+        .collect();
+    let path = tmp("flat-time.log");
+    std::fs::write(&path, lines.join("\n")).unwrap();
+    let r = replay::replay(&path, &no_classifier()).unwrap().report;
+    assert!((r.duration_s - 49.0 * 0.2).abs() < 1e-9, "{}", r.duration_s);
+    assert!(r.warnings.iter().any(|w| w.contains("do not advance")), "{:?}", r.warnings);
+    assert!(r.plans > 1, "the controller's clock advanced: {} plans", r.plans);
+}
+
+// ---- ROS 2 bags ----------------------------------------------------------------------------
+
+/// The robot stands still at (1, 2) facing +x (odometry `odom` → `base_link`); the laser is
+/// mounted 0.5 m ahead and 0.2 m left of the base, 0.3 m up, turned +90° (it looks along +y):
+/// it sits at (1.5, 2.2) facing +y. Its scans: 21 beams from −0.1 rad in 0.01 rad steps; the
+/// middle beam (angle 0) sees a wall at 3 m, i.e. at (1.5, 5.2) in the world. Beams 0–4 have no
+/// return (+inf), beam 5 is NaN, beam 6 −inf (too close), beams 16–20 read 25 m, beyond
+/// `range_max` (20 m): discarded.
+const SCANS: u32 = 30;
+const MOUNT: [f64; 3] = [0.5, 0.2, 0.3];
+
+fn laser_scan(i: u32, frame: &str) -> LaserScan {
+    let mut ranges = vec![3.0f32; 21];
+    ranges[..5].fill(f32::INFINITY);
+    ranges[5] = f32::NAN;
+    ranges[6] = f32::NEG_INFINITY;
+    ranges[16..].fill(25.0);
+    LaserScan {
+        header: Header { stamp: Time { sec: 10 + i as i32 / 5, nanosec: (i % 5) * 200_000_000 }, frame_id: frame.into() },
+        angle_min: -0.1,
+        angle_max: 0.1,
+        angle_increment: 0.01,
+        time_increment: 0.0,
+        scan_time: 0.2,
+        range_min: 0.05,
+        range_max: 20.0,
+        ranges,
+        intensities: vec![],
+    }
+}
+
+fn mount(rotation: [f64; 4]) -> Vec<u8> {
+    cdr::encode_tf_message(&[TransformStamped {
+        header: Header { stamp: Time::default(), frame_id: "base_link".into() },
+        child_frame_id: "laser".into(),
+        transform: Transform { translation: MOUNT, rotation },
+    }])
+}
+
+fn odometry(i: u32) -> Vec<u8> {
+    cdr::encode_odometry(&Odometry {
+        header: Header { stamp: Time { sec: 10, nanosec: i }, frame_id: "odom".into() },
+        child_frame_id: "base_link".into(),
+        pose: Transform::planar(1.0, 2.0, 0.0),
+    })
+}
+
+/// `(topic, type, receive time ns, CDR)` of the test bag, in receive order. `tf_static` comes
+/// after the first scan (it holds for the whole bag).
+fn bag_messages(mount_rotation: [f64; 4]) -> Vec<(&'static str, &'static str, u64, Vec<u8>)> {
+    let mut m = Vec::new();
+    for i in 0..SCANS {
+        let t = 10_000_000_000 + i as u64 * 200_000_000;
+        m.push(("/odom", "nav_msgs/msg/Odometry", t, odometry(i)));
+        m.push(("/scan", "sensor_msgs/msg/LaserScan", t + 1_000_000, cdr::encode_laser_scan(&laser_scan(i, "laser"))));
+        if i == 0 {
+            m.push(("/tf_static", "tf2_msgs/msg/TFMessage", t + 2_000_000, mount(mount_rotation)));
+        }
+    }
+    m
+}
+
+/// Yaw +90° about z.
+const YAW_90: [f64; 4] = [0.0, 0.0, std::f64::consts::FRAC_1_SQRT_2, std::f64::consts::FRAC_1_SQRT_2];
+
+fn write_mcap(path: &Path, messages: &[(&str, &str, u64, Vec<u8>)], chunk_size: u64) {
+    let opts = mcap::WriteOptions::new().compression(Some(mcap::Compression::Zstd)).chunk_size(Some(chunk_size)).profile("ros2");
+    let mut w = opts.create(std::io::BufWriter::new(std::fs::File::create(path).unwrap())).unwrap();
+    let mut channels = BTreeMap::new();
+    for (seq, (topic, ty, t, data)) in messages.iter().enumerate() {
+        let id = *channels.entry(*topic).or_insert_with(|| {
+            let schema = w.add_schema(ty, "ros2msg", b"").unwrap();
+            w.add_channel(schema, topic, "cdr", &BTreeMap::new()).unwrap()
+        });
+        let header = mcap::records::MessageHeader { channel_id: id, sequence: seq as u32, log_time: *t, publish_time: *t };
+        w.write_to_known_channel(&header, data).unwrap();
+    }
+    w.finish().unwrap();
+}
+
+fn write_db3(path: &Path, messages: &[(&str, &str, u64, Vec<u8>)]) {
+    let _ = std::fs::remove_file(path);
+    let db = rusqlite::Connection::open(path).unwrap();
+    // rosbag2's sqlite3 schema (version 4, Jazzy).
+    db.execute_batch(
+        "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);
+         INSERT INTO schema VALUES (4, 'jazzy');
+         CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL, metadata TEXT NOT NULL);
+         CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
+             serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL, type_description_hash TEXT NOT NULL);
+         CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL, data BLOB NOT NULL);
+         CREATE INDEX timestamp_idx ON messages (timestamp ASC);",
+    )
+    .unwrap();
+    let mut ids: BTreeMap<&str, i64> = BTreeMap::new();
+    for (topic, ty, t, data) in messages {
+        let n = ids.len() as i64 + 1;
+        let id = *ids.entry(topic).or_insert_with(|| {
+            db.execute("INSERT INTO topics VALUES (?1, ?2, ?3, 'cdr', '', '')", rusqlite::params![n, topic, ty]).unwrap();
+            n
+        });
+        db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (?1, ?2, ?3)", rusqlite::params![id, *t as i64, data]).unwrap();
+    }
+}
+
+fn assert_mounted_scan(run: &ReplayRun) {
+    let r = &run.report;
+    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (SCANS, SCANS, 0), "{r:?}");
+    assert_eq!(r.odometry, SCANS);
+    // From the first odometry to the last scan, 1 ms after the last odometry.
+    assert!((r.duration_s - 0.2 * (SCANS - 1) as f64 - 0.001).abs() < 1e-6, "{}", r.duration_s);
+    // The laser's pose is the base's composed with the mount.
+    assert_eq!(r.trajectory_bounds, [[1.5, 2.2], [1.5, 2.2]]);
+    // The wall the middle beam sees lands at (1.5, 5.2): not at (1.0, 5.0) (mount translation
+    // ignored) nor at (4.5, 2.2) (mount rotation ignored).
+    assert!(occupied_near(run, 1.5, 5.2));
+    let between = around(run, 1.5, 4.0);
+    assert!(between.contains(&Cell::Free) && !between.contains(&Cell::Occupied), "between laser and wall");
+    assert!(!occupied_near(run, 1.0, 5.0));
+    assert!(!occupied_near(run, 4.5, 2.2));
+    // No return (+inf, beams 0–4 at −0.1…−0.06 rad) clears to the core's 30 m range;
+    // the discarded 25 m readings (beams 16–20) leave their direction unknown.
+    let dir = |a: f64, d: f64| (1.5 + d * (std::f64::consts::FRAC_PI_2 + a).cos(), 2.2 + d * (std::f64::consts::FRAC_PI_2 + a).sin());
+    let (x, y) = dir(-0.08, 10.0);
+    assert!(around(run, x, y).contains(&Cell::Free), "an inf beam clears beyond the wall's range");
+    let (x, y) = dir(0.08, 10.0);
+    assert!(around(run, x, y).iter().all(|c| *c == Cell::Unknown), "a reading beyond range_max is discarded");
+    let (x, y) = dir(0.08, 25.0);
+    assert!(!occupied_near(run, x, y));
+}
+
+#[test]
+fn an_mcap_bag_replays_with_the_laser_mount_applied() {
+    let path = tmp("mounted.mcap");
+    write_mcap(&path, &bag_messages(YAW_90), 4096);
+    let log = replay::read_log(&path).unwrap();
+    assert_eq!(log.format, LogFormat::Ros2Mcap);
+    let s = &log.scans[0];
+    assert!((s.pose[0] - 1.5).abs() < 1e-12 && (s.pose[1] - 2.2).abs() < 1e-12, "{:?}", s.pose);
+    assert!((s.pose[2] - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+    assert_eq!((s.angle_min, s.angle_increment), (-0.1f32 as f64, 0.01f32 as f64));
+    assert!(s.ranges_m[5].is_nan() && s.ranges_m[6].is_nan() && s.ranges_m[16].is_nan(), "NaN, −inf, > range_max");
+    assert_eq!((s.ranges_m[0], s.ranges_m[10]), (f32::INFINITY, 3.0));
+    assert!(matches!(s.at, Location::Offset(_)));
+    assert!(log.warnings.is_empty(), "{:?}", log.warnings);
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    assert!(run.error.is_none(), "{:?}", run.error);
+    assert_eq!(run.report.format, LogFormat::Ros2Mcap);
+    assert_mounted_scan(&run);
+    assert!(!run.report.goals.is_empty(), "the controller planned on the bag");
+}
+
+#[test]
+fn a_replay_can_be_recorded_and_the_recording_reads_back() {
+    let bag = tmp("for-record.mcap");
+    write_mcap(&bag, &bag_messages(YAW_90), 4096);
+    let out = tmp("replay-recording.mcap");
+    let opts = ReplayOptions { record: Some(out.clone()), ..no_classifier() };
+    let run = replay::replay(&bag, &opts).unwrap();
+    let rec = run.report.record.clone().expect("recorded");
+    assert_eq!(rec.error, None);
+    let bytes = std::fs::read(&out).unwrap();
+    let mut topics = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        *topics.entry(m.unwrap().channel.topic.clone()).or_insert(0u64) += 1;
+    }
+    assert_eq!(topics.values().sum::<u64>(), rec.messages);
+    assert_eq!(topics.get("/lives/goal").copied().unwrap_or(0), run.report.goals.len() as u64, "{topics:?}");
+    assert!(topics.get("/lives/lidar_grid").is_some_and(|&n| n >= 1), "{topics:?}");
+    // Recording only reads: the replay is the same without it.
+    let plain = replay::replay(&bag, &no_classifier()).unwrap().report;
+    assert_eq!((plain.grid, plain.goals.clone()), (run.report.grid, run.report.goals.clone()));
+}
+
+#[test]
+fn a_sqlite3_bag_replays_with_the_laser_mount_applied() {
+    let path = tmp("mounted.db3");
+    write_db3(&path, &bag_messages(YAW_90));
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    assert!(run.error.is_none(), "{:?}", run.error);
+    assert_eq!(run.report.format, LogFormat::Ros2Sqlite3);
+    assert_mounted_scan(&run);
+}
+
+#[test]
+fn an_upside_down_laser_sees_the_world_mirrored() {
+    // Rolled by π about x (z down): a beam at +a in the laser frame points to −a in the world.
+    let mut msgs = bag_messages([1.0, 0.0, 0.0, 0.0]);
+    for m in msgs.iter_mut().filter(|m| m.0 == "/scan") {
+        let mut s = laser_scan(0, "laser");
+        s.ranges = vec![f32::NAN; 21];
+        s.ranges[20] = 2.0; // +0.1 rad in the laser frame
+        m.3 = cdr::encode_laser_scan(&s);
+    }
+    let path = tmp("flipped.db3");
+    write_db3(&path, &msgs);
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    // The laser at (1.5, 2.2) facing +x; the hit at angle −0.1 rad, 2 m away.
+    let (x, y) = (1.5 + 2.0 * (-0.1f64).cos(), 2.2 + 2.0 * (-0.1f64).sin());
+    assert!(occupied_near(&run, x, y));
+    assert!(!occupied_near(&run, x, 2.2 + 2.0 * 0.1f64.sin()), "not the unmirrored point");
+}
+
+#[test]
+fn a_truncated_mcap_bag_names_the_offset_and_keeps_the_scans_before() {
+    let path = tmp("whole.mcap");
+    write_mcap(&path, &bag_messages(YAW_90), 2048);
+    let bytes = std::fs::read(&path).unwrap();
+    let cut = bytes.len() * 6 / 10;
+    let cut_path = tmp("cut.mcap");
+    std::fs::write(&cut_path, &bytes[..cut]).unwrap();
+    let run = replay::replay(&cut_path, &no_classifier()).unwrap();
+    let Some(ReplayError::Mcap { file, offset, reason }) = &run.error else { panic!("{:?}", run.error) };
+    assert_eq!(file, &cut_path);
+    assert!(*offset < cut as u64, "the damaged record starts before the cut: {offset} vs {cut}");
+    assert!(reason.contains("truncated"), "{reason}");
+    let r = &run.report;
+    assert!(r.scans_read > 0 && r.scans_read < SCANS, "{} scans before the damage", r.scans_read);
+    assert_eq!(r.scans_used, r.scans_read);
+    assert!(occupied_near(&run, 1.5, 5.2), "the scans before the damage were used");
+    assert!(r.error.as_deref().unwrap().contains(&format!("cut.mcap: byte {offset}")));
+    // Corrupt bytes inside a compressed chunk after the first third: an error at that chunk's
+    // offset, the scans before it kept.
+    let (chunk_at, chunk_len) =
+        records(&bytes).into_iter().find(|&(op, at, _)| op == 0x06 && at > bytes.len() / 3).map(|(_, at, len)| (at, len)).unwrap();
+    let mut bad = bytes.clone();
+    let mid = chunk_at + 9 + chunk_len / 2;
+    for b in &mut bad[mid..mid + 16] {
+        *b ^= 0x5a;
+    }
+    let bad_path = tmp("corrupt.mcap");
+    std::fs::write(&bad_path, &bad).unwrap();
+    let run = replay::replay(&bad_path, &no_classifier()).unwrap();
+    assert!(matches!(run.error, Some(ReplayError::Mcap { offset, .. }) if offset == chunk_at as u64), "{:?}", run.error);
+    assert!(run.report.scans_read > 0 && run.report.scans_read < SCANS, "{}", run.report.scans_read);
+}
+
+/// The top-level records of an MCAP file: (opcode, offset, body length).
+fn records(bytes: &[u8]) -> Vec<(u8, usize, usize)> {
+    let mut out = Vec::new();
+    let mut pos = 8;
+    while pos + 9 <= bytes.len() {
+        let len = u64::from_le_bytes(bytes[pos + 1..pos + 9].try_into().unwrap()) as usize;
+        out.push((bytes[pos], pos, len));
+        pos += 9 + len;
+    }
+    out
+}
+
+#[test]
+fn a_truncated_sqlite3_bag_names_the_row_and_keeps_the_scans_before() {
+    // 200 scans of 1000 beams (4 kB each): the messages table spans many pages.
+    let mut msgs = Vec::new();
+    msgs.push(("/tf_static", "tf2_msgs/msg/TFMessage", 1, mount(YAW_90)));
+    for i in 0..200u32 {
+        let t = 10_000_000_000 + i as u64 * 200_000_000;
+        msgs.push(("/odom", "nav_msgs/msg/Odometry", t, odometry(i)));
+        let mut s = laser_scan(i, "laser");
+        s.angle_min = -1.0;
+        s.angle_increment = 0.002;
+        s.ranges = vec![3.0; 1000];
+        msgs.push(("/scan", "sensor_msgs/msg/LaserScan", t + 1, cdr::encode_laser_scan(&s)));
+    }
+    let path = tmp("long.db3");
+    write_db3(&path, &msgs);
+    let bytes = std::fs::read(&path).unwrap();
+    let cut_path = tmp("long-cut.db3");
+    std::fs::write(&cut_path, &bytes[..bytes.len() / 2]).unwrap();
+    let run = replay::replay(&cut_path, &no_classifier()).unwrap();
+    let Some(ReplayError::Sqlite { file, after_row, .. }) = &run.error else { panic!("{:?}", run.error) };
+    assert_eq!(file, &cut_path);
+    let r = &run.report;
+    assert!(r.scans_read > 10 && r.scans_read < 200, "{} scans before the damage", r.scans_read);
+    // Rows: 1 the mount, then odometry and scan in turn (scan k at row 1 + 2k): the last row read
+    // is the last scan's or the odometry after it.
+    let n = r.scans_read as i64;
+    assert!(matches!(*after_row, Some(row) if row == 1 + 2 * n || row == 2 + 2 * n), "{after_row:?} after {n} scans");
+    assert!(r.error.as_deref().unwrap().contains("long-cut.db3: sqlite error after messages row"));
+}
