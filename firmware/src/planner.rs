@@ -521,7 +521,8 @@ impl Planner {
         let mut sites: heapless::Vec<((i32, i32), Site, Option<BinaryAngle>, i64), { SITES }> = heapless::Vec::new();
         let euclid_bits = |c: (i32, i32)| {
             let d2 = ((c.0 - robot.0) as i64).pow(2) + ((c.1 - robot.1) as i64).pow(2);
-            fixed_point::isqrt_u64(d2 as u64) as i64 * 65_536 / crate::capacity::CELLS_PER_METER
+            // Q16.16 metres: sqrt(d2 · 2³²) is the distance in cells · 2¹⁶.
+            fixed_point::isqrt_u64((d2 as u64) << 32) as i64 / crate::capacity::CELLS_PER_METER
         };
         for f in frontiers.frontiers() {
             if use_rrt || ((nearest || explore_lite) && lidar_frontiers_reachable && f.source != FrontierSource::Lidar) {
@@ -628,11 +629,11 @@ impl Planner {
                 work += view.work;
                 let unseen = view.unseen_cells;
                 let nm = if w_nonmap != Weight::ZERO { self.in_cone(heading, cfg.camera_fov, cfg.nonmap_block_cap) } else { 0 };
-                let utility = -dist_term
-                    + cfg.w_unknown_per_cell.to_bits() as i64 * unseen as i64
+                let gain = cfg.w_unknown_per_cell.to_bits() as i64 * unseen as i64
                     + cfg.w_surface_per_ray.to_bits() as i64 * view.unseen_surface_rays as i64
                     + cfg.w_frontier_per_cell.to_bits() as i64 * near as i64
                     + w_nonmap.to_bits() as i64 * nm as i64;
+                let utility = gain - dist_term;
                 let vp = Viewpoint {
                     cell: site,
                     heading,

@@ -289,7 +289,7 @@ pub fn revenue(lidar: &LidarGrid, visual: &VisualGrid, p: RrtPoint, robot: (i32,
     let gain_bits = info_gain(lidar, visual, p) as i64 * 65_536 / 100; // cells of 0.01 m²
     let d2 = dist2(p.cell, robot);
     let h = if d2 <= (HYSTERESIS_RADIUS_CELLS * HYSTERESIS_RADIUS_CELLS) as i64 { HYSTERESIS_GAIN } else { 1 };
-    let dist_bits = fixed_point::isqrt_u64(d2 as u64) as i64 * 65_536 / 10; // cells of 0.1 m
+    let dist_bits = fixed_point::isqrt_u64((d2 as u64) << 32) as i64 / 10; // cells · 2¹⁶ → metres
     INFO_MULTIPLIER * gain_bits * h - dist_bits
 }
 
