@@ -20,6 +20,22 @@ pub enum PlannerKind {
     /// Yamauchi's nearest frontier: the reachable frontier with the shortest path, LiDAR frontiers
     /// first, camera frontiers once the LiDAR map has none.
     Nearest,
+    /// A baseline after ROS `explore_lite`: the frontier of least
+    /// `potential_scale · distance − gain_scale · size` (its defaults 3 and 1; distance Euclidean
+    /// in metres, size in cells), LiDAR frontiers first, camera frontiers once the LiDAR map has
+    /// none, facing the direction of travel. See [`crate::planner`].
+    ExploreLite,
+    /// A baseline in the spirit of RRT exploration: frontier points found by random trees, scored
+    /// by the original assigner's revenue. See [`crate::rrt`].
+    Rrt,
+}
+
+impl PlannerKind {
+    /// One of the baselines (`nearest`, `explore-lite`, `rrt`): scored by their own rules, facing
+    /// the direction of travel, every reached goal retired.
+    pub const fn is_baseline(self) -> bool {
+        matches!(self, PlannerKind::Nearest | PlannerKind::ExploreLite | PlannerKind::Rrt)
+    }
 }
 
 /// Work budgets per stage, in work units (cells or points touched). A stage that exceeds its
@@ -206,7 +222,7 @@ impl Config {
     pub fn effective_w_nonmap(&self) -> Weight {
         match self.planner {
             PlannerKind::Lives => self.w_nonmap_per_point,
-            PlannerKind::Multisensor | PlannerKind::Nearest => Weight::ZERO,
+            PlannerKind::Multisensor | PlannerKind::Nearest | PlannerKind::ExploreLite | PlannerKind::Rrt => Weight::ZERO,
         }
     }
 }

@@ -450,7 +450,7 @@ impl Controller {
                 // Reached: whatever it offered has been looked at. A LiDAR frontier still there
                 // once the robot stands on it is one the sensor cannot resolve (a shadow under
                 // furniture, a glass pane): retire the spot so it is not chosen again.
-                if g.viewpoint.source == Site::LidarFrontier || self.cfg.planner == crate::PlannerKind::Nearest {
+                if g.viewpoint.source == Site::LidarFrontier || self.cfg.planner.is_baseline() {
                     let cell = g.viewpoint.cell;
                     self.planner.blacklist(cell);
                     self.status.retired += 1;
@@ -473,6 +473,17 @@ impl Controller {
         }
         let due = self.last_plan_us.is_none_or(|t| now_us.saturating_sub(t) >= self.cfg.replan_interval_us);
         if !force && !due {
+            return false;
+        }
+        if !force && self.cfg.planner == crate::PlannerKind::Rrt {
+            // The `rrt` baseline's assigner gives only an idle robot a new goal; its trees keep
+            // growing meanwhile.
+            self.last_plan_us = Some(now_us);
+            obs.begin(Stage::Plan);
+            let robot = self.lidar.geom.cell_of(pose.x, pose.y);
+            let work = self.planner.rrt.grow(&self.lidar, &self.visual, robot);
+            obs.end(Stage::Plan);
+            self.status.cost.plan = work;
             return false;
         }
         self.last_plan_us = Some(now_us);

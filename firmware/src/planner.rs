@@ -24,6 +24,16 @@
 //!
 //! `nearest` (Yamauchi) replaces 4–5 with the reachable LiDAR frontier of shortest path (camera
 //! frontiers once the LiDAR map has none), facing the direction of travel.
+//!
+//! The two other baselines of `lives eval` also face the direction of travel:
+//! - `explore-lite` (after ROS `explore_lite`): the frontier of least
+//!   `EXPLORE_LITE_POTENTIAL_SCALE · d − EXPLORE_LITE_GAIN_SCALE · cells`, `d` the Euclidean
+//!   distance in metres from the robot to the frontier's anchor cell and `cells` the frontier's
+//!   size (its defaults 3 and 1; explore_lite multiplies both terms by the costmap resolution,
+//!   which does not change the order). LiDAR frontiers first, camera frontiers once the LiDAR map
+//!   has none (as `nearest`; explore_lite itself stops there). Simplified: frontiers are the
+//!   pieces of at most [`crate::frontier::SPLIT_CELLS`] cells, not whole groups.
+//! - `rrt`: frontier points from [`crate::rrt::RrtExplorer`], scored by its revenue.
 
 use crate::capacity::{
     BLOCKS, BLOCK_CELLS, DIJKSTRA_HEAP, GRID_AREA, GRID_CELLS, MAX_BLACKLIST, MAX_FRONTIERS_PER_GRID, MAX_INFLATION_OFFSETS,
@@ -33,6 +43,7 @@ use crate::config::{Config, PlannerKind, Weight};
 use crate::frontier::{FrontierSet, FrontierSource};
 use crate::grid::{BitGrid, Cell, GridGeometry, LidarGrid, Line, PackedGrid, VisualGrid};
 use crate::nonmap::NonMapStore;
+use crate::rrt::{self, RrtExplorer};
 use fixed_point::{atan2, BinaryAngle, Meters, Pose2};
 use heapless::binary_heap::{BinaryHeap, Min};
 
@@ -51,6 +62,15 @@ pub const GAZE_HEADINGS: usize = 16;
 /// Within this distance of its goal the robot stops choosing a gaze and turns to the goal's
 /// heading (the viewpoint's own view).
 pub const GAZE_HANDOVER_M: Meters = Meters::from_bits(1 << 16);
+
+/// Capacity of one step's site list: frontier pieces of both maps, non-map clusters, the
+/// current goal, and the `rrt` baseline's points.
+const SITES: usize = 2 * MAX_FRONTIERS_PER_GRID + MAX_NONMAP_SITES + 1 + rrt::RRT_POINTS;
+
+/// `explore-lite`: cost per metre of distance (explore_lite's `potential_scale` default).
+pub const EXPLORE_LITE_POTENTIAL_SCALE: i64 = 3;
+/// `explore-lite`: gain per frontier cell (explore_lite's `gain_scale` default).
+pub const EXPLORE_LITE_GAIN_SCALE: i64 = 1;
 
 /// The four viewpoint headings.
 pub const HEADINGS: [BinaryAngle; 4] = [BinaryAngle::ZERO, BinaryAngle::QUARTER, BinaryAngle::HALF, BinaryAngle(-(1 << 30))];
@@ -140,6 +160,8 @@ pub struct Planner {
     /// Counters of the last step.
     pub stats: PlanStats,
     robot_cell: (i32, i32),
+    /// The `rrt` baseline's trees and frontier points (idle under the other planners).
+    pub rrt: RrtExplorer,
 }
 
 #[inline]
@@ -169,6 +191,7 @@ impl Planner {
                 work: 0,
             },
             robot_cell: (0, 0),
+            rrt: RrtExplorer::new(),
         }
     }
 
@@ -176,6 +199,7 @@ impl Planner {
     pub fn clear(&mut self) {
         self.blacklist.clear();
         self.candidates.clear();
+        self.rrt.clear();
         self.dist.fill(UNREACHABLE);
         self.stats = PlanStats::default();
     }
@@ -481,15 +505,27 @@ impl Planner {
         let range_cells = GridGeometry::cells(cfg.camera_range_m);
         let w_nonmap = cfg.effective_w_nonmap();
         let nearest = cfg.planner == PlannerKind::Nearest;
-        let lidar_frontiers_reachable = nearest
+        let explore_lite = cfg.planner == PlannerKind::ExploreLite;
+        let use_rrt = cfg.planner == PlannerKind::Rrt;
+        // The baselines score sites by their own rules and face the direction of travel.
+        let baseline = nearest || explore_lite || use_rrt;
+        let lidar_frontiers_reachable = (nearest || explore_lite)
             && frontiers.frontiers().iter().any(|f| f.source == FrontierSource::Lidar && self.reachable_near(f.anchor, snap).is_some());
+        if use_rrt {
+            work += self.rrt.grow(lidar, visual, robot);
+        }
 
         // Sites: frontier anchors; for `lives`, viewpoints aimed at non-map clusters; last, the
         // current goal (re-scored for hysteresis, never a candidate itself).
-        let mut sites: heapless::Vec<((i32, i32), Site, Option<BinaryAngle>), { 2 * MAX_FRONTIERS_PER_GRID + MAX_NONMAP_SITES + 1 }> =
-            heapless::Vec::new();
+        // The fourth field is a baseline's own score of the site (`explore-lite`, `rrt`).
+        let mut sites: heapless::Vec<((i32, i32), Site, Option<BinaryAngle>, i64), { SITES }> = heapless::Vec::new();
+        let euclid_bits = |c: (i32, i32)| {
+            let d2 = ((c.0 - robot.0) as i64).pow(2) + ((c.1 - robot.1) as i64).pow(2);
+            // Q16.16 metres: sqrt(d2 · 2³²) is the distance in cells · 2¹⁶.
+            fixed_point::isqrt_u64((d2 as u64) << 32) as i64 / crate::capacity::CELLS_PER_METER
+        };
         for f in frontiers.frontiers() {
-            if nearest && lidar_frontiers_reachable && f.source != FrontierSource::Lidar {
+            if use_rrt || ((nearest || explore_lite) && lidar_frontiers_reachable && f.source != FrontierSource::Lidar) {
                 continue;
             }
             work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
@@ -498,7 +534,23 @@ impl Planner {
                 continue;
             };
             let kind = if f.source == FrontierSource::Lidar { Site::LidarFrontier } else { Site::VisualFrontier };
-            let _ = sites.push((c, kind, None));
+            let cost = EXPLORE_LITE_POTENTIAL_SCALE * euclid_bits(f.anchor) - EXPLORE_LITE_GAIN_SCALE * f.cells as i64 * 65_536;
+            let _ = sites.push((c, kind, None, -cost));
+        }
+        if use_rrt {
+            let lidar_points = self.rrt.points().any(|p| p.source == FrontierSource::Lidar && self.reachable_near(p.cell, snap).is_some());
+            for &p in self.rrt.points() {
+                if lidar_points && p.source != FrontierSource::Lidar {
+                    continue;
+                }
+                work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
+                let Some(c) = self.reachable_near(p.cell, snap) else {
+                    self.stats.unreachable += 1;
+                    continue;
+                };
+                let kind = if p.source == FrontierSource::Lidar { Site::LidarFrontier } else { Site::VisualFrontier };
+                let _ = sites.push((c, kind, None, rrt::revenue(lidar, visual, p, robot)));
+            }
         }
         if cfg.planner == PlannerKind::Lives && cfg.nonmap_viewpoints {
             let standoff = GridGeometry::cells(cfg.nonmap_standoff_m);
@@ -506,7 +558,7 @@ impl Planner {
                 work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
                 match self.nonmap_viewpoint(p, standoff, snap) {
                     Some((c, h)) => {
-                        let _ = sites.push((c, Site::NonMapCluster, Some(h)));
+                        let _ = sites.push((c, Site::NonMapCluster, Some(h), 0));
                     }
                     None => self.stats.unreachable += 1,
                 }
@@ -514,11 +566,14 @@ impl Planner {
         }
         if !nearest && cfg.look_around_here && PackedGrid::in_bounds(robot.0, robot.1) {
             // Turning in place is an action too: the four headings at the robot's own cell.
-            let _ = sites.push((robot, Site::Here, None));
+            let _ = sites.push((robot, Site::Here, None, 0));
         }
-        if let Some((c, h)) = current {
+        // The current goal is re-scored for hysteresis, except under `explore-lite` (which
+        // switches to any better frontier) and `rrt` (which keeps a goal until it is reached or
+        // fails; see `Controller`).
+        if let (Some((c, h)), false) = (current, explore_lite || use_rrt) {
             if self.distance(c.0, c.1) != UNREACHABLE {
-                let _ = sites.push((c, Site::Current, Some(h)));
+                let _ = sites.push((c, Site::Current, Some(h), 0));
             }
         }
 
@@ -528,7 +583,7 @@ impl Planner {
         let already_there = |cell: (i32, i32), h: BinaryAngle, d: u16| {
             (cell == robot || (d as i64) <= here) && (h - pose.theta).unsigned_abs() <= cfg.goal_heading_tolerance.unsigned_abs()
         };
-        for &(site, kind, fixed_heading) in sites.iter() {
+        for &(site, kind, fixed_heading, own_score) in sites.iter() {
             if kind != Site::Current && self.is_blacklisted(site, bl) {
                 self.stats.blacklisted += 1;
                 continue;
@@ -536,13 +591,13 @@ impl Planner {
             let path_units = self.distance(site.0, site.1);
             let path_mm = path_units as i64 * (crate::capacity::CELL_MM / STEP_STRAIGHT as i64);
             let dist_term = (cfg.w_dist_per_m.to_bits() as i64 * path_mm) / 1000;
-            if nearest {
+            if baseline {
                 let heading = fixed_heading.unwrap_or_else(|| self.travel_heading(site, pose));
                 let vp = Viewpoint {
                     cell: site,
                     heading,
                     source: kind,
-                    utility: -dist_term,
+                    utility: if nearest { -dist_term } else { own_score },
                     path_units,
                     unseen: 0,
                     surface: 0,
@@ -574,11 +629,11 @@ impl Planner {
                 work += view.work;
                 let unseen = view.unseen_cells;
                 let nm = if w_nonmap != Weight::ZERO { self.in_cone(heading, cfg.camera_fov, cfg.nonmap_block_cap) } else { 0 };
-                let utility = -dist_term
-                    + cfg.w_unknown_per_cell.to_bits() as i64 * unseen as i64
+                let gain = cfg.w_unknown_per_cell.to_bits() as i64 * unseen as i64
                     + cfg.w_surface_per_ray.to_bits() as i64 * view.unseen_surface_rays as i64
                     + cfg.w_frontier_per_cell.to_bits() as i64 * near as i64
                     + w_nonmap.to_bits() as i64 * nm as i64;
+                let utility = gain - dist_term;
                 let vp = Viewpoint {
                     cell: site,
                     heading,

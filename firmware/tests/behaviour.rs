@@ -216,7 +216,7 @@ fn an_unreachable_frontier_is_never_chosen() {
     let mut f = Box::new(FrontierSet::new());
     let cfg = Config::DEFAULT;
     let robot = pose(7.55, 7.55, 0.0);
-    for kind in [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest] {
+    for kind in [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest, PlannerKind::ExploreLite, PlannerKind::Rrt] {
         let cfg = Config { planner: kind, ..cfg };
         f.compute(&lidar, &vis, cfg.min_frontier_cells);
         assert!(f.frontiers().iter().any(|fr| fr.source == FrontierSource::Lidar && fr.anchor.0 > 200));
@@ -226,7 +226,8 @@ fn an_unreachable_frontier_is_never_chosen() {
             assert!(g.viewpoint.cell.0 <= 100 && g.viewpoint.cell.1 <= 100, "{kind:?} chose {:?}", g.viewpoint);
         }
         assert!(planner.candidates.iter().all(|c| c.cell.0 <= 100), "{kind:?} scored an unreachable viewpoint");
-        assert!(planner.stats.unreachable >= 1);
+        // (The `rrt` trees grow from the robot, so they never find the pocket at all.)
+        assert!(kind == PlannerKind::Rrt || planner.stats.unreachable >= 1, "{kind:?}");
     }
     // With a doorway in the robot's room, its frontier is chosen (and only it).
     let mut lidar2 = room_grid(true);
@@ -249,6 +250,45 @@ fn an_unreachable_frontier_is_never_chosen() {
         let (cx, cy) = geom().cell_of(x, y);
         assert!(planner.traversable(cx, cy) || planner.distance(cx, cy) == 0);
     }
+}
+
+#[test]
+fn explore_lite_trades_distance_against_frontier_size_where_nearest_takes_the_closest() {
+    // The robot's room has a small doorway 1 m away (south) and a wide one 4 m away (east).
+    let mut lidar = room_grid(false);
+    for x in 55..65 {
+        lidar.grid.set(x, 50, Cell::Unknown);
+    }
+    for y in 56..94 {
+        lidar.grid.set(100, y, Cell::Unknown);
+    }
+    let vis = Box::new(VisualGrid::new());
+    let store = Box::new(NonMapStore::new());
+    let mut f = Box::new(FrontierSet::new());
+    let robot = pose(6.05, 6.05, 0.0);
+    let mut chosen = Vec::new();
+    for kind in [PlannerKind::Nearest, PlannerKind::ExploreLite] {
+        let cfg = Config { planner: kind, ..Config::DEFAULT };
+        f.compute(&lidar, &vis, cfg.min_frontier_cells);
+        let small = f.frontiers().iter().find(|fr| fr.source == FrontierSource::Lidar && fr.anchor.1 < 55).expect("south doorway").anchor;
+        let wide = *f.frontiers().iter().find(|fr| fr.source == FrontierSource::Lidar && fr.anchor.0 > 95).expect("east doorway");
+        assert_eq!(wide.cells, 38);
+        let mut planner = Box::new(Planner::new());
+        let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None);
+        let g = goal.expect("a goal");
+        if kind == PlannerKind::ExploreLite {
+            // explore_lite's cost 3·d − cells: about 3·0.9 − 10 for the south doorway, 3·4.2 − 38 for the east one.
+            let wide_vp = planner.candidates.iter().find(|c| c.cell == wide.anchor).expect("the east doorway is a candidate");
+            let d = ((wide.anchor.0 as f64 - 60.0).powi(2) + (wide.anchor.1 as f64 - 60.0).powi(2)).sqrt() / 10.0;
+            let expected = -(3.0 * d - 38.0);
+            assert!((wide_vp.utility as f64 / 65536.0 - expected).abs() < 0.01, "{} vs {expected}", wide_vp.utility as f64 / 65536.0);
+        }
+        chosen.push((g.viewpoint.cell, small, wide.anchor));
+    }
+    let (nearest, small, _) = chosen[0];
+    assert_eq!(nearest, small, "nearest takes the closest frontier");
+    let (explore, _, wide) = chosen[1];
+    assert_eq!(explore, wide, "explore-lite takes the bigger one a little farther away");
 }
 
 fn run_room(ctrl: &mut firmware::Controller, ticks: u32, feed_until: u32) -> Vec<firmware::Outputs> {

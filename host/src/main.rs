@@ -25,7 +25,7 @@ struct RunArgs {
     /// easy or hard (built-in worlds).
     #[arg(long, default_value = "easy")]
     scenario: Scenario,
-    /// lives, lives-gt, multisensor or nearest.
+    /// lives, lives-gt, multisensor, nearest, explore-lite or rrt.
     #[arg(long, default_value = "lives")]
     planner: PlannerChoice,
     /// Seed: start jitter, target placement, people, sensor noise (and the random world).
@@ -267,7 +267,7 @@ enum Cmd {
         #[arg(long, value_delimiter = ',', default_value = "easy,hard")]
         scenarios: Vec<Scenario>,
         /// Planners, comma-separated (`lives` runs the embedded int8 classifier).
-        #[arg(long, value_delimiter = ',', default_value = "nearest,multisensor,lives-gt,lives")]
+        #[arg(long, value_delimiter = ',', default_value = "rrt,explore-lite,nearest,multisensor,lives-gt,lives")]
         planners: Vec<PlannerChoice>,
         /// Worker threads (default: the machine's cores).
         #[arg(long)]

@@ -29,11 +29,22 @@ pub enum PlannerChoice {
     Multisensor,
     /// Yamauchi's nearest frontier.
     Nearest,
+    /// After ROS explore_lite: `3 · distance − 1 · frontier size`, its defaults.
+    ExploreLite,
+    /// A sampling-based explorer in the spirit of RRT exploration.
+    Rrt,
 }
 
 impl PlannerChoice {
     /// All of them.
-    pub const ALL: [PlannerChoice; 4] = [PlannerChoice::Lives, PlannerChoice::LivesGt, PlannerChoice::Multisensor, PlannerChoice::Nearest];
+    pub const ALL: [PlannerChoice; 6] = [
+        PlannerChoice::Lives,
+        PlannerChoice::LivesGt,
+        PlannerChoice::Multisensor,
+        PlannerChoice::Nearest,
+        PlannerChoice::ExploreLite,
+        PlannerChoice::Rrt,
+    ];
 
     /// The core's planner kind.
     pub fn kind(self) -> PlannerKind {
@@ -41,6 +52,8 @@ impl PlannerChoice {
             PlannerChoice::Lives | PlannerChoice::LivesGt => PlannerKind::Lives,
             PlannerChoice::Multisensor => PlannerKind::Multisensor,
             PlannerChoice::Nearest => PlannerKind::Nearest,
+            PlannerChoice::ExploreLite => PlannerKind::ExploreLite,
+            PlannerChoice::Rrt => PlannerKind::Rrt,
         }
     }
 
@@ -50,7 +63,7 @@ impl PlannerChoice {
             PlannerChoice::Lives if model => "int8-classifier",
             // Without a model `lives` runs on simulator labels, like `lives-gt`.
             PlannerChoice::Lives | PlannerChoice::LivesGt => "ground-truth",
-            PlannerChoice::Multisensor | PlannerChoice::Nearest => "none",
+            PlannerChoice::Multisensor | PlannerChoice::Nearest | PlannerChoice::ExploreLite | PlannerChoice::Rrt => "none",
         }
     }
 }
@@ -62,6 +75,8 @@ impl fmt::Display for PlannerChoice {
             PlannerChoice::LivesGt => "lives-gt",
             PlannerChoice::Multisensor => "multisensor",
             PlannerChoice::Nearest => "nearest",
+            PlannerChoice::ExploreLite => "explore-lite",
+            PlannerChoice::Rrt => "rrt",
         })
     }
 }
@@ -72,7 +87,7 @@ impl FromStr for PlannerChoice {
         PlannerChoice::ALL
             .into_iter()
             .find(|p| p.to_string() == s)
-            .ok_or_else(|| format!("unknown planner `{s}` (expected lives, lives-gt, multisensor or nearest)"))
+            .ok_or_else(|| format!("unknown planner `{s}` (expected lives, lives-gt, multisensor, nearest, explore-lite or rrt)"))
     }
 }
 
@@ -261,12 +276,20 @@ pub fn controller_config(base: &Config, world: &World, planner: PlannerChoice) -
     let [min, max] = world.bounds;
     let centre = [(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0];
     let half = firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64 / 2.0;
+    // explore_lite's own defaults where they differ from ours: minimum frontier 0.5 m, a goal
+    // without progress for 30 s is blacklisted, any better frontier replaces the goal.
+    let base = match planner {
+        PlannerChoice::ExploreLite => {
+            Config { min_frontier_cells: 5, goal_timeout_us: 30_000_000, switch_margin: firmware::config::Weight::ZERO, ..*base }
+        }
+        _ => *base,
+    };
     Config {
         planner: planner.kind(),
         // Centred on the world, on the 0.1 m lattice (a world up to 51 m across fits).
         origin_x_m: fixed_point::meters_from_f64(((centre[0] - half) * 10.0).round() / 10.0).unwrap_or_default(),
         origin_y_m: fixed_point::meters_from_f64(((centre[1] - half) * 10.0).round() / 10.0).unwrap_or_default(),
-        ..*base
+        ..base
     }
 }
 

@@ -496,6 +496,10 @@ pub enum WirePlanner {
     Multisensor,
     /// [`PlannerKind::Nearest`].
     Nearest,
+    /// [`PlannerKind::ExploreLite`].
+    ExploreLite,
+    /// [`PlannerKind::Rrt`].
+    Rrt,
 }
 
 impl From<PlannerKind> for WirePlanner {
@@ -504,6 +508,8 @@ impl From<PlannerKind> for WirePlanner {
             PlannerKind::Lives => Self::Lives,
             PlannerKind::Multisensor => Self::Multisensor,
             PlannerKind::Nearest => Self::Nearest,
+            PlannerKind::ExploreLite => Self::ExploreLite,
+            PlannerKind::Rrt => Self::Rrt,
         }
     }
 }
@@ -514,6 +520,8 @@ impl From<WirePlanner> for PlannerKind {
             WirePlanner::Lives => Self::Lives,
             WirePlanner::Multisensor => Self::Multisensor,
             WirePlanner::Nearest => Self::Nearest,
+            WirePlanner::ExploreLite => Self::ExploreLite,
+            WirePlanner::Rrt => Self::Rrt,
         }
     }
 }
@@ -1223,7 +1231,7 @@ mod tests {
         for m in [Mode::Idle, Mode::Exploring, Mode::TargetFound, Mode::Exhausted, Mode::Stopped] {
             assert_eq!(Mode::from(WireMode::from(m)), m);
         }
-        for p in [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest] {
+        for p in [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest, PlannerKind::ExploreLite, PlannerKind::Rrt] {
             assert_eq!(PlannerKind::from(WirePlanner::from(p)), p);
         }
         let d = Detection { position: Some((Meters::from_bits(3), Meters::from_bits(-4))) };
