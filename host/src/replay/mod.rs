@@ -42,6 +42,10 @@ use std::io::{BufRead, Read};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// `--record`: grids every 10 s of log time (a log replays hundreds of times faster than it was
+/// recorded; grids at the live rate of 1 Hz made a 0.8 GB file of the Intel log).
+pub const REPLAY_GRID_PERIOD_US: u64 = 10_000_000;
+
 /// Where in a file something came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -456,13 +460,22 @@ pub struct ReplayOptions {
     pub classifier: bool,
     /// Record every tick to this MCAP file ([`crate::record`], Foxglove's schemas).
     pub record: Option<PathBuf>,
+    /// The controller's LiDAR range for this log, metres (`None`: [`CARMEN_MAX_RANGE_M`] for
+    /// CARMEN logs, the configuration's range for bags).
+    pub max_range_m: Option<f64>,
 }
 
 impl Default for ReplayOptions {
     fn default() -> Self {
-        ReplayOptions { config: Config::DEFAULT, classifier: true, record: None }
+        ReplayOptions { config: Config::DEFAULT, classifier: true, record: None, max_range_m: None }
     }
 }
+
+/// The LiDAR range used for CARMEN logs unless `--max-range` says otherwise: 10 m, the usable
+/// range mappers give these SICK LMS logs (gmapping's `maxUrange`). Their long readings (through
+/// windows and glass, up to the 80 m "no return") would otherwise clear whole walls that a beam
+/// grazes on its way out, in the core's last-observation-wins grid.
+pub const CARMEN_MAX_RANGE_M: f64 = 10.0;
 
 /// A goal the controller would have sent.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -635,9 +648,16 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     let size = grid_size_m();
     let exceeds =
         bounds[0][0] < origin[0] || bounds[0][1] < origin[1] || bounds[1][0] >= origin[0] + size || bounds[1][1] >= origin[1] + size;
+    let carmen = matches!(log.format, LogFormat::Carmen | LogFormat::CarmenGzip);
+    let max_range = match (opts.max_range_m, carmen) {
+        (Some(m), _) => fixed_point::meters_from_f64(m).unwrap_or(opts.config.lidar_max_range_m),
+        (None, true) => fixed_point::meters_from_f64(CARMEN_MAX_RANGE_M).unwrap_or(opts.config.lidar_max_range_m),
+        (None, false) => opts.config.lidar_max_range_m,
+    };
     let cfg = Config {
         origin_x_m: fixed_point::meters_from_f64(origin[0]).unwrap_or_default(),
         origin_y_m: fixed_point::meters_from_f64(origin[1]).unwrap_or_default(),
+        lidar_max_range_m: max_range,
         ..opts.config
     };
     let mut ctrl = Box::new(Controller::new(cfg));
@@ -646,7 +666,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     }
     let mut recorder = match &opts.record {
         Some(p) => Some(
-            crate::record::Recorder::create(p, crate::record::RecordOptions::default())
+            crate::record::Recorder::create(p, crate::record::RecordOptions { grid_period_us: REPLAY_GRID_PERIOD_US, ..Default::default() })
                 .map_err(|e| ReplayError::Record { file: p.clone(), reason: e.to_string() })?,
         ),
         None => None,
@@ -834,7 +854,8 @@ pub struct ReplayArgs {
     #[arg(long)]
     pub no_classifier: bool,
     /// The controller's LiDAR range, metres: readings at or beyond it, and "no return" readings,
-    /// clear cells up to it and mark nothing (default: the core's 30 m).
+    /// clear cells up to it and mark nothing (default: 10 m for CARMEN logs, the usable range
+    /// mappers give them; the core's 30 m for bags).
     #[arg(long, value_name = "METRES")]
     pub max_range: Option<f64>,
     /// Record every tick (pose, scan, labels, grids, frontiers, candidates, goals) to this MCAP
@@ -856,9 +877,10 @@ pub fn run_command(args: &ReplayArgs) -> Result<std::process::ExitCode, String> 
         crate::overrides::apply(&mut opts.config, a)?;
     }
     if let Some(m) = args.max_range {
-        opts.config.lidar_max_range_m = fixed_point::meters_from_f64(m)
+        fixed_point::meters_from_f64(m)
             .filter(|v| *v > opts.config.lidar_min_range_m && m <= 65.0)
             .ok_or_else(|| format!("--max-range {m}: expected metres above the minimum range and at most 65"))?;
+        opts.max_range_m = Some(m);
     }
     let run = replay(&args.file, &opts).map_err(|e| e.to_string())?;
     let r = &run.report;
