@@ -27,17 +27,32 @@ pub fn outline(shape: &Shape) -> Vec<[f64; 2]> {
     }
 }
 
-/// Writes the picture of `run` to `path` with `title`.
-pub fn write_png(run: &SearchRun, path: &Path, title: &str) -> Result<(), RenderError> {
-    let ctrl = &run.controller;
-    let world = run.sim.world();
+/// What a picture shows of the controller's state, in metres (shared by the search and replay
+/// pictures).
+pub struct ControllerLayers {
+    /// Lower-left corner of the grid.
+    pub origin: [f64; 2],
+    /// Cell size.
+    pub cell_m: f64,
+    /// Stored non-map points.
+    pub nonmap: Vec<[f64; 2]>,
+    /// Centres of the frontier cells of both maps.
+    pub frontier_cells: Vec<[f64; 2]>,
+    /// The twelve best candidates of the last planning step (position, heading): enough to show
+    /// the choice, few enough to keep the map readable.
+    pub viewpoints: Vec<([f64; 2], f64)>,
+    /// The current goal (position, heading).
+    pub goal: Option<([f64; 2], f64)>,
+    /// Its planned path.
+    pub goal_path: Vec<[f64; 2]>,
+}
+
+/// Reads the layers of a picture off `ctrl`.
+pub fn controller_layers(ctrl: &firmware::Controller) -> ControllerLayers {
     let geom = ctrl.lidar.geom;
     let origin = [geom.origin_x.to_num::<f64>(), geom.origin_y.to_num::<f64>()];
     let cell = 1.0 / firmware::capacity::CELLS_PER_METER as f64;
     let centre = |x: i32, y: i32| [origin[0] + (x as f64 + 0.5) * cell, origin[1] + (y as f64 + 0.5) * cell];
-    let obstacles: Vec<Vec<[f64; 2]>> = world.obstacles.iter().map(|o| outline(&o.shape)).collect();
-    let targets: Vec<Vec<[f64; 2]>> = run.sim.target_shapes().iter().map(outline).collect();
-    let people: Vec<[f64; 2]> = run.sim.people().iter().map(|p| p.0).collect();
     let nonmap: Vec<[f64; 2]> = ctrl.nonmap.points().iter().map(|p| [p.x.to_num::<f64>(), p.y.to_num::<f64>()]).collect();
     let mut frontier_cells = Vec::new();
     for y in 0..GRID_CELLS as i32 {
@@ -47,14 +62,23 @@ pub fn write_png(run: &SearchRun, path: &Path, title: &str) -> Result<(), Render
             }
         }
     }
-    // The twelve best candidates of the last planning step: enough to show the choice, few
-    // enough to keep the map readable.
     let mut ranked: Vec<_> = ctrl.planner.candidates.iter().collect();
     ranked.sort_by_key(|v| std::cmp::Reverse(v.utility));
     let viewpoints: Vec<([f64; 2], f64)> = ranked.iter().take(12).map(|v| (centre(v.cell.0, v.cell.1), v.heading.to_radians())).collect();
     let goal = ctrl.goal().map(|g| ([g.pose.x.to_num::<f64>(), g.pose.y.to_num::<f64>()], g.pose.theta.to_radians()));
     let goal_path: Vec<[f64; 2]> =
         ctrl.goal().map(|g| g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect()).unwrap_or_default();
+    ControllerLayers { origin, cell_m: cell, nonmap, frontier_cells, viewpoints, goal, goal_path }
+}
+
+/// Writes the picture of `run` to `path` with `title`.
+pub fn write_png(run: &SearchRun, path: &Path, title: &str) -> Result<(), RenderError> {
+    let ctrl = &run.controller;
+    let world = run.sim.world();
+    let ControllerLayers { origin, cell_m: cell, nonmap, frontier_cells, viewpoints, goal, goal_path } = controller_layers(ctrl);
+    let obstacles: Vec<Vec<[f64; 2]>> = world.obstacles.iter().map(|o| outline(&o.shape)).collect();
+    let targets: Vec<Vec<[f64; 2]>> = run.sim.target_shapes().iter().map(outline).collect();
+    let people: Vec<[f64; 2]> = run.sim.people().iter().map(|p| p.0).collect();
     let pose = run.sim.pose();
     let lidar = |x: usize, y: usize| ctrl.lidar.get(x as i32, y as i32).to_ros();
     let seen = |x: usize, y: usize| ctrl.visual.seen(x as i32, y as i32);

@@ -26,38 +26,16 @@ use host::link::{
 use serde_json::Value;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpStream};
-use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Mutex, OnceLock};
+use std::sync::Mutex;
 use std::time::{Duration, Instant};
+
+mod common;
+use common::{lives, root};
 
 /// Tests that run a node and a bridge in real time go one at a time (2-core machines).
 static SERIAL: Mutex<()> = Mutex::new(());
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("workspace root").to_path_buf()
-}
-
-/// The `lives` binary, built now (this package cannot name another package's binary).
-fn lives() -> &'static Path {
-    static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        let out = Command::new(env!("CARGO"))
-            .current_dir(root())
-            .args(["build", "--release", "-p", "host", "--bin", "lives", "--message-format=json-render-diagnostics"])
-            .stderr(Stdio::inherit())
-            .output()
-            .expect("cargo runs");
-        assert!(out.status.success(), "building `lives` failed");
-        String::from_utf8_lossy(&out.stdout)
-            .lines()
-            .filter_map(|l| serde_json::from_str::<Value>(l).ok())
-            .filter(|v| v["target"]["name"] == "lives")
-            .find_map(|v| v["executable"].as_str().map(PathBuf::from))
-            .expect("cargo names the lives executable")
-    })
-}
 
 /// python3 (standard library only), or a failure that says exactly what to install.
 fn python() -> String {

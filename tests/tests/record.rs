@@ -15,32 +15,11 @@ use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
 use std::time::Duration;
 
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("workspace root").to_path_buf()
-}
+mod common;
+use common::{lives, root};
 
 fn tmp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("lives-record-test-{}-{name}", std::process::id()))
-}
-
-/// The `lives` binary, built now (this package cannot name another package's binary).
-fn lives() -> &'static Path {
-    static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        let out = Command::new(env!("CARGO"))
-            .current_dir(root())
-            .args(["build", "--release", "-p", "host", "--bin", "lives", "--message-format=json-render-diagnostics"])
-            .stderr(Stdio::inherit())
-            .output()
-            .expect("cargo runs");
-        assert!(out.status.success(), "building `lives` failed");
-        String::from_utf8_lossy(&out.stdout)
-            .lines()
-            .filter_map(|l| serde_json::from_str::<Value>(l).ok())
-            .filter(|v| v["target"]["name"] == "lives")
-            .find_map(|v| v["executable"].as_str().map(PathBuf::from))
-            .expect("cargo names the lives executable")
-    })
 }
 
 /// A Python with the `mcap` package, or a failure that says how to get one.

@@ -666,8 +666,11 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     }
     let mut recorder = match &opts.record {
         Some(p) => Some(
-            crate::record::Recorder::create(p, crate::record::RecordOptions { grid_period_us: REPLAY_GRID_PERIOD_US, ..Default::default() })
-                .map_err(|e| ReplayError::Record { file: p.clone(), reason: e.to_string() })?,
+            crate::record::Recorder::create(
+                p,
+                crate::record::RecordOptions { grid_period_us: REPLAY_GRID_PERIOD_US, ..Default::default() },
+            )
+            .map_err(|e| ReplayError::Record { file: p.clone(), reason: e.to_string() })?,
         ),
         None => None,
     };

@@ -21,25 +21,8 @@ pub fn write_png(run: &ReplayRun, path: &Path, title: &str) -> Result<(), Render
 /// Renders the picture of `run` into memory.
 pub fn render(run: &ReplayRun, title: &str) -> Result<RgbImage, RenderError> {
     let ctrl = &run.controller;
-    let geom = ctrl.lidar.geom;
-    let origin = [geom.origin_x.to_num::<f64>(), geom.origin_y.to_num::<f64>()];
-    let cell = 1.0 / firmware::capacity::CELLS_PER_METER as f64;
-    let centre = |x: i32, y: i32| [origin[0] + (x as f64 + 0.5) * cell, origin[1] + (y as f64 + 0.5) * cell];
-    let nonmap: Vec<[f64; 2]> = ctrl.nonmap.points().iter().map(|p| [p.x.to_num::<f64>(), p.y.to_num::<f64>()]).collect();
-    let mut frontier_cells = Vec::new();
-    for y in 0..GRID_CELLS as i32 {
-        for x in 0..GRID_CELLS as i32 {
-            if firmware::FrontierSet::is_frontier(&ctrl.lidar.grid, x, y) || firmware::FrontierSet::is_frontier(&ctrl.visual.grid, x, y) {
-                frontier_cells.push(centre(x, y));
-            }
-        }
-    }
-    let mut ranked: Vec<_> = ctrl.planner.candidates.iter().collect();
-    ranked.sort_by_key(|v| std::cmp::Reverse(v.utility));
-    let viewpoints: Vec<([f64; 2], f64)> = ranked.iter().take(12).map(|v| (centre(v.cell.0, v.cell.1), v.heading.to_radians())).collect();
-    let goal = ctrl.goal().map(|g| ([g.pose.x.to_num::<f64>(), g.pose.y.to_num::<f64>()], g.pose.theta.to_radians()));
-    let goal_path: Vec<[f64; 2]> =
-        ctrl.goal().map(|g| g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect()).unwrap_or_default();
+    let crate::picture::ControllerLayers { origin, cell_m: cell, nonmap, frontier_cells, viewpoints, goal, goal_path } =
+        crate::picture::controller_layers(ctrl);
     let lidar = |x: usize, y: usize| ctrl.lidar.get(x as i32, y as i32).to_ros();
     let seen = |x: usize, y: usize| ctrl.visual.seen(x as i32, y as i32);
     // Show what was mapped: the trajectory's box grown by 10 m (the laser reaches well beyond
