@@ -534,8 +534,12 @@ impl Planner {
                 continue;
             };
             let kind = if f.source == FrontierSource::Lidar { Site::LidarFrontier } else { Site::VisualFrontier };
-            let cost = EXPLORE_LITE_POTENTIAL_SCALE * euclid_bits(f.anchor) - EXPLORE_LITE_GAIN_SCALE * f.cells as i64 * 65_536;
-            let _ = sites.push((c, kind, None, -cost));
+            let own = if explore_lite {
+                EXPLORE_LITE_GAIN_SCALE * f.cells as i64 * 65_536 - EXPLORE_LITE_POTENTIAL_SCALE * euclid_bits(f.anchor)
+            } else {
+                0
+            };
+            let _ = sites.push((c, kind, None, own));
         }
         if use_rrt {
             let lidar_points = self.rrt.points().any(|p| p.source == FrontierSource::Lidar && self.reachable_near(p.cell, snap).is_some());
@@ -564,7 +568,7 @@ impl Planner {
                 }
             }
         }
-        if !nearest && cfg.look_around_here && PackedGrid::in_bounds(robot.0, robot.1) {
+        if !baseline && cfg.look_around_here && PackedGrid::in_bounds(robot.0, robot.1) {
             // Turning in place is an action too: the four headings at the robot's own cell.
             let _ = sites.push((robot, Site::Here, None, 0));
         }
