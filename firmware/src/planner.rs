@@ -90,6 +90,16 @@ pub enum Site {
     Current,
 }
 
+impl Site {
+    /// The site kind of a frontier of `source`'s map.
+    pub const fn frontier(source: FrontierSource) -> Site {
+        match source {
+            FrontierSource::Lidar => Site::LidarFrontier,
+            FrontierSource::Visual => Site::VisualFrontier,
+        }
+    }
+}
+
 /// A scored candidate viewpoint.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Viewpoint {
@@ -384,6 +394,15 @@ impl Planner {
         (total, work)
     }
 
+    /// Where a frontier's (or frontier point's) viewpoint stands: [`Planner::reachable_near`],
+    /// with its work added to `work` and a miss counted in `unreachable`.
+    fn snap_site(&self, at: (i32, i32), snap: i32, work: &mut u32, unreachable: &mut u32) -> Option<(i32, i32)> {
+        *work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
+        let c = self.reachable_near(at, snap);
+        *unreachable += c.is_none() as u32;
+        c
+    }
+
     /// The nearest reachable cell to `c` within `radius` cells (Euclidean), `c` itself first.
     fn reachable_near(&self, c: (i32, i32), radius: i32) -> Option<(i32, i32)> {
         if self.distance(c.0, c.1) != UNREACHABLE {
@@ -508,7 +527,7 @@ impl Planner {
         let explore_lite = cfg.planner == PlannerKind::ExploreLite;
         let use_rrt = cfg.planner == PlannerKind::Rrt;
         // The baselines score sites by their own rules and face the direction of travel.
-        let baseline = nearest || explore_lite || use_rrt;
+        let baseline = cfg.planner.is_baseline();
         let lidar_frontiers_reachable = (nearest || explore_lite)
             && frontiers.frontiers().iter().any(|f| f.source == FrontierSource::Lidar && self.reachable_near(f.anchor, snap).is_some());
         if use_rrt {
@@ -524,16 +543,13 @@ impl Planner {
             // Q16.16 metres: sqrt(d2 · 2³²) is the distance in cells · 2¹⁶.
             fixed_point::isqrt_u64((d2 as u64) << 32) as i64 / crate::capacity::CELLS_PER_METER
         };
+        let mut unreachable = 0;
         for f in frontiers.frontiers() {
             if use_rrt || ((nearest || explore_lite) && lidar_frontiers_reachable && f.source != FrontierSource::Lidar) {
                 continue;
             }
-            work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
-            let Some(c) = self.reachable_near(f.anchor, snap) else {
-                self.stats.unreachable += 1;
-                continue;
-            };
-            let kind = if f.source == FrontierSource::Lidar { Site::LidarFrontier } else { Site::VisualFrontier };
+            let Some(c) = self.snap_site(f.anchor, snap, &mut work, &mut unreachable) else { continue };
+            let kind = Site::frontier(f.source);
             let own = if explore_lite {
                 EXPLORE_LITE_GAIN_SCALE * f.cells as i64 * 65_536 - EXPLORE_LITE_POTENTIAL_SCALE * euclid_bits(f.anchor)
             } else {
@@ -547,15 +563,11 @@ impl Planner {
                 if lidar_points && p.source != FrontierSource::Lidar {
                     continue;
                 }
-                work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
-                let Some(c) = self.reachable_near(p.cell, snap) else {
-                    self.stats.unreachable += 1;
-                    continue;
-                };
-                let kind = if p.source == FrontierSource::Lidar { Site::LidarFrontier } else { Site::VisualFrontier };
-                let _ = sites.push((c, kind, None, rrt::revenue(lidar, visual, p, robot)));
+                let Some(c) = self.snap_site(p.cell, snap, &mut work, &mut unreachable) else { continue };
+                let _ = sites.push((c, Site::frontier(p.source), None, rrt::revenue(lidar, visual, p, robot)));
             }
         }
+        self.stats.unreachable += unreachable;
         if cfg.planner == PlannerKind::Lives && cfg.nonmap_viewpoints {
             let standoff = GridGeometry::cells(cfg.nonmap_standoff_m);
             for (p, _) in self.nonmap_clusters(lidar, nonmap) {

@@ -678,10 +678,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
                 b.send(&batch);
             }
             ticks += 1;
-            next_tick += opts.period;
-            if next_tick < Instant::now() {
-                next_tick = Instant::now() + opts.period;
-            }
+            super::advance_deadline(&mut next_tick, opts.period, Instant::now());
             if let Some(pr) = &opts.progress {
                 pr.store(ticks, Ordering::Relaxed);
             }

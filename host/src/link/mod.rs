@@ -121,6 +121,18 @@ impl SerialLink {
     }
 }
 
+/// Moves a real-time loop's deadline `next` on by `period`; a loop that fell more than a period
+/// behind `now` restarts from `now` instead of bursting to catch up. Returns true when it fell
+/// behind (an overrun).
+pub(crate) fn advance_deadline(next: &mut Instant, period: Duration, now: Instant) -> bool {
+    *next += period;
+    let behind = *next < now;
+    if behind {
+        *next = now + period;
+    }
+    behind
+}
+
 fn not_connected() -> io::Error {
     io::Error::new(io::ErrorKind::NotConnected, "link down")
 }

@@ -141,10 +141,8 @@ impl NodeProcess {
                 let t = Instant::now();
                 self.node.tick(now_us, &mut self.ctl, |f| tx.extend_from_slice(f));
                 self.tick_us.push(t.elapsed().as_secs_f64() * 1e6);
-                next_tick += period;
-                if next_tick < now {
+                if super::advance_deadline(&mut next_tick, period, now) {
                     self.overruns += 1;
-                    next_tick = now + period;
                 }
             }
             if !down && !self.flush(link) {

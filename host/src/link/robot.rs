@@ -497,10 +497,7 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
         }
         // A tick.
         ticks += 1;
-        next_tick += opts.period;
-        if next_tick < Instant::now() {
-            next_tick = Instant::now() + opts.period;
-        }
+        super::advance_deadline(&mut next_tick, opts.period, Instant::now());
         if let Some(p) = &opts.progress {
             p.store(ticks, Ordering::Relaxed);
         }
