@@ -245,14 +245,21 @@ impl Recorder {
     pub fn create(path: &Path, opts: RecordOptions) -> Result<Self, RecordError> {
         let file = File::create(path).map_err(|source| RecordError::Create { path: path.to_path_buf(), source })?;
         // Chunks built in memory and written in one go (`disable_seeking`), zstd-compressed on
-        // this thread (about 8x smaller; Foxglove and the `mcap` readers read it).
+        // this thread when built with the `zstd` feature (about 8x smaller; Foxglove and the
+        // `mcap` readers read both).
+        #[cfg(feature = "zstd")]
+        let compression = Some(mcap::Compression::Zstd);
+        #[cfg(not(feature = "zstd"))]
+        let compression = None;
         let options = mcap::WriteOptions::new()
-            .compression(Some(mcap::Compression::Zstd))
-            .compression_threads(0)
+            .compression(compression)
             .profile("")
             .library(concat!("lives ", env!("CARGO_PKG_VERSION")))
             .disable_seeking(true)
             .chunk_size(Some(4 << 20));
+        // Compress on this thread (no worker pool); the option exists with the zstd codec only.
+        #[cfg(feature = "zstd")]
+        let options = options.compression_threads(0);
         let mut writer = options.create(BufWriter::new(file))?;
         writer.flush()?;
         Ok(Recorder {

@@ -175,7 +175,7 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
             }
         };
         let result = match record {
-            mcap::records::Record::Chunk { header, data } => match mcap::read::ChunkReader::new(header, &data) {
+            mcap::records::Record::Chunk { header, data } => match mcap::read::ChunkReader::new(header.clone(), &data) {
                 Ok(reader) => {
                     let mut r = Ok(());
                     for inner in reader {
@@ -189,7 +189,13 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
                     }
                     r
                 }
-                Err(e) => Err(format!("cannot read Chunk record: {e}")),
+                Err(e) => Err(match missing_codec(&header.compression) {
+                    Some(feature) => format!(
+                        "chunk compressed with {}, which this `lives` was built without (rebuild with `--features {feature}`, or `ros-bags`)",
+                        header.compression
+                    ),
+                    None => format!("cannot read Chunk record: {e}"),
+                }),
             },
             rec => {
                 take_record(rec, &mut schemas, &mut channels, &mut out, Location::Offset(pos as u64));
@@ -201,6 +207,15 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
             return out;
         }
         pos = next;
+    }
+}
+
+/// The cargo feature a chunk compression needs, if this build lacks it.
+fn missing_codec(compression: &str) -> Option<&'static str> {
+    match compression {
+        "zstd" if !cfg!(feature = "zstd") => Some("zstd"),
+        "lz4" if !cfg!(feature = "lz4") => Some("lz4"),
+        _ => None,
     }
 }
 
@@ -239,7 +254,21 @@ fn take_record(
     }
 }
 
+/// Without the `db3` feature (no SQLite compiled in): the error says how to get it.
+#[cfg(not(feature = "db3"))]
+pub fn read_db3(file: &Path) -> BagContents {
+    BagContents {
+        error: Some(ReplayError::Sqlite {
+            file: file.to_path_buf(),
+            after_row: None,
+            reason: "this `lives` was built without sqlite3 bag support (rebuild with `--features db3`, or `ros-bags`)".into(),
+        }),
+        ..BagContents::default()
+    }
+}
+
 /// Reads a rosbag2 sqlite3 file (`topics` and `messages` tables), rows in id order.
+#[cfg(feature = "db3")]
 pub fn read_db3(file: &Path) -> BagContents {
     let mut out = BagContents::default();
     let err =
