@@ -612,4 +612,39 @@ mod tests {
         let c = read_mcap(Path::new("x.mcap"), b"not an mcap file");
         assert!(matches!(c.error, Some(ReplayError::Mcap { offset: 0, .. })), "{:?}", c.error);
     }
+
+    /// A build without a codec (the default features) names the feature a compressed chunk
+    /// needs; a build with it reports the junk payload as damage instead. `scripts/test.sh` runs
+    /// this test both ways.
+    #[test]
+    fn a_compressed_chunk_names_the_feature_it_needs() {
+        for codec in ["zstd", "lz4"] {
+            let mut body = Vec::new();
+            body.extend_from_slice(&0u64.to_le_bytes()); // message start time
+            body.extend_from_slice(&0u64.to_le_bytes()); // message end time
+            body.extend_from_slice(&16u64.to_le_bytes()); // uncompressed size
+            body.extend_from_slice(&0u32.to_le_bytes()); // uncompressed CRC (0: unchecked)
+            body.extend_from_slice(&(codec.len() as u32).to_le_bytes());
+            body.extend_from_slice(codec.as_bytes());
+            body.extend_from_slice(&4u64.to_le_bytes());
+            body.extend_from_slice(b"junk");
+            let mut file = MCAP_MAGIC.to_vec();
+            file.push(0x06); // Chunk
+            file.extend_from_slice(&(body.len() as u64).to_le_bytes());
+            file.extend_from_slice(&body);
+            let c = read_mcap(Path::new("c.mcap"), &file);
+            let Some(ReplayError::Mcap { offset: 8, reason, .. }) = &c.error else { panic!("{codec}: {:?}", c.error) };
+            let built_with = if codec == "zstd" { cfg!(feature = "zstd") } else { cfg!(feature = "lz4") };
+            assert_eq!(reason.contains(&format!("rebuild with `--features {codec}`")), !built_with, "{codec}: {reason}");
+            assert!(c.messages.is_empty());
+        }
+    }
+
+    #[cfg(not(feature = "db3"))]
+    #[test]
+    fn without_db3_a_sqlite_bag_names_the_feature() {
+        let c = read_db3(Path::new("x.db3"));
+        let Some(ReplayError::Sqlite { reason, .. }) = &c.error else { panic!("{:?}", c.error) };
+        assert!(reason.contains("`--features db3`"), "{reason}");
+    }
 }
