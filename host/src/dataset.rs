@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::labeller::{hit_code, Agreement, GtLabel, Labeller, LabellerConfig};
 use crate::search::{controller_config, EncodedScan, PlannerChoice, TICK_US};
-use crate::sim::generate::GENERATOR_ROBOT_RADIUS_M;
+use crate::sim::generate::{random_world_with_density, DEFAULT_DENSITY, GENERATOR_ROBOT_RADIUS_M};
 use crate::sim::geometry::dist;
 use crate::sim::reach::ReachMap;
 use crate::sim::{BaseStatus, Scan, Scenario, Sim, SimConfig, World, P2};
@@ -188,6 +188,10 @@ pub struct DatasetSpec {
     pub threads: usize,
     /// The command line recorded in `meta.json`.
     pub command: String,
+    /// Furniture and clutter density range `[lo, hi]` (each in `0..=1`): world `s` is
+    /// `random_world_with_density(s, d)` with `d` drawn uniformly from the range by a hash of
+    /// `s` ([`world_density`]). `[1, 1]` (the default) is exactly `World::random(s)`.
+    pub density: [f64; 2],
 }
 
 impl DatasetSpec {
@@ -204,6 +208,7 @@ impl DatasetSpec {
             val_modulus: 5,
             labeller: LabellerConfig::default(),
             threads: 1,
+            density: [DEFAULT_DENSITY, DEFAULT_DENSITY],
             command: format!("lives dataset --worlds {worlds} --episodes-per-world {episodes_per_world} --seed {first_world_seed}"),
         }
     }
@@ -225,6 +230,10 @@ impl DatasetSpec {
         }
         if self.val_modulus < 2 {
             return bad(format!("val_modulus must be at least 2, got {}", self.val_modulus));
+        }
+        let [dlo, dhi] = self.density;
+        if !(0.0..=1.0).contains(&dlo) || !(0.0..=1.0).contains(&dhi) || dlo > dhi {
+            return bad(format!("furniture density {dlo}–{dhi}: need 0 ≤ lo ≤ hi ≤ 1"));
         }
         Ok(())
     }
@@ -296,6 +305,17 @@ pub struct GeneratorMeta {
     pub trajectories: Vec<String>,
     pub robot_radius_m: f64,
     pub labeller: LabellerConfig,
+    /// Furniture and clutter density range (absent = `[1, 1]`, the fully furnished default).
+    #[serde(default = "default_density", skip_serializing_if = "is_default_density")]
+    pub furniture_density: [f64; 2],
+}
+
+fn default_density() -> [f64; 2] {
+    [DEFAULT_DENSITY, DEFAULT_DENSITY]
+}
+
+fn is_default_density(d: &[f64; 2]) -> bool {
+    *d == default_density()
 }
 
 /// The labeller against the simulator's truth over the whole dataset.
@@ -500,6 +520,25 @@ fn mix(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
+}
+
+/// The furniture density of world `world_seed` under the range `[lo, hi]`: `lo` when they are
+/// equal, else uniform in the range by a hash of the seed (independent of the thread count).
+pub fn world_density(world_seed: u64, [lo, hi]: [f64; 2]) -> f64 {
+    if lo >= hi {
+        return lo;
+    }
+    let u = (mix(world_seed ^ 0x6465_6e73_6974_7921) >> 11) as f64 / (1u64 << 53) as f64;
+    lo + (hi - lo) * u
+}
+
+/// The world of `world_seed` in a dataset with furniture density range `density`.
+pub fn dataset_world(world_seed: u64, density: [f64; 2]) -> World {
+    if density == default_density() {
+        World::random(world_seed)
+    } else {
+        random_world_with_density(world_seed, world_density(world_seed, density))
+    }
 }
 
 /// The simulator seed of an episode.
@@ -719,8 +758,8 @@ fn builtin_walls() -> Vec<(String, Vec<[P2; 2]>)> {
 }
 
 fn world_output(spec: &DatasetSpec, world_seed: u64, builtins: &[(String, Vec<[P2; 2]>)]) -> Result<WorldOutput, DatasetError> {
-    // The only source of worlds.
-    let world = World::random(world_seed);
+    // The only source of worlds: `World::random(seed)`, or the same generator thinned.
+    let world = dataset_world(world_seed, spec.density);
     if let Some((name, _)) = builtins.iter().find(|(_, walls)| *walls == world.walls) {
         return Err(DatasetError::BuiltinWorld { world_seed, builtin: name.clone() });
     }
@@ -941,6 +980,7 @@ fn build_meta(
             trajectories: Trajectory::ROTATION.iter().map(|t| t.name()).collect(),
             robot_radius_m: sim.robot_radius_m,
             labeller: spec.labeller.clone(),
+            furniture_density: spec.density,
         },
         agreement: AgreementMeta {
             counts: agreement.counts,
@@ -1349,7 +1389,28 @@ mod tests {
         let mut s = small_spec(&dir);
         s.first_world_seed = u64::MAX;
         assert!(matches!(generate(&s), Err(DatasetError::InvalidSpec(_))));
+        for bad in [[0.5, 0.2], [-0.1, 1.0], [0.0, 1.5]] {
+            let mut s = small_spec(&dir);
+            s.density = bad;
+            assert!(matches!(generate(&s), Err(DatasetError::InvalidSpec(_))), "{bad:?}");
+        }
         let _ = fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn furniture_density_default_is_world_random_and_range_is_respected() {
+        for seed in [1, 5, 12] {
+            assert_eq!(dataset_world(seed, [1.0, 1.0]), World::random(seed));
+            let d = world_density(seed, [0.2, 0.6]);
+            assert!((0.2..=0.6).contains(&d), "{d}");
+            assert_eq!(d, world_density(seed, [0.2, 0.6]));
+            assert_eq!(world_density(seed, [0.3, 0.3]), 0.3);
+            assert!(dataset_world(seed, [0.0, 0.0]).obstacles.is_empty());
+        }
+        // The default range is not written to meta.json, so default datasets stay byte-identical.
+        let dir = tmp_dir("density-meta");
+        let meta = build_meta(&small_spec(&dir), &sim_config(), BTreeMap::new(), &Agreement::default(), Vec::new());
+        assert!(!serde_json::to_string(&meta).unwrap().contains("furniture_density"));
     }
 
     #[test]

@@ -86,6 +86,10 @@ enum Cmd {
         /// Worlds generated at once (the output does not depend on it).
         #[arg(long, default_value_t = 1)]
         threads: usize,
+        /// Furniture and clutter density range LO,HI in 0..=1: each world keeps each piece with
+        /// probability d, d uniform in the range by a hash of the world seed (default 1,1 = `World::random`).
+        #[arg(long, value_delimiter = ',', num_args = 1..=2, default_values_t = [1.0, 1.0])]
+        furniture_density: Vec<f64>,
     },
     /// The controller core as a process on a serial device (the deployment on the onboard
     /// computer, or a workstation for testing): sensor frames in, goals out.
@@ -220,6 +224,24 @@ enum Cmd {
         /// Cosine learning-rate decay to lr / 20 over the run.
         #[arg(long)]
         lr_decay: bool,
+    },
+    /// Calibrate the decision bias of a model without label history on a dataset's validation
+    /// split: scores shifts of the scan encoder's linear bias, writes the best as a checkpoint.
+    /// (Built with `--features train`.)
+    #[cfg(feature = "train")]
+    CalibrateBias {
+        /// The f32 checkpoint.
+        #[arg(long)]
+        checkpoint: PathBuf,
+        /// The dataset whose validation split decides (procedural worlds only).
+        #[arg(long)]
+        data: PathBuf,
+        /// Where to write the shifted checkpoint.
+        #[arg(long)]
+        out: PathBuf,
+        /// Candidate shifts, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "-0.5,-0.25,0,0.25,0.5,0.75,1,1.25,1.5,1.75,2,2.5,3")]
+        deltas: Vec<f32>,
     },
     /// Quantise a checkpoint to the int8 blob the firmware runs, evaluate it, and write the model card.
     /// (Built with `--features train`.)
@@ -634,13 +656,18 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             }
             Ok(ExitCode::SUCCESS)
         }
-        Cmd::Dataset { out, worlds, episodes_per_world, seed, min_episode_s, max_episode_s, labeller, threads } => {
+        Cmd::Dataset { out, worlds, episodes_per_world, seed, min_episode_s, max_episode_s, labeller, threads, furniture_density } => {
             use host::dataset::{generate_with, DatasetSpec};
             use host::labeller::LabellerConfig;
             let mut spec = DatasetSpec::new(&out, seed, worlds, episodes_per_world);
             spec.episode_min_s = min_episode_s;
             spec.episode_max_s = max_episode_s;
             spec.threads = threads;
+            spec.density = match furniture_density[..] {
+                [d] => [d, d],
+                [lo, hi] => [lo, hi],
+                _ => return Err(format!("--furniture-density takes LO,HI or one value, not {} values", furniture_density.len())),
+            };
             spec.labeller = match labeller.as_str() {
                 "sim" => LabellerConfig::default(),
                 "spot" => LabellerConfig::spot(),
@@ -876,6 +903,40 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             .map_err(|e| e.to_string())?;
             host::train::save_checkpoint(&model, Some(&log), &out).map_err(|e| e.to_string())?;
             say!("trained {} epochs on {} samples in {:.0} s; checkpoint {}", log.epochs.len(), log.samples[0], log.total_s, out.display());
+            Ok(ExitCode::SUCCESS)
+        }
+        #[cfg(feature = "train")]
+        Cmd::CalibrateBias { checkpoint, data, out, deltas } => {
+            let t0 = Instant::now();
+            let (mut model, log) = host::train::load_checkpoint(&checkpoint).map_err(|e| e.to_string())?;
+            let eps = host::train::load_split(&data, host::dataset::Split::Val).map_err(|e| e.to_string())?;
+            let cands = host::train::calibrate_scan_bias(&model, &eps, &deltas).map_err(|e| e.to_string())?;
+            say!(
+                "| delta | float accuracy, all steps | warm steps | map recall | non-map recall | always map |\n|---|---|---|---|---|---|"
+            );
+            for c in &cands {
+                let a = &c.accuracy;
+                say!(
+                    "| {} | {:.2} % | {:.2} % | {:.2} % | {:.2} % | {:.2} % |",
+                    c.delta,
+                    100.0 * a.all.accuracy(),
+                    100.0 * a.warm.accuracy(),
+                    100.0 * a.all.map_recall(),
+                    100.0 * a.all.non_map_recall(),
+                    100.0 * a.all.always_map()
+                );
+            }
+            let best =
+                cands.iter().max_by(|a, b| a.accuracy.all.accuracy().total_cmp(&b.accuracy.all.accuracy())).ok_or("no candidate shifts")?;
+            model.scan.fc_b.iter_mut().for_each(|v| *v += best.delta);
+            host::train::save_checkpoint(&model, log.as_ref(), &out).map_err(|e| e.to_string())?;
+            say!(
+                "best shift {} ({:.2} %); checkpoint {} ({:.0} s)",
+                best.delta,
+                100.0 * best.accuracy.all.accuracy(),
+                out.display(),
+                t0.elapsed().as_secs_f64()
+            );
             Ok(ExitCode::SUCCESS)
         }
         #[cfg(feature = "train")]

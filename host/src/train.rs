@@ -665,6 +665,47 @@ pub fn evaluate_teacher_forced(net: &LabelPoseNet, episodes: &[Episode], zero_la
     Ok(conf)
 }
 
+/// One candidate of [`calibrate_scan_bias`]: the shift and the accuracy it gives.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BiasCandidate {
+    /// Added to every beam's bias of the scan encoder's 897 × 897 layer (before its tanh).
+    pub delta: f32,
+    /// Float accuracy over the episodes with that shift.
+    pub accuracy: ArAccuracy,
+}
+
+/// Decision-bias calibration of a model **without label history**: the accuracy over
+/// `episodes` (float, run as at run time) for each shift `delta` of the scan encoder's linear
+/// bias. A positive shift moves every beam's decision towards *map*; the architecture is
+/// unchanged (only `scan.fc_b` moves), so the int8 blob carries the shift. Choose the shift on
+/// procedural validation episodes, never on the built-in worlds. One pass: each step's scan
+/// pre-activations, pose and label encodings are computed once and every shift is scored on
+/// them, which is exact because the label encoding of a model without label history does not
+/// depend on its input (checked: the label convolution must be zero).
+pub fn calibrate_scan_bias(model: &FloatModel, episodes: &[Episode], deltas: &[f32]) -> Result<Vec<BiasCandidate>> {
+    if model.label.conv_w.iter().any(|&w| w != 0.0) {
+        return Err(TrainError("calibrate_scan_bias needs a model without label history (zero label convolution)".into()));
+    }
+    let mut out: Vec<BiasCandidate> = deltas.iter().map(|&delta| BiasCandidate { delta, accuracy: ArAccuracy::default() }).collect();
+    let mut row = vec![0.0f32; BEAMS];
+    for ep in episodes {
+        let mut h = FloatHistory::new(model.norm);
+        for (i, st) in ep.steps.iter().enumerate() {
+            h.push_scan(&st.pose, &st.ranges_mm);
+            let t = model.trace(&h.inputs());
+            let pre = &t.pre[1];
+            for c in out.iter_mut() {
+                for b in 0..BEAMS {
+                    row[b] = ((pre[b] + c.delta).tanh() + t.pose_enc[b]).tanh() * t.label_enc[b];
+                }
+                c.accuracy.add_row(i, &row, &st.labels);
+            }
+            h.push_labels(&t.output);
+        }
+    }
+    Ok(out)
+}
+
 /// What goes back into the float model's label history in an autoregressive run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Feedback {

@@ -172,7 +172,7 @@ const FURNITURE: &[(&str, f64, f64)] = &[
     ("bookshelf", 2.0, 0.35),
 ];
 
-fn try_generate(seed: u64, attempt: u64, furnish: bool) -> Option<World> {
+fn try_generate(seed: u64, attempt: u64, furnish: bool, density: f64) -> Option<World> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(attempt + 1);
     let mut g = Gen { rng, lines: Vec::new(), rooms: Vec::new() };
@@ -319,6 +319,17 @@ fn try_generate(seed: u64, attempt: u64, furnish: bool) -> Option<World> {
                 }
             }
         }
+    }
+
+    // Thinning for sparser buildings ([`random_world_with_density`]): every piece of furniture
+    // and clutter is kept with probability `density`, drawn from a stream of its own so that the
+    // main stream, hence the layout and every later draw's distribution, is untouched. At the
+    // default density 1 nothing is drawn and nothing removed.
+    if density < 1.0 {
+        let mut thin = ChaCha8Rng::seed_from_u64(seed ^ DENSITY_STREAM_KEY);
+        thin.set_stream(attempt + 1);
+        let keep = density.max(0.0);
+        obstacles.retain(|_| thin.gen_bool(keep));
     }
 
     // A partial world to run the checks on.
@@ -482,13 +493,29 @@ rect = { center = [7.45, 8.7], size = [0.5, 0.35] }
 
 /// A procedural building for `seed` (see the module docs). Deterministic in the seed.
 pub fn random_world(seed: u64) -> World {
+    random_world_with_density(seed, DEFAULT_DENSITY)
+}
+
+/// The furniture and clutter density of [`random_world`].
+pub const DEFAULT_DENSITY: f64 = 1.0;
+
+/// Key of the thinning stream (`seed ^ key`), independent of the layout stream.
+const DENSITY_STREAM_KEY: u64 = 0x6c69_7665_732d_646e;
+
+/// [`random_world`] with sparser furnishing: the same building (walls, doors, rooms) as
+/// `random_world(seed)` would try first, with each piece of furniture and clutter kept with
+/// probability `density` (clamped to `0..=1`; a separate random stream decides). `density = 1`
+/// is exactly [`random_world`]. Targets, people and the start are then drawn as usual, so
+/// they may differ from the fully furnished world's. Deterministic in `(seed, density)`.
+pub fn random_world_with_density(seed: u64, density: f64) -> World {
+    let density = if density.is_nan() { DEFAULT_DENSITY } else { density.clamp(0.0, 1.0) };
     for attempt in 0..ATTEMPTS {
-        if let Some(w) = try_generate(seed, attempt, true) {
+        if let Some(w) = try_generate(seed, attempt, true, density) {
             return w;
         }
     }
     for attempt in ATTEMPTS..ATTEMPTS + 20 {
-        if let Some(w) = try_generate(seed, attempt, false) {
+        if let Some(w) = try_generate(seed, attempt, false, density) {
             return w;
         }
     }
@@ -526,6 +553,20 @@ mod tests {
     fn random_worlds_are_deterministic_and_vary() {
         assert_eq!(World::random(7), World::random(7));
         assert_ne!(World::random(7).walls, World::random(8).walls);
+    }
+
+    #[test]
+    fn density_one_is_the_default_and_lower_density_thins() {
+        for seed in [3, 7, 11] {
+            let full = World::random(seed);
+            assert_eq!(random_world_with_density(seed, 1.0), full);
+            let sparse = random_world_with_density(seed, 0.3);
+            assert_eq!(sparse, random_world_with_density(seed, 0.3), "deterministic");
+            assert!(sparse.obstacles.len() <= full.obstacles.len(), "seed {seed}");
+            assert!(random_world_with_density(seed, 0.0).obstacles.is_empty(), "seed {seed}");
+            let r = SimConfig::default().robot_radius_m;
+            assert!(sparse.unreachable_targets(r).is_empty(), "seed {seed}");
+        }
     }
 
     #[test]
