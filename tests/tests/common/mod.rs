@@ -16,7 +16,17 @@ pub fn lives() -> &'static Path {
     BIN.get_or_init(|| {
         let out = Command::new(env!("CARGO"))
             .current_dir(root())
-            .args(["build", "--release", "-p", "host", "--features", "ros-bags", "--bin", "lives", "--message-format=json-render-diagnostics"])
+            .args([
+                "build",
+                "--release",
+                "-p",
+                "host",
+                "--features",
+                "ros-bags",
+                "--bin",
+                "lives",
+                "--message-format=json-render-diagnostics",
+            ])
             .stderr(Stdio::inherit())
             .output()
             .expect("cargo runs");
