@@ -314,6 +314,8 @@ mod tests {
             collisions: 0,
             labels: "none".into(),
             targets: vec![],
+            motion: None,
+            lidar_saw_target_s: None,
         }
     }
 

@@ -617,6 +617,11 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             } else {
                 let sim_s = r.ticks as f64 * search::TICK_US as f64 / 1e6;
                 say!("{}; {:.1} s simulated in {:.2} s ({:.0}x real time)", result_line(r), sim_s, wall, sim_s / wall.max(1e-9));
+                if let Some(m) = r.motion {
+                    let lidar =
+                        r.lidar_saw_target_s.map_or("never saw the target".to_string(), |t| format!("first saw the target at {t:.1} s"));
+                    say!("time: {:.1} s moving, {:.1} s turning, {:.1} s still; the LiDAR {lidar}", m.moving_s, m.turning_s, m.still_s);
+                }
                 if planner == PlannerChoice::Lives && r.labels == "ground-truth" {
                     say!("note: no --model given, so `lives` runs on the simulator's ground-truth labels (same as lives-gt)");
                 }

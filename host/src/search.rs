@@ -168,7 +168,75 @@ pub struct SearchResult {
     pub labels: String,
     /// Where the target(s) were placed (this seed's draw).
     pub targets: Vec<[f64; 2]>,
+    /// Where the time went (simulated runs; absent on the real robot).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion: Option<Motion>,
+    /// When the LiDAR first had a target in view ([`LIDAR_SIGHTING_BEAMS`] beams on it in one
+    /// scan), `None` if never (or on the real robot): with `time_s` it shows how long the camera
+    /// took to look where the LiDAR had already seen something.
+    pub lidar_saw_target_s: Option<f64>,
 }
+
+/// Where a run's time went, tick by tick.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Motion {
+    /// The base translated ([`MOVING_M_PER_TICK`] or more in the tick).
+    pub moving_s: f64,
+    /// It turned in place ([`TURNING_RAD_PER_TICK`] or more, without moving).
+    pub turning_s: f64,
+    /// It stood still (waiting out a block, arrived, stopped, or waiting for a goal).
+    pub still_s: f64,
+}
+
+/// Tallies a simulated run for [`SearchResult::motion`] and [`SearchResult::lidar_saw_target_s`];
+/// the in-process loop and the serial bridge both feed one.
+#[derive(Clone, Debug, Default)]
+pub struct RunTally {
+    /// Seconds moving, turning, still.
+    split: [f64; 3],
+    lidar_saw_target_s: Option<f64>,
+}
+
+impl RunTally {
+    /// A scan taken at `now_us`.
+    pub fn scan(&mut self, now_us: u64, scan: &Scan) {
+        if self.lidar_saw_target_s.is_none() && scan.hits.iter().filter(|&&h| h == HitKind::Target).count() >= LIDAR_SIGHTING_BEAMS {
+            self.lidar_saw_target_s = Some(round3(now_us as f64 / 1e6));
+        }
+    }
+
+    /// One base step of `dt_s` seconds (a tick), from pose `before` to pose `after`.
+    pub fn step(&mut self, before: [f64; 3], after: [f64; 3], dt_s: f64) {
+        let scale = dt_s / (TICK_US as f64 / 1e6);
+        let kind = if (after[0] - before[0]).hypot(after[1] - before[1]) >= MOVING_M_PER_TICK * scale {
+            0
+        } else if crate::sim::geometry::wrap_angle(after[2] - before[2]).abs() >= TURNING_RAD_PER_TICK * scale {
+            1
+        } else {
+            2
+        };
+        self.split[kind] += dt_s;
+    }
+
+    /// The motion split.
+    pub fn motion(&self) -> Motion {
+        let [moving_s, turning_s, still_s] = self.split.map(round3);
+        Motion { moving_s, turning_s, still_s }
+    }
+
+    /// When the LiDAR first saw a target.
+    pub fn lidar_saw_target_s(&self) -> Option<f64> {
+        self.lidar_saw_target_s
+    }
+}
+
+/// A tick (of the nominal 0.2 s; scaled for other periods) in which the base moves at least this
+/// far counts as moving (2.5 cm/s).
+pub const MOVING_M_PER_TICK: f64 = 0.005;
+/// A tick in which the base turns at least this much (and does not move) counts as turning.
+pub const TURNING_RAD_PER_TICK: f64 = 0.01;
+/// Beams that must hit a target in one scan for [`SearchResult::lidar_saw_target_s`].
+pub const LIDAR_SIGHTING_BEAMS: usize = 3;
 
 /// Everything a picture or a test may want after a run.
 pub struct SearchRun {
@@ -353,10 +421,13 @@ fn run_with(
     let mut found_at = None;
     let mut outcome = "time-limit";
     let mut status: firmware::Status;
+    let mut tally = RunTally::default();
+    let tick_s = TICK_US as f64 / 1e6;
     loop {
         let now_us = ticks as u64 * TICK_US;
         let p = sim.pose();
         let scan = sim.scan();
+        tally.scan(now_us, &scan);
         let encoded = EncodedScan::new(&scan, spec.sim.lidar_min_range_m);
         let detection = sim.detect().map(|_| Detection { position: None });
         let inputs = Inputs {
@@ -412,7 +483,8 @@ fn run_with(
             sim.set_path(&path, Some(g.pose.theta.to_radians()));
         }
         sim.set_gaze(out.status.gaze.map(|h| h.to_radians()));
-        let moved = step_base(&mut sim, TICK_US as f64 / 1e6);
+        let moved = step_base(&mut sim, tick_s);
+        tally.step(p, sim.pose(), tick_s);
         base_blocked = moved.blocked;
         blocked_count += moved.blocked as u32;
         trajectory.push(moved.position);
@@ -440,6 +512,8 @@ fn run_with(
         collisions,
         labels: spec.planner.label_source(classifier).to_string(),
         targets: sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
+        motion: Some(tally.motion()),
+        lidar_saw_target_s: tally.lidar_saw_target_s(),
     };
     SearchRun { result, controller: ctrl, sim, trajectory, start, found_at, goals }
 }

@@ -18,6 +18,14 @@ fn lives_gt_finds_the_target_in_apartment_easy_seed_1() {
     let at = run.found_at.expect("found_at");
     let t = r.targets[0];
     assert!((at[0] - t[0]).hypot(at[1] - t[1]) <= 4.5, "found at {at:?}, target {t:?}");
+    // Where the time went: every stepped tick is moving, turning or still (the detecting tick
+    // is not stepped), and the LiDAR saw the suitcase before the camera did.
+    let m = r.motion.expect("a simulated run reports its motion");
+    let stepped_s = (r.ticks - 1) as f64 * search::TICK_US as f64 / 1e6;
+    assert!((m.moving_s + m.turning_s + m.still_s - stepped_s).abs() < 1e-6, "{m:?} vs {stepped_s} s");
+    assert!(m.moving_s > m.turning_s && m.moving_s > m.still_s, "{m:?}");
+    let seen = r.lidar_saw_target_s.expect("the LiDAR saw the target");
+    assert!(seen < r.time_s, "LiDAR {seen} s, camera {} s", r.time_s);
 }
 
 #[test]

@@ -27,7 +27,7 @@
 
 use super::robot::Base;
 use super::{Link, Summary, TimeMode};
-use crate::search::{controller_config, encode_ranges, gt_label, step_base, PlannerChoice, SearchResult, SearchSpec, TICK_US};
+use crate::search::{controller_config, encode_ranges, gt_label, step_base, PlannerChoice, RunTally, SearchResult, SearchSpec, TICK_US};
 use crate::sim::Sim;
 use firmware::protocol::{
     encode, BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, GoalMsg, Heartbeat, Hello, HostDecoder, HostToCore, IncompatiblePeer,
@@ -567,6 +567,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
     let mut goals = Vec::new();
     let mut recorded_seq = None;
     let (mut ticks, mut blocked_count, mut collisions) = (0u32, 0u32, 0u32);
+    let mut tally = RunTally::default();
     let mut base_blocked = false;
     let mut outcome = "time-limit";
     let mut need_start = true;
@@ -612,7 +613,9 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
 
         // A tick: the base moved for a period (real time), then sense and send.
         if realtime && ticks > 0 {
+            let before = b.sim.pose();
             let moved = step_base(&mut b.sim, opts.period.as_secs_f64());
+            tally.step(before, b.sim.pose(), opts.period.as_secs_f64());
             base_blocked = moved.blocked;
             blocked_count += moved.blocked as u32;
             trajectory.push(moved.position);
@@ -624,6 +627,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         let now_us = if realtime { (b.sim.time_s() * 1e6).round() as u64 } else { ticks as u64 * TICK_US };
         let p = b.sim.pose();
         let scan = b.sim.scan();
+        tally.scan(now_us, &scan);
         let ranges = encode_ranges(&scan, spec.sim.lidar_min_range_m);
         let labels: Vec<BeamLabel> = scan.hits.iter().map(|&h| gt_label(h)).collect();
         let detected = b.sim.detect().is_some();
@@ -757,7 +761,9 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         }
         // Where the camera looks while walking (as the in-process loop does).
         b.sim.set_gaze(status.gaze.map(|h| BinaryAngle(h).to_radians()));
+        let before = b.sim.pose();
         let moved = step_base(&mut b.sim, TICK_US as f64 / 1e6);
+        tally.step(before, b.sim.pose(), TICK_US as f64 / 1e6);
         base_blocked = moved.blocked;
         blocked_count += moved.blocked as u32;
         trajectory.push(moved.position);
@@ -790,6 +796,8 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         collisions,
         labels: spec.planner.label_source(classifier).to_string(),
         targets: b.sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
+        motion: Some(tally.motion()),
+        lidar_saw_target_s: tally.lidar_saw_target_s(),
     };
     Ok(BridgeResult {
         result,

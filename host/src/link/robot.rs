@@ -623,6 +623,8 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
         collisions: 0,
         labels: if spec.planner == PlannerChoice::Lives { "node-classifier-or-none" } else { "none" }.to_string(),
         targets: Vec::new(),
+        motion: None,
+        lidar_saw_target_s: None,
     };
     // Every goal the client was given a path for, once per `seq` (as the simulator's decisions).
     let origin = origin_used.map_or([0.0; 2], |o| o);
