@@ -66,6 +66,10 @@ pub struct CellSummary {
     pub mean_path_m: f64,
     /// The setting's time limit (s).
     pub time_limit_s: f64,
+    /// Trials in which the LiDAR saw a target ([`SearchResult::lidar_saw_target_s`]).
+    pub lidar_sighted: usize,
+    /// Mean time of the LiDAR's first sighting over those trials (s; NaN if none).
+    pub mean_lidar_sighting_s: f64,
     /// Every trial's time (s), in seed order (for plots).
     pub times_s: Vec<f64>,
 }
@@ -115,7 +119,10 @@ pub fn summarise(results: &[SearchResult]) -> Vec<CellSummary> {
             let times: Vec<f64> = rs.iter().map(|r| if r.found { r.time_s } else { r.time_limit_s }).collect();
             let (mean, ci) = mean_ci(&times);
             let found = rs.iter().filter(|r| r.found).count();
+            let sightings: Vec<f64> = rs.iter().filter_map(|r| r.lidar_saw_target_s).collect();
             CellSummary {
+                lidar_sighted: sightings.len(),
+                mean_lidar_sighting_s: mean_ci(&sightings).0,
                 trials: rs.len(),
                 found,
                 success_rate: found as f64 / rs.len() as f64,
@@ -160,23 +167,44 @@ pub fn markdown_table(cells: &[CellSummary]) -> String {
         out.push_str(&format!("| {w} {s} | {limit:.0} s | {} |\n", entries.join(" | ")));
     }
     out.push_str("\nMean time to find in seconds (a failure counts as the time limit) and success rate.\n\n");
-    out.push_str("| planner | setting | trials | found | mean time (s) | 95 % CI (s) | mean path (m) |\n|---|---|---|---|---|---|---|\n");
+    out.push_str(
+        "| planner | setting | trials | found | mean time (s) | 95 % CI (s) | mean path (m) | LiDAR saw the target | its first sighting, mean (s) |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
     for c in cells {
+        let sighting = if c.lidar_sighted > 0 { format!("{:.1}", c.mean_lidar_sighting_s) } else { "—".into() };
         out.push_str(&format!(
-            "| {} | {} {} | {} | {} | {:.1} | ± {:.1} | {:.1} |\n",
-            c.planner, c.world, c.scenario, c.trials, c.found, c.mean_time_s, c.ci95_s, c.mean_path_m
+            "| {} | {} {} | {} | {} | {:.1} | ± {:.1} | {:.1} | {} | {} |\n",
+            c.planner, c.world, c.scenario, c.trials, c.found, c.mean_time_s, c.ci95_s, c.mean_path_m, c.lidar_sighted, sighting
         ));
     }
+    out.push_str(
+        "\nThe last two columns: in how many trials the LiDAR had a target in view (3 or more beams on it in one scan) and, over \
+         those, when it first did; the camera's detection came at the mean time (or never).\n",
+    );
     out
 }
 
 /// The summary as CSV (one line per planner and setting).
 pub fn csv(cells: &[CellSummary]) -> String {
-    let mut out = String::from("planner,world,scenario,trials,found,success_rate,mean_time_s,ci95_s,mean_path_m,time_limit_s\n");
+    let mut out = String::from(
+        "planner,world,scenario,trials,found,success_rate,mean_time_s,ci95_s,mean_path_m,time_limit_s,lidar_sighted,mean_lidar_sighting_s\n",
+    );
     for c in cells {
+        let sighting = if c.lidar_sighted > 0 { format!("{:.3}", c.mean_lidar_sighting_s) } else { String::new() };
         out.push_str(&format!(
-            "{},{},{},{},{},{:.4},{:.3},{:.3},{:.3},{:.1}\n",
-            c.planner, c.world, c.scenario, c.trials, c.found, c.success_rate, c.mean_time_s, c.ci95_s, c.mean_path_m, c.time_limit_s
+            "{},{},{},{},{},{:.4},{:.3},{:.3},{:.3},{:.1},{},{}\n",
+            c.planner,
+            c.world,
+            c.scenario,
+            c.trials,
+            c.found,
+            c.success_rate,
+            c.mean_time_s,
+            c.ci95_s,
+            c.mean_path_m,
+            c.time_limit_s,
+            c.lidar_sighted,
+            sighting
         ));
     }
     out
@@ -321,7 +349,9 @@ mod tests {
 
     #[test]
     fn failures_count_as_the_limit_and_the_ci_uses_students_t() {
-        let rs = [result("a", true, 30.0), result("a", false, 0.0), result("a", true, 60.0), result("b", true, 10.0)];
+        let mut rs = [result("a", true, 30.0), result("a", false, 0.0), result("a", true, 60.0), result("b", true, 10.0)];
+        rs[0].lidar_saw_target_s = Some(5.0);
+        rs[1].lidar_saw_target_s = Some(8.0);
         let cells = summarise(&rs);
         assert_eq!(cells.len(), 2);
         let a = &cells[0];
@@ -333,6 +363,11 @@ mod tests {
         let md = markdown_table(&cells);
         assert!(md.contains("| apartment easy | 120 s | 70.0 (67 %) | 10.0 (100 %) |"), "{md}");
         assert!(csv(&cells).lines().nth(1).unwrap().starts_with("a,apartment,easy,3,2,0.6667,70.000"));
+        // The LiDAR sighting: 2 of 3 trials, mean 6.5 s; none in `b`.
+        assert_eq!((a.lidar_sighted, a.mean_lidar_sighting_s), (2, 6.5));
+        assert!(md.contains("| 2 | 6.5 |") && md.contains("| 0 | — |"), "{md}");
+        assert!(csv(&cells).lines().nth(1).unwrap().ends_with(",2,6.500"));
+        assert!(csv(&cells).lines().nth(2).unwrap().ends_with(",0,"));
     }
 
     #[test]
