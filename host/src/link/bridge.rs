@@ -264,6 +264,14 @@ pub(super) struct Bridge<'l, B: Base = Sim> {
 }
 
 impl<'l, B: Base> Bridge<'l, B> {
+    /// Fills the run's link statistics from the decoder's counters and the round-trip samples.
+    pub(super) fn finish_stats(&mut self) {
+        self.st.decoder = self.dec.counters();
+        self.st.rejected = self.st.decoder.dropped() as u64;
+        self.st.link_rtt_us = Summary::of(&self.link_rtt);
+        self.st.batch_rtt_us = Summary::of(&self.batch_rtt);
+    }
+
     /// A bridge on `link` driving `sim`, no session yet.
     pub(super) fn new(link: &'l mut dyn Link, opts: &BridgeOptions, stop: &'l AtomicBool, sim: B) -> Self {
         Bridge {
@@ -775,10 +783,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
 
     let found = outcome == "found";
     let status = b.st.node_status;
-    b.st.decoder = b.dec.counters();
-    b.st.rejected = b.dec.counters().dropped() as u64;
-    b.st.link_rtt_us = Summary::of(&b.link_rtt);
-    b.st.batch_rtt_us = Summary::of(&b.batch_rtt);
+    b.finish_stats();
     let result = SearchResult {
         world: spec.world_name.clone(),
         scenario: spec.scenario.to_string(),

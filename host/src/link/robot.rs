@@ -602,10 +602,7 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
     let found = outcome == "found";
     let session_s = b.sim.time_s();
     let status = b.st.node_status;
-    b.st.decoder = b.dec.counters();
-    b.st.rejected = b.dec.counters().dropped() as u64;
-    b.st.link_rtt_us = Summary::of(&b.link_rtt);
-    b.st.batch_rtt_us = Summary::of(&b.batch_rtt);
+    b.finish_stats();
     let result = SearchResult {
         world: "robot".to_string(),
         scenario: "real".to_string(),
