@@ -253,6 +253,12 @@ pub struct TuneScore {
     pub success_rate: f64,
     /// Searches run.
     pub searches: usize,
+    /// Mean over the same searches of (this assignment's normalised time − the defaults'): a
+    /// paired difference, negative when this assignment is faster. Pairing removes the spread
+    /// between worlds, so it resolves differences the unpaired [`TuneScore::ci95`] cannot.
+    pub vs_defaults: f64,
+    /// Its 95 % confidence half-width (Student's t over the paired differences).
+    pub vs_defaults_ci95: f64,
 }
 
 /// Every combination of the grid's values: `[("a", ["1","2"]), ("b", ["x"])]` →
@@ -276,43 +282,56 @@ pub fn parse_grid_axis(s: &str) -> Result<(String, Vec<String>), String> {
 }
 
 /// Scores every assignment of `grid` with `planners` on procedurally generated worlds
-/// (`World::random(seed)` for `seeds`), best (lowest mean normalised time) first.
+/// (`World::random_scenario(seed, s)` for `seeds` × `scenarios`), best (lowest mean normalised
+/// time) first. The defaults (no `--set`, sets empty) are always scored as well, first in the
+/// run, and every score carries its paired difference to them.
 pub fn tune(
     grid: &[(String, Vec<String>)],
     planners: &[PlannerChoice],
+    scenarios: &[Scenario],
     seeds: std::ops::RangeInclusive<u64>,
     threads: usize,
     done: impl Fn(usize, usize) + Sync,
 ) -> Result<Vec<TuneScore>, String> {
-    let assignments = grid_assignments(grid);
+    let mut assignments = grid_assignments(grid);
+    assignments.insert(0, Vec::new());
     let mut specs = Vec::new();
     for sets in &assignments {
         for seed in seeds.clone() {
-            let world = World::random(seed);
-            for &p in planners {
-                let mut spec = SearchSpec::new(&format!("random-{seed}"), world.clone(), Scenario::Easy, p, seed);
-                for a in sets {
-                    crate::overrides::apply(&mut spec.controller, a)?;
+            for &scenario in scenarios {
+                let world = World::random_scenario(seed, scenario);
+                for &p in planners {
+                    let mut spec = SearchSpec::new(&format!("random-{seed}"), world.clone(), scenario, p, seed);
+                    for a in sets {
+                        crate::overrides::apply(&mut spec.controller, a)?;
+                    }
+                    specs.push(spec);
                 }
-                specs.push(spec);
             }
         }
     }
     let total = specs.len();
     let results = run_batch(&specs, threads, |n| done(n, total))?;
     let per = results.len() / assignments.len().max(1);
+    let normalised =
+        |rs: &[SearchResult]| -> Vec<f64> { rs.iter().map(|r| if r.found { r.time_s / r.time_limit_s } else { 1.0 }).collect() };
+    let base = normalised(&results[..per.min(results.len())]);
     let mut scores: Vec<TuneScore> = assignments
         .into_iter()
         .zip(results.chunks(per.max(1)))
         .map(|(sets, rs)| {
-            let xs: Vec<f64> = rs.iter().map(|r| if r.found { r.time_s / r.time_limit_s } else { 1.0 }).collect();
+            let xs = normalised(rs);
             let (m, ci) = mean_ci(&xs);
+            let diffs: Vec<f64> = xs.iter().zip(&base).map(|(x, b)| x - b).collect();
+            let (d, dci) = mean_ci(&diffs);
             TuneScore {
                 sets,
                 mean_normalised_time: m,
                 ci95: ci,
                 success_rate: rs.iter().filter(|r| r.found).count() as f64 / rs.len() as f64,
                 searches: rs.len(),
+                vs_defaults: d,
+                vs_defaults_ci95: dci,
             }
         })
         .collect();
@@ -368,6 +387,23 @@ mod tests {
         assert!(md.contains("| 2 | 6.5 |") && md.contains("| 0 | — |"), "{md}");
         assert!(csv(&cells).lines().nth(1).unwrap().ends_with(",2,6.500"));
         assert!(csv(&cells).lines().nth(2).unwrap().ends_with(",0,"));
+    }
+
+    #[test]
+    fn tune_scores_the_defaults_and_pairs_every_assignment_with_them() {
+        // `w_dist_per_m=1` is the default: the same searches, so a paired difference of exactly 0.
+        let grid = vec![parse_grid_axis("w_dist_per_m=1,8").unwrap()];
+        let scores = tune(&grid, &[PlannerChoice::Multisensor], &Scenario::ALL, 1..=2, 2, |_, _| {}).unwrap();
+        assert_eq!(scores.len(), 3, "the defaults and the two grid values");
+        assert!(scores.iter().all(|s| s.searches == 4), "2 worlds × 2 scenarios × 1 planner");
+        let find = |sets: &[&str]| scores.iter().find(|s| s.sets == sets).unwrap();
+        let (base, same, far) = (find(&[]), find(&["w_dist_per_m=1"]), find(&["w_dist_per_m=8"]));
+        assert_eq!((base.vs_defaults, base.vs_defaults_ci95), (0.0, 0.0));
+        assert_eq!(same.mean_normalised_time, base.mean_normalised_time);
+        assert_eq!((same.vs_defaults, same.vs_defaults_ci95), (0.0, 0.0));
+        let d = far.mean_normalised_time - base.mean_normalised_time;
+        assert!((far.vs_defaults - d).abs() < 1e-12, "the mean of the differences is the difference of the means");
+        assert!(scores.windows(2).all(|w| w[0].mean_normalised_time <= w[1].mean_normalised_time), "best first");
     }
 
     #[test]

@@ -313,6 +313,10 @@ enum Cmd {
         /// Planners the score averages over, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "lives-gt,multisensor")]
         planners: Vec<PlannerChoice>,
+        /// Settings of each random world, comma-separated: `easy` (the suitcase 2.5–8 m from the
+        /// start, a shorter limit) and `hard` (in another room); see `--world random --scenario`.
+        #[arg(long, value_delimiter = ',', default_value = "easy,hard")]
+        scenarios: Vec<Scenario>,
         /// A parameter and its candidate values, e.g. `--grid w_dist_per_m=0.5,1,2` (repeatable).
         #[arg(long, value_name = "NAME=V1,V2,...", required = true)]
         grid: Vec<String>,
@@ -392,7 +396,7 @@ macro_rules! say {
 
 fn load_world(name: &str, scenario: Scenario, seed: u64) -> Result<(String, World), String> {
     if name == "random" {
-        return Ok((format!("random-{seed}"), World::random(seed)));
+        return Ok((format!("random-{seed}"), World::random_scenario(seed, scenario)));
     }
     if let Some(w) = World::builtin(name, scenario) {
         return Ok((name.to_string(), w));
@@ -993,7 +997,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Eval { trials, worlds, scenarios, planners, threads, out, no_pictures, set } => {
             eval_cmd(trials, &worlds, &scenarios, &planners, threads, &out, no_pictures, &set)
         }
-        Cmd::Tune { worlds, planners, grid, threads, out } => {
+        Cmd::Tune { worlds, planners, scenarios, grid, threads, out } => {
             let grid: Vec<(String, Vec<String>)> = grid.iter().map(|g| host::eval::parse_grid_axis(g)).collect::<Result<_, _>>()?;
             // Reject unknown names and bad values before spending minutes.
             for a in host::eval::grid_assignments(&grid) {
@@ -1005,31 +1009,40 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             if worlds == 0 {
                 return Err("--worlds must be at least 1".into());
             }
+            if scenarios.is_empty() || planners.is_empty() {
+                return Err("--scenarios and --planners need at least one value each".into());
+            }
             let pb = count_bar();
             let t0 = Instant::now();
-            let scores = host::eval::tune(&grid, &planners, 1..=worlds, threads.unwrap_or_else(cores), |n, total| {
+            let scores = host::eval::tune(&grid, &planners, &scenarios, 1..=worlds, threads.unwrap_or_else(cores), |n, total| {
                 pb.set_length(total as u64);
                 pb.set_position(n as u64);
             })?;
             pb.finish_and_clear();
-            say!("| rank | assignment | mean time / limit | 95 % CI | found |\n|---|---|---|---|---|");
+            say!("| rank | assignment | mean time / limit | 95 % CI | found | paired Δ vs defaults |\n|---|---|---|---|---|---|");
+            let label = |sets: &[String]| if sets.is_empty() { "(defaults)".to_string() } else { sets.join(" ") };
             for (i, sc) in scores.iter().enumerate() {
                 say!(
-                    "| {} | {} | {:.3} | ± {:.3} | {:.0} % |",
+                    "| {} | {} | {:.3} | ± {:.3} | {:.0} % | {:+.3} ± {:.3} |",
                     i + 1,
-                    sc.sets.join(" "),
+                    label(&sc.sets),
                     sc.mean_normalised_time,
                     sc.ci95,
-                    100.0 * sc.success_rate
+                    100.0 * sc.success_rate,
+                    sc.vs_defaults,
+                    sc.vs_defaults_ci95
                 );
             }
-            if let Some(best) = scores.first() {
+            if let Some(best) = scores.first().filter(|b| !b.sets.is_empty()) {
                 say!(
-                    "best on random worlds 1..={worlds} ({} searches each, {:.0} s): --set {}",
+                    "best on random worlds 1..={worlds}, {} ({} searches each, {:.0} s): --set {}",
+                    scenarios.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(" and "),
                     best.searches,
                     t0.elapsed().as_secs_f64(),
                     best.sets.join(" --set ")
                 );
+            } else {
+                say!("best on random worlds 1..={worlds}: the defaults ({:.0} s)", t0.elapsed().as_secs_f64());
             }
             write_file(&out, &serde_json::to_string_pretty(&scores).map_err(|e| e.to_string())?)?;
             say!("ranking: {}", out.display());

@@ -524,6 +524,91 @@ pub fn random_world_with_density(seed: u64, density: f64) -> World {
     w
 }
 
+/// Where the easy variant of a procedural building puts its target: this far from the start
+/// along the shortest 4-connected path, in metres. The built-in easy scenarios put it 3–8 m away
+/// the same way (behind the start, in the hallway, just inside a nearby room).
+pub const EASY_TARGET_PATH_M: [f64; 2] = [2.5, 8.0];
+
+/// Key of the easy variant's placement stream (`seed ^ key`), independent of the layout stream.
+const EASY_STREAM_KEY: u64 = 0x6c69_7665_732d_6561;
+
+/// A procedural building in one of the paper's two kinds of setting (see [`super::Scenario`]).
+///
+/// * `Hard` is [`random_world`] unchanged: the suitcase stands beside furniture in a room other
+///   than the start's, the time limit is `60 + 3 (w + h)` s rounded to 10 s.
+/// * `Easy` is the same building, start, furniture and people with the suitcase moved near the
+///   start: 1–3 positions [`EASY_TARGET_PATH_M`] from it along the free space, anywhere the
+///   robot can get next to (the corridor, the start room, a room next to it; against a wall or
+///   free-standing), and a shorter limit, `30 + 1.8 (w + h)` s rounded to 10 s (120 s for a
+///   20 × 30 m floor, the paper's apartment-easy limit). The positions come from a stream of
+///   their own, so the building is exactly `random_world(seed)`'s.
+///
+/// The tuning worlds of `lives tune` are both kinds, so that the planner weights are chosen for
+/// near and far targets, as the built-in evaluation measures them. Deterministic in the seed.
+pub fn random_world_scenario(seed: u64, scenario: super::Scenario) -> World {
+    let world = random_world(seed);
+    match scenario {
+        super::Scenario::Hard => world,
+        super::Scenario::Easy => easy_variant(world, seed).unwrap_or_else(|w| w),
+    }
+}
+
+/// [`random_world_scenario`]'s easy variant of `world`, or `Err(world)` unchanged when no near
+/// position fits (never seen in the generator's worlds; the test below checks a range of seeds).
+fn easy_variant(mut world: World, seed: u64) -> Result<World, World> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ EASY_STREAM_KEY);
+    let sp = [world.start.pose[0], world.start.pose[1]];
+    let reach = ReachMap::new(&world, sp, GENERATOR_ROBOT_RADIUS_M);
+    let cells = reach.reached_within(EASY_TARGET_PATH_M[0], EASY_TARGET_PATH_M[1]);
+    if cells.is_empty() {
+        return Err(world);
+    }
+    let start_need = START_CLEARANCE_M.max(GENERATOR_ROBOT_RADIUS_M) + world.start.jitter_m * std::f64::consts::SQRT_2 + 0.05;
+    let suitcase = [0.5, 0.35];
+    let want = rng.gen_range(1..=3);
+    let mut positions: Vec<P2> = Vec::new();
+    for _ in 0..400 {
+        if positions.len() >= want {
+            break;
+        }
+        // A reachable spot, then up to 0.6 m off it, so that the suitcase may stand against a
+        // wall or a piece of furniture as well as in the open.
+        let (c, _) = cells[rng.gen_range(0..cells.len())];
+        let p = [round_to(c[0] + rng.gen_range(-0.6..=0.6), 0.05), round_to(c[1] + rng.gen_range(-0.6..=0.6), 0.05)];
+        let shape = Shape::Rect { center: p, size: suitcase, yaw: 0.0 };
+        let apart = positions.iter().all(|q| (q[0] - p[0]).hypot(q[1] - p[1]) >= 2.0);
+        let clear_of_people =
+            world.people.iter().all(|h| person_path_samples(&h.path, 0.05).into_iter().all(|q| shape.distance_to(q) > h.radius_m + 0.1));
+        if !apart
+            || !clear_of_people
+            || !inside(shape.aabb(), [world.bounds[0][0], world.bounds[0][1], world.bounds[1][0], world.bounds[1][1]], 0.05)
+            || !fits(&shape, &world.walls, &world.obstacles, &[], 0.08)
+            || shape.distance_to(sp) < start_need + 0.05
+        {
+            continue;
+        }
+        let reachable = reach.reached_near(p, 1.0).into_iter().any(|q| shape.distance_to(q) >= GENERATOR_ROBOT_RADIUS_M);
+        if reachable {
+            positions.push(p);
+        }
+    }
+    let Some(&first) = positions.first() else {
+        return Err(world);
+    };
+    world.targets = vec![Target {
+        name: "suitcase".into(),
+        shape: Shape::Rect { center: first, size: suitcase, yaw: 0.0 },
+        candidates: positions[1..].to_vec(),
+    }];
+    let (w, h) = (world.bounds[1][0] - world.bounds[0][0], world.bounds[1][1] - world.bounds[0][1]);
+    world.time_limit_s = round_to(30.0 + 1.8 * (w + h), 10.0);
+    // The same checks as the generator's: the format's own validation and an exact round trip.
+    match World::from_toml_str(&world.to_toml_string(), &world.name) {
+        Ok(back) if back == world => Ok(world),
+        _ => Err(random_world(seed)),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -566,6 +651,30 @@ mod tests {
             assert!(random_world_with_density(seed, 0.0).obstacles.is_empty(), "seed {seed}");
             let r = SimConfig::default().robot_radius_m;
             assert!(sparse.unreachable_targets(r).is_empty(), "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn the_easy_variant_moves_only_the_target_near_the_start() {
+        for seed in 0..24 {
+            let hard = random_world_scenario(seed, super::super::Scenario::Hard);
+            assert_eq!(hard, World::random(seed));
+            let easy = random_world_scenario(seed, super::super::Scenario::Easy);
+            assert_eq!(easy, random_world_scenario(seed, super::super::Scenario::Easy), "deterministic");
+            assert_eq!(
+                (&easy.walls, &easy.obstacles, &easy.people, &easy.start),
+                (&hard.walls, &hard.obstacles, &hard.people, &hard.start)
+            );
+            assert!(easy.time_limit_s < hard.time_limit_s, "seed {seed}");
+            let sp = [easy.start.pose[0], easy.start.pose[1]];
+            let reach = ReachMap::new(&easy, sp, GENERATOR_ROBOT_RADIUS_M);
+            assert!(easy.unreachable_targets(GENERATOR_ROBOT_RADIUS_M).is_empty(), "seed {seed}");
+            for p in easy.targets[0].positions() {
+                // Within the band (the suitcase may stand up to 0.85 m off the spot it was
+                // drawn from), and much nearer than the far targets of the hard variant.
+                let near = reach.reached_near(p, 1.0).into_iter().filter_map(|q| reach.path_m(q)).fold(f64::INFINITY, f64::min);
+                assert!(near <= EASY_TARGET_PATH_M[1] + 0.1, "seed {seed}: target {p:?} is {near} m away");
+            }
         }
     }
 

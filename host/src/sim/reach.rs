@@ -23,6 +23,8 @@ pub struct ReachMap {
     nx: usize,
     ny: usize,
     reached: Vec<bool>,
+    /// 4-connected steps from the start cell (`u32::MAX` where not reached).
+    steps: Vec<u32>,
 }
 
 impl ReachMap {
@@ -41,7 +43,7 @@ impl ReachMap {
         let nx = (((world.bounds[1][0] - origin[0] + 0.5) / res).ceil() as usize).clamp(1, 2000);
         let ny = (((world.bounds[1][1] - origin[1] + 0.5) / res).ceil() as usize).clamp(1, 2000);
         let center = |x: usize, y: usize| [origin[0] + (x as f64 + 0.5) * res, origin[1] + (y as f64 + 0.5) * res];
-        let mut map = ReachMap { origin, nx, ny, reached: vec![false; nx * ny] };
+        let mut map = ReachMap { origin, nx, ny, reached: vec![false; nx * ny], steps: vec![u32::MAX; nx * ny] };
         let Some(s) = map.index(from) else {
             return map;
         };
@@ -60,12 +62,15 @@ impl ReachMap {
         }
         let mut queue = VecDeque::new();
         map.reached[s] = true;
+        map.steps[s] = 0;
         queue.push_back(s);
         while let Some(i) = queue.pop_front() {
             let (x, y) = (i % nx, i / nx);
+            let next = map.steps[i] + 1;
             let mut visit = |j: usize, map: &mut ReachMap, state: &mut Vec<u8>| {
                 if !map.reached[j] && free(j, state) {
                     map.reached[j] = true;
+                    map.steps[j] = next;
                     queue.push_back(j);
                 }
             };
@@ -125,6 +130,22 @@ impl ReachMap {
             }
         }
         out
+    }
+
+    /// Length of the shortest 4-connected path from the start to the cell containing `p`, in
+    /// metres (an overestimate of the true shortest path by at most a factor of √2), or `None`
+    /// where the flood did not reach.
+    pub fn path_m(&self, p: P2) -> Option<f64> {
+        self.index(p).filter(|&i| self.reached[i]).map(|i| self.steps[i] as f64 * REACH_RESOLUTION_M)
+    }
+
+    /// Centres of all reached cells whose [`ReachMap::path_m`] lies in `lo..=hi`, in cell order.
+    pub fn reached_within(&self, lo: f64, hi: f64) -> Vec<(P2, f64)> {
+        (0..self.reached.len())
+            .filter(|&i| self.reached[i])
+            .map(|i| (self.center(i), self.steps[i] as f64 * REACH_RESOLUTION_M))
+            .filter(|&(_, d)| d >= lo && d <= hi)
+            .collect()
     }
 
     /// Number of reached cells.

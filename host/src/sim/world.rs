@@ -552,6 +552,13 @@ impl World {
         super::generate::random_world(seed)
     }
 
+    /// A procedural building in the easy (target near the start) or hard (target in another
+    /// room) setting (see [`super::generate::random_world_scenario`]); `Hard` is
+    /// [`World::random`].
+    pub fn random_scenario(seed: u64, scenario: Scenario) -> World {
+        super::generate::random_world_scenario(seed, scenario)
+    }
+
     /// Axis-aligned bounds of everything in the world.
     pub fn compute_bounds(&self) -> [P2; 2] {
         let mut pts: Vec<P2> = Vec::new();
