@@ -173,7 +173,13 @@ fn tune_rejects_unknown_parameters_before_running_and_ranks_a_grid() {
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let ranking: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    assert_eq!(ranking.as_array().unwrap().len(), 2);
+    // The defaults and the two grid values; 3 s is the default replan interval, so it pairs
+    // with the defaults at exactly 0.
+    let ranking = ranking.as_array().unwrap();
+    assert_eq!(ranking.len(), 3);
+    let three = ranking.iter().find(|r| r["sets"] == serde_json::json!(["replan_interval_s=3"])).unwrap();
+    assert_eq!((three["vs_defaults"].as_f64(), three["vs_defaults_ci95"].as_f64()), (Some(0.0), Some(0.0)));
+    assert!(ranking.iter().any(|r| r["sets"] == serde_json::json!([])));
     assert!(String::from_utf8_lossy(&out.stdout).contains("best on random worlds 1..=1"));
     let _ = std::fs::remove_file(&path);
 }

@@ -726,13 +726,34 @@ impl AdapterServer {
         ok
     }
 
-    /// Closes the client's connection (after a final `stop`, which the caller sends).
+    /// Closes the client's connection (after a final `stop`, which the caller sends), gracefully:
+    /// our side is shut for writing first, so the `stop` and then the end of the stream reach
+    /// the client in order, and what the client still sends meanwhile (odometry, scans) is read
+    /// and dropped until it closes too, or [`CLOSE_LINGER`] passes. Closing with unread input
+    /// makes the kernel reset the connection, and a client that was still writing would then
+    /// get a broken pipe and could lose the `stop` it had not read yet.
     pub fn close(&mut self) {
-        if let Some(c) = self.client.take() {
+        if let Some(mut c) = self.client.take() {
+            let _ = c.stream.shutdown(std::net::Shutdown::Write);
+            let _ = c.stream.set_nonblocking(false);
+            let _ = c.stream.set_read_timeout(Some(Duration::from_millis(50)));
+            let deadline = Instant::now() + CLOSE_LINGER;
+            let mut sink = [0u8; 4096];
+            while Instant::now() < deadline {
+                match c.stream.read(&mut sink) {
+                    Ok(0) => break,
+                    Ok(_) => {}
+                    Err(e) if matches!(e.kind(), io::ErrorKind::WouldBlock | io::ErrorKind::TimedOut | io::ErrorKind::Interrupted) => {}
+                    Err(_) => break,
+                }
+            }
             let _ = c.stream.shutdown(std::net::Shutdown::Both);
         }
     }
 }
+
+/// How long [`AdapterServer::close`] waits for the client to close after the final `stop`.
+pub const CLOSE_LINGER: Duration = Duration::from_secs(1);
 
 /// `v` rounded to `1 / per` (e.g. `per = 1e4`: 0.1 mm).
 pub fn round_to(v: f64, per: f64) -> f64 {

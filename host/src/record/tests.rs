@@ -128,7 +128,7 @@ fn a_crash_loses_only_the_messages_after_the_last_flushed_chunk() {
     ok.unwrap();
     let total = rec.summary().total_messages();
     let lost = rec.unflushed_messages();
-    assert!(lost < 100 && total > 1000, "{total} recorded, {lost} unflushed");
+    assert!(lost < 100 && total >= 300, "{total} recorded, {lost} unflushed: several chunks flushed");
     // The process dies here: the file is what is on disk now (no summary, no footer).
     let crashed = std::fs::read(&path).unwrap();
     std::mem::forget(rec);
