@@ -259,6 +259,9 @@ pub struct TuneScore {
     pub vs_defaults: f64,
     /// Its 95 % confidence half-width (Student's t over the paired differences).
     pub vs_defaults_ci95: f64,
+    /// Every search's time to find / limit (failures 1), in the order seed, scenario, planner:
+    /// for pairing with another `lives tune` run over the same worlds.
+    pub per_search: Vec<f64>,
 }
 
 /// Every combination of the grid's values: `[("a", ["1","2"]), ("b", ["x"])]` →
@@ -332,6 +335,7 @@ pub fn tune(
                 searches: rs.len(),
                 vs_defaults: d,
                 vs_defaults_ci95: dci,
+                per_search: xs,
             }
         })
         .collect();
@@ -396,6 +400,11 @@ mod tests {
         let scores = tune(&grid, &[PlannerChoice::Multisensor], &Scenario::ALL, 1..=2, 2, |_, _| {}).unwrap();
         assert_eq!(scores.len(), 3, "the defaults and the two grid values");
         assert!(scores.iter().all(|s| s.searches == 4), "2 worlds × 2 scenarios × 1 planner");
+        for s in &scores {
+            assert_eq!(s.per_search.len(), 4);
+            assert!((s.per_search.iter().sum::<f64>() / 4.0 - s.mean_normalised_time).abs() < 1e-12);
+            assert!(s.per_search.iter().all(|x| (0.0..=1.0).contains(x)));
+        }
         let find = |sets: &[&str]| scores.iter().find(|s| s.sets == sets).unwrap();
         let (base, same, far) = (find(&[]), find(&["w_dist_per_m=1"]), find(&["w_dist_per_m=8"]));
         assert_eq!((base.vs_defaults, base.vs_defaults_ci95), (0.0, 0.0));
