@@ -412,14 +412,7 @@ fn try_generate(seed: u64, attempt: u64, furnish: bool, density: f64) -> Option<
                 [round_to(p[0], 0.05), round_to(p[1], 0.05)]
             };
             let shape = Shape::Rect { center: p, size: suitcase, yaw: 0.0 };
-            if !inside(shape.aabb(), r, 0.05)
-                || !fits(&shape, &world.walls, &world.obstacles, &[], 0.08)
-                || shape.distance_to(sp) < start_need + 0.05
-            {
-                continue;
-            }
-            let reachable = reach.reached_near(p, 1.0).into_iter().any(|c| shape.distance_to(c) >= GENERATOR_ROBOT_RADIUS_M);
-            if reachable {
+            if inside(shape.aabb(), r, 0.05) && target_fits(&shape, &world, &reach, sp, start_need) {
                 positions.push(p);
                 break;
             }
@@ -470,6 +463,14 @@ fn try_generate(seed: u64, attempt: u64, furnish: bool, density: f64) -> Option<
         Ok(back) if back == world => Some(world),
         _ => None,
     }
+}
+
+/// Can the suitcase `shape` stand here: clear of walls and obstacles, off the start (`start_need`
+/// from the jittered start's disc), and beside a spot the robot reaches from the start.
+fn target_fits(shape: &Shape, world: &World, reach: &ReachMap, start: P2, start_need: f64) -> bool {
+    fits(shape, &world.walls, &world.obstacles, &[], 0.08)
+        && shape.distance_to(start) >= start_need + 0.05
+        && reach.reached_near(shape.center(), 1.0).into_iter().any(|q| shape.distance_to(q) >= GENERATOR_ROBOT_RADIUS_M)
 }
 
 /// A last resort that cannot fail: one furnished room.
@@ -579,16 +580,8 @@ fn easy_variant(mut world: World, seed: u64) -> Result<World, World> {
         let apart = positions.iter().all(|q| (q[0] - p[0]).hypot(q[1] - p[1]) >= 2.0);
         let clear_of_people =
             world.people.iter().all(|h| person_path_samples(&h.path, 0.05).into_iter().all(|q| shape.distance_to(q) > h.radius_m + 0.1));
-        if !apart
-            || !clear_of_people
-            || !inside(shape.aabb(), [world.bounds[0][0], world.bounds[0][1], world.bounds[1][0], world.bounds[1][1]], 0.05)
-            || !fits(&shape, &world.walls, &world.obstacles, &[], 0.08)
-            || shape.distance_to(sp) < start_need + 0.05
-        {
-            continue;
-        }
-        let reachable = reach.reached_near(p, 1.0).into_iter().any(|q| shape.distance_to(q) >= GENERATOR_ROBOT_RADIUS_M);
-        if reachable {
+        let bounds = [world.bounds[0][0], world.bounds[0][1], world.bounds[1][0], world.bounds[1][1]];
+        if apart && clear_of_people && inside(shape.aabb(), bounds, 0.05) && target_fits(&shape, &world, &reach, sp, start_need) {
             positions.push(p);
         }
     }
