@@ -184,6 +184,88 @@ pub fn markdown_table(cells: &[CellSummary]) -> String {
     out
 }
 
+/// The paper's claims for LIVES (issue 7's acceptance), checked on `results` for `lives` and
+/// `lives-gt`: 100 % success in every setting; mean time over the hard settings against
+/// `multisensor` (the ratio of the averages, and the paired difference over the same trials:
+/// same world, scenario and seed, so the same start, target, people and noise); and faster than
+/// `nearest` and `explore-lite` in every setting. `None` unless `multisensor` and at least one
+/// of the two LIVES planners were run.
+pub fn claims(results: &[SearchResult]) -> Option<String> {
+    let cells = summarise(results);
+    let has = |p: &str| results.iter().any(|r| r.planner == p);
+    let subjects: Vec<&str> = ["lives", "lives-gt"].into_iter().filter(|p| has(p)).collect();
+    if subjects.is_empty() || !has("multisensor") {
+        return None;
+    }
+    let mut settings: Vec<(&str, &str)> = Vec::new();
+    for c in &cells {
+        if !settings.contains(&(c.world.as_str(), c.scenario.as_str())) {
+            settings.push((&c.world, &c.scenario));
+        }
+    }
+    let cell = |p: &str, w: &str, s: &str| cells.iter().find(|c| c.planner == p && c.world == w && c.scenario == s);
+    let hard: Vec<(&str, &str)> = settings.iter().copied().filter(|s| s.1 == "hard").collect();
+    let mut rows: [Vec<String>; 3] = Default::default();
+    for &p in &subjects {
+        let short: Vec<String> = settings
+            .iter()
+            .filter_map(|&(w, s)| cell(p, w, s).filter(|c| c.found < c.trials).map(|c| format!("{w} {s} {}/{}", c.found, c.trials)))
+            .collect();
+        rows[0].push(if short.is_empty() { "yes".into() } else { format!("no: {}", short.join(", ")) });
+        // Over the hard settings: ratio of the averaged means, and the paired difference per trial.
+        let avg = |q: &str| {
+            let v: Vec<f64> = hard.iter().filter_map(|&(w, s)| cell(q, w, s).map(|c| c.mean_time_s)).collect();
+            (v.len() == hard.len() && !v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+        };
+        let diffs: Vec<f64> = results
+            .iter()
+            .filter(|r| r.planner == p && r.scenario == "hard")
+            .filter_map(|r| {
+                results
+                    .iter()
+                    .find(|m| m.planner == "multisensor" && m.world == r.world && m.scenario == r.scenario && m.seed == r.seed)
+                    .map(|m| r.time_s - m.time_s)
+            })
+            .collect();
+        rows[1].push(match (avg(p), avg("multisensor")) {
+            (Some(a), Some(b)) if b > 0.0 => {
+                let (d, ci) = mean_ci(&diffs);
+                format!("{:.3}× ({a:.1} s vs {b:.1} s; paired Δ {d:+.1} ± {ci:.1} s over {} trials)", a / b, diffs.len())
+            }
+            _ => "— (no hard settings run)".into(),
+        });
+        let mut behind = Vec::new();
+        let mut compared = 0;
+        for &(w, s) in &settings {
+            let Some(me) = cell(p, w, s) else { continue };
+            for base in ["nearest", "explore-lite"] {
+                if let Some(b) = cell(base, w, s) {
+                    compared += 1;
+                    if me.mean_time_s >= b.mean_time_s {
+                        behind.push(format!("{w} {s} vs {base} ({:.1} ≥ {:.1} s)", me.mean_time_s, b.mean_time_s));
+                    }
+                }
+            }
+        }
+        rows[2].push(match (compared, behind.is_empty()) {
+            (0, _) => "— (nearest and explore-lite not run)".into(),
+            (_, true) => "yes".into(),
+            (_, false) => format!("no, {} of {compared}: {}", behind.len(), behind.join("; ")),
+        });
+    }
+    let mut out = String::from("\n## Against the paper's claims for LIVES\n\n");
+    out.push_str(&format!("| claim | {} |\n|---|{}\n", subjects.join(" | "), "---|".repeat(subjects.len())));
+    let names = [
+        "100 % success in every setting",
+        "mean time over the hard settings vs `multisensor` (the claim: at most 0.85×)",
+        "faster than `nearest` and `explore-lite` in every setting",
+    ];
+    for (name, row) in names.iter().zip(&rows) {
+        out.push_str(&format!("| {name} | {} |\n", row.join(" | ")));
+    }
+    Some(out)
+}
+
 /// The summary as CSV (one line per planner and setting).
 pub fn csv(cells: &[CellSummary]) -> String {
     let mut out = String::from(
@@ -413,6 +495,35 @@ mod tests {
         let d = far.mean_normalised_time - base.mean_normalised_time;
         assert!((far.vs_defaults - d).abs() < 1e-12, "the mean of the differences is the difference of the means");
         assert!(scores.windows(2).all(|w| w[0].mean_normalised_time <= w[1].mean_normalised_time), "best first");
+    }
+
+    #[test]
+    fn the_claims_are_checked_per_trial_against_the_same_seeds() {
+        let mk = |planner: &str, scenario: &str, seed: u64, found: bool, t: f64| {
+            let mut r = result(planner, found, t);
+            r.scenario = scenario.into();
+            r.seed = seed;
+            if !found {
+                r.time_s = if scenario == "hard" { 180.0 } else { 120.0 };
+            }
+            r.time_limit_s = r.time_s.max(r.time_limit_s);
+            r
+        };
+        let rs = vec![
+            mk("multisensor", "hard", 1, true, 100.0),
+            mk("multisensor", "hard", 2, true, 120.0),
+            mk("lives", "hard", 1, true, 80.0),
+            mk("lives", "hard", 2, false, 0.0),
+            mk("nearest", "hard", 1, true, 90.0),
+            mk("nearest", "hard", 2, true, 90.0),
+        ];
+        let md = claims(&rs).expect("lives and multisensor ran");
+        // lives: 1 of 2 found; hard mean (80 + 180) / 2 = 130 vs 110: 1.182×; paired −20 and +60.
+        assert!(md.contains("| 100 % success in every setting | no: apartment hard 1/2 |"), "{md}");
+        assert!(md.contains("1.182× (130.0 s vs 110.0 s; paired Δ +20.0 ± "), "{md}");
+        assert!(md.contains("over 2 trials"), "{md}");
+        assert!(md.contains("no, 1 of 1: apartment hard vs nearest (130.0 ≥ 90.0 s)"), "{md}");
+        assert!(claims(&rs[4..]).is_none(), "nothing to check without lives and multisensor");
     }
 
     #[test]

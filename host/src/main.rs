@@ -502,8 +502,9 @@ fn eval_cmd(
         .unwrap_or_else(|| "unknown".into());
     let command = std::env::args().map(|a| if a.contains(' ') { format!("'{a}'") } else { a }).collect::<Vec<_>>().join(" ");
     let table = eval::markdown_table(&cells);
+    let claims = eval::claims(&results).unwrap_or_default();
     let md = format!(
-        "{table}\nCommand: `{command}` · commit {commit} · {} searches in {wall:.0} s on {} threads.\n",
+        "{table}{claims}\nCommand: `{command}` · commit {commit} · {} searches in {wall:.0} s on {} threads.\n",
         results.len(),
         threads.unwrap_or_else(cores)
     );
