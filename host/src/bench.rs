@@ -74,6 +74,37 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
         Err(_) => None,
     };
 
+    // The float reference of the same network (`host::model`, f32, the committed model's
+    // shapes; the weights do not change the time) on the same scan, filled history.
+    let float_model = crate::model::FloatModel::random(1);
+    let mut history = crate::model::FloatHistory::new(float_model.norm);
+    for _ in 0..firmware::classifier::HISTORY {
+        history.push_scan(&pose, &beams.ranges_mm);
+        history.push_labels(&[1.0; firmware::capacity::BEAMS]);
+    }
+    let inputs = history.inputs();
+    let t_float = time(reps, || {
+        std::hint::black_box(float_model.forward(std::hint::black_box(&inputs)));
+    });
+
+    // The map-based ground-truth labeller (training labels) on 20 scans of a procedural
+    // building, with its 10-scan history full: the time per scan.
+    let t_labeller = {
+        let world = World::random(11);
+        let mut sim = crate::sim::Sim::new(world.clone(), crate::sim::SimConfig::default(), 1);
+        let mut scans = Vec::new();
+        for _ in 0..20 {
+            scans.push((sim.pose(), sim.scan()));
+            sim.step(0.2);
+        }
+        time(reps, || {
+            let mut lab = crate::labeller::Labeller::for_world(&world, crate::labeller::LabellerConfig::default());
+            for (p, sc) in &scans {
+                std::hint::black_box(lab.label_scan(*p, sc));
+            }
+        }) / scans.len() as f64
+    };
+
     println!(
         "map: office hard after {explore_s:.0} s of lives-gt search: {free} free, {occ} occupied LiDAR cells; {seen} camera-seen cells;"
     );
@@ -87,6 +118,8 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
         Some(t) => println!("{:<36} {:>12.3} {:>14}", "classify (int8, embedded model)", t, classify_work),
         None => println!("{:<36} {:>12} {:>14}", "classify (int8, embedded model)", "no model", ""),
     }
+    println!("{:<36} {:>12.3} {:>14}", "classify (f32 reference, host)", t_float, "");
+    println!("{:<36} {:>12.3} {:>14}", "labeller (ground truth, per scan)", t_labeller, "");
     println!("{:<36} {:>12.3} {:>14}", "LiDAR update (897 beams)", t_lidar, lidar_work);
     println!("{:<36} {:>12.3} {:>14}", "visual update (camera cone)", t_visual, visual_work);
     println!("{:<36} {:>12.3} {:>14}", "frontiers (both maps)", t_frontiers, "");

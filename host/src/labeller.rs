@@ -536,29 +536,33 @@ impl PointGrid {
         y * self.nx + x
     }
 
-    /// Distance to the nearest point within `radius` of `p`, if any.
-    fn nearest_within(&self, p: P2, radius: f64) -> Option<f64> {
-        if self.nx == 0 || !p[0].is_finite() || !p[1].is_finite() {
-            return None;
-        }
-        let r = radius.max(0.0);
-        let x0 = ((p[0] - r - self.origin[0]) / self.cell).floor();
-        let x1 = ((p[0] + r - self.origin[0]) / self.cell).floor();
-        let y0 = ((p[1] - r - self.origin[1]) / self.cell).floor();
-        let y1 = ((p[1] + r - self.origin[1]) / self.cell).floor();
-        if x1 < 0.0 || y1 < 0.0 || x0 >= self.nx as f64 || y0 >= self.ny as f64 {
-            return None;
-        }
-        let (x0, y0) = (x0.max(0.0) as usize, y0.max(0.0) as usize);
-        let (x1, y1) = ((x1 as usize).min(self.nx - 1), (y1 as usize).min(self.ny - 1));
-        let mut best = f64::INFINITY;
-        for y in y0..=y1 {
-            let row = y * self.nx;
-            let (a, b) = (self.start[row + x0] as usize, self.start[row + x1 + 1] as usize);
-            for q in &self.pts[a..b] {
-                best = best.min(dist2(*q, p));
+    /// The stored points in the cells that a disc of `radius` around `p` touches (a superset of
+    /// the points within `radius`), as index ranges into `pts`, one per grid row.
+    fn candidate_ranges(&self, p: P2, radius: f64) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+        let mut rows = (0, 0, 0, 0, false);
+        if self.nx > 0 && p[0].is_finite() && p[1].is_finite() {
+            let r = radius.max(0.0);
+            let x0 = ((p[0] - r - self.origin[0]) / self.cell).floor();
+            let x1 = ((p[0] + r - self.origin[0]) / self.cell).floor();
+            let y0 = ((p[1] - r - self.origin[1]) / self.cell).floor();
+            let y1 = ((p[1] + r - self.origin[1]) / self.cell).floor();
+            if !(x1 < 0.0 || y1 < 0.0 || x0 >= self.nx as f64 || y0 >= self.ny as f64) {
+                let (x0, y0) = (x0.max(0.0) as usize, y0.max(0.0) as usize);
+                let (x1, y1) = ((x1 as usize).min(self.nx - 1), (y1 as usize).min(self.ny - 1));
+                rows = (x0, x1, y0, y1, true);
             }
         }
+        let (x0, x1, y0, y1, any) = rows;
+        (y0..if any { y1 + 1 } else { y0 }).map(move |y| {
+            let row = y * self.nx;
+            self.start[row + x0] as usize..self.start[row + x1 + 1] as usize
+        })
+    }
+
+    /// Distance to the nearest point within `radius` of `p`, if any.
+    fn nearest_within(&self, p: P2, radius: f64) -> Option<f64> {
+        let r = radius.max(0.0);
+        let best = self.candidate_ranges(p, r).flat_map(|range| &self.pts[range]).fold(f64::INFINITY, |b, q| b.min(dist2(*q, p)));
         (best <= r * r).then(|| best.sqrt())
     }
 }
@@ -853,22 +857,37 @@ rect = { center = [1.0, 1.0], size = [0.5, 0.35] }
     }
 
     #[test]
-    fn labelling_is_fast() {
+    fn the_history_lookup_examines_only_nearby_points() {
+        // The STF match is the labeller's only search over many points: with the spatial grid
+        // a lookup examines the points of a few 0.25 m cells, not the whole history. A
+        // deterministic count (the speed itself is in `lives bench`, "labeller").
         let world = World::random(11);
         let mut sim = Sim::new(world.clone(), SimConfig::default(), 1);
         let mut lab = Labeller::for_world(&world, LabellerConfig::default());
-        let mut scans = Vec::new();
+        let mut last = None;
         for _ in 0..20 {
-            scans.push((sim.pose(), sim.scan()));
+            let (pose, scan) = (sim.pose(), sim.scan());
+            lab.label_scan(pose, &scan);
+            last = Some((pose, scan));
             sim.step(0.2);
         }
-        let t0 = std::time::Instant::now();
-        for (p, s) in &scans {
-            lab.label_scan(*p, s);
+        let stored: usize = lab.history.iter().map(Vec::len).sum();
+        lab.grid.build(lab.history.iter().flatten().copied(), lab.config.stf_match_m);
+        let (pose, scan) = last.unwrap();
+        let (mut examined, mut queries) = (0usize, 0usize);
+        for (i, &r) in scan.ranges_m.iter().enumerate() {
+            if !r.is_finite() {
+                continue;
+            }
+            let a = pose[2] + scan.angle_min + i as f64 * scan.angle_increment;
+            let p = [pose[0] + r as f64 * a.cos(), pose[1] + r as f64 * a.sin()];
+            examined += lab.grid.candidate_ranges(p, lab.config.stf_match_m).map(|r| r.len()).sum::<usize>();
+            queries += 1;
         }
-        let per = t0.elapsed().as_secs_f64() / scans.len() as f64;
-        // Release builds take well under 1 ms; the bound is loose for debug builds.
-        let limit = if cfg!(debug_assertions) { 0.05 } else { 0.002 };
-        assert!(per < limit, "{:.3} ms per scan", per * 1e3);
+        let mean = examined as f64 / queries as f64;
+        assert!(stored > 1000 && queries > 500, "{stored} points stored, {queries} queries");
+        // Measured: 316.8 of 4250 (7.5 %: the robot has barely moved, so the history's points
+        // crowd the same surfaces); a linear scan would examine all of them.
+        assert!(mean < 0.1 * stored as f64, "a lookup examines {mean:.1} of {stored} points on average");
     }
 }
