@@ -18,7 +18,7 @@
 
 use firmware::node::TimeMode;
 use firmware::Config;
-use host::link::adapter::{error_line, AdapterConfig, AdapterError, AdapterServer, Input};
+use host::link::adapter::{error_line, AdapterConfig, AdapterError, AdapterServer, Input, StopReason};
 use host::link::{
     mem_pair, run_robot, BridgeOptions, FaultConfig, FaultHandle, FaultyLink, Link, NodeOptions, NodeProcess, RobotRun, RobotSpec,
     SerialLink,
@@ -177,6 +177,57 @@ fn a_simulated_robot_behind_the_adapter_gets_goals_in_its_room_and_is_stopped_on
     assert_eq!(run["adapter"]["errors"], 0);
     assert!(run["adapter"]["scans"].as_u64().unwrap() > 10);
     assert!(run["result"]["goals"].as_u64().unwrap() >= 2);
+}
+
+#[test]
+fn a_client_still_writing_when_the_session_ends_reads_its_stop_before_its_writes_fail() {
+    // A robot streams odometry without waiting for the bridge. When the search ends the bridge
+    // sends `stop` and closes; the close must not reset the connection under the client's feet
+    // (a write failing before the client has read the `stop` loses the reason it stopped).
+    let mut server = AdapterServer::bind("127.0.0.1:0".parse().unwrap(), AdapterConfig::default()).unwrap();
+    let (mut c, mut r) = connect(server.local_addr().unwrap());
+    c.write_all(b"{\"type\":\"hello\",\"v\":1,\"client\":\"test\"}\n").unwrap();
+    assert!(matches!(&pump(&mut server, 4)[..], [Input::Greeted { .. }]));
+    assert_eq!(parse(&read_line(&mut r))["type"], "hello");
+    let stop_read = std::sync::Arc::new(AtomicBool::new(false));
+    let writer = std::thread::spawn({
+        let mut c = c.try_clone().unwrap();
+        let stop_read = stop_read.clone();
+        move || {
+            let line = b"{\"type\":\"odometry\",\"x\":1,\"y\":2,\"yaw\":0}\n";
+            let t0 = Instant::now();
+            while t0.elapsed() < Duration::from_secs(5) {
+                if c.write_all(line).is_err() {
+                    return Some(stop_read.load(Ordering::SeqCst));
+                }
+                std::thread::sleep(Duration::from_micros(500));
+            }
+            None
+        }
+    });
+    // Unread odometry piles up in the server's socket, as it does behind a busy bridge.
+    std::thread::sleep(Duration::from_millis(50));
+    assert!(server.send_stop(StopReason::TargetFound, "test"));
+    let reader = std::thread::spawn({
+        let stop_read = stop_read.clone();
+        move || {
+            let line = read_line(&mut r);
+            stop_read.store(parse(&line)["type"] == "stop", Ordering::SeqCst);
+            let mut rest = Vec::new();
+            let end = r.read_to_end(&mut rest);
+            (parse(&line), end.map(|_| rest.len()).map_err(|e| e.to_string()))
+        }
+    });
+    server.close();
+    let (stop, end) = reader.join().unwrap();
+    assert_eq!((stop["type"].as_str(), stop["reason"].as_str()), (Some("stop"), Some("target-found")), "{stop}");
+    assert_eq!(end, Ok(0), "then the stream ends cleanly");
+    // The client closes after reading the stop (as sim_robot.py does); its writes had not failed
+    // before it read it.
+    drop(c);
+    if let Some(had_read) = writer.join().unwrap() {
+        assert!(had_read, "a write failed before the client could read its stop");
+    }
 }
 
 #[test]
