@@ -143,15 +143,12 @@ pub fn summarise(results: &[SearchResult]) -> Vec<CellSummary> {
 /// entry `mean s (success %)`; then the same cells in detail (CI and path length).
 pub fn markdown_table(cells: &[CellSummary]) -> String {
     let mut planners: Vec<&str> = Vec::new();
-    let mut settings: Vec<(&str, &str, f64)> = Vec::new();
     for c in cells {
         if !planners.contains(&c.planner.as_str()) {
             planners.push(&c.planner);
         }
-        if !settings.iter().any(|s| s.0 == c.world && s.1 == c.scenario) {
-            settings.push((&c.world, &c.scenario, c.time_limit_s));
-        }
     }
+    let settings = settings_of(cells);
     let find = |p: &str, w: &str, s: &str| cells.iter().find(|c| c.planner == p && c.world == w && c.scenario == s);
     let mut out = String::new();
     out.push_str(&format!("| setting | limit | {} |\n", planners.join(" | ")));
@@ -184,6 +181,17 @@ pub fn markdown_table(cells: &[CellSummary]) -> String {
     out
 }
 
+/// The (world, scenario, time limit) settings of `cells`, in order of first appearance.
+fn settings_of(cells: &[CellSummary]) -> Vec<(&str, &str, f64)> {
+    let mut settings: Vec<(&str, &str, f64)> = Vec::new();
+    for c in cells {
+        if !settings.iter().any(|s| s.0 == c.world && s.1 == c.scenario) {
+            settings.push((&c.world, &c.scenario, c.time_limit_s));
+        }
+    }
+    settings
+}
+
 /// The paper's claims for LIVES (issue 7's acceptance), checked on `results` for `lives` and
 /// `lives-gt`: 100 % success in every setting; mean time over the hard settings against
 /// `multisensor` (the ratio of the averages, and the paired difference over the same trials:
@@ -197,12 +205,7 @@ pub fn claims(results: &[SearchResult]) -> Option<String> {
     if subjects.is_empty() || !has("multisensor") {
         return None;
     }
-    let mut settings: Vec<(&str, &str)> = Vec::new();
-    for c in &cells {
-        if !settings.contains(&(c.world.as_str(), c.scenario.as_str())) {
-            settings.push((&c.world, &c.scenario));
-        }
-    }
+    let settings: Vec<(&str, &str)> = settings_of(&cells).into_iter().map(|(w, s, _)| (w, s)).collect();
     let cell = |p: &str, w: &str, s: &str| cells.iter().find(|c| c.planner == p && c.world == w && c.scenario == s);
     let hard: Vec<(&str, &str)> = settings.iter().copied().filter(|s| s.1 == "hard").collect();
     let mut rows: [Vec<String>; 3] = Default::default();
