@@ -539,23 +539,19 @@ impl PointGrid {
     /// The stored points in the cells that a disc of `radius` around `p` touches (a superset of
     /// the points within `radius`), as index ranges into `pts`, one per grid row.
     fn candidate_ranges(&self, p: P2, radius: f64) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
-        let mut rows = (0, 0, 0, 0, false);
-        if self.nx > 0 && p[0].is_finite() && p[1].is_finite() {
-            let r = radius.max(0.0);
+        let r = radius.max(0.0);
+        let cells = (self.nx > 0 && p[0].is_finite() && p[1].is_finite()).then(|| {
             let x0 = ((p[0] - r - self.origin[0]) / self.cell).floor();
             let x1 = ((p[0] + r - self.origin[0]) / self.cell).floor();
             let y0 = ((p[1] - r - self.origin[1]) / self.cell).floor();
             let y1 = ((p[1] + r - self.origin[1]) / self.cell).floor();
-            if !(x1 < 0.0 || y1 < 0.0 || x0 >= self.nx as f64 || y0 >= self.ny as f64) {
+            (x1 >= 0.0 && y1 >= 0.0 && x0 < self.nx as f64 && y0 < self.ny as f64).then(|| {
                 let (x0, y0) = (x0.max(0.0) as usize, y0.max(0.0) as usize);
-                let (x1, y1) = ((x1 as usize).min(self.nx - 1), (y1 as usize).min(self.ny - 1));
-                rows = (x0, x1, y0, y1, true);
-            }
-        }
-        let (x0, x1, y0, y1, any) = rows;
-        (y0..if any { y1 + 1 } else { y0 }).map(move |y| {
-            let row = y * self.nx;
-            self.start[row + x0] as usize..self.start[row + x1 + 1] as usize
+                (x0, (x1 as usize).min(self.nx - 1), y0, (y1 as usize).min(self.ny - 1))
+            })
+        });
+        cells.flatten().into_iter().flat_map(move |(x0, x1, y0, y1)| {
+            (y0..=y1).map(move |y| self.start[y * self.nx + x0] as usize..self.start[y * self.nx + x1 + 1] as usize)
         })
     }
 

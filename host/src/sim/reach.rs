@@ -17,13 +17,15 @@ pub const REACH_RESOLUTION_M: f64 = 0.1;
 /// its centre.
 pub const REACH_STANDOFF_M: f64 = 1.0;
 
+/// [`ReachMap`]'s step count of a cell the flood did not reach.
+const UNREACHED: u32 = u32::MAX;
+
 /// The flood fill's result.
 pub struct ReachMap {
     origin: P2,
     nx: usize,
     ny: usize,
-    reached: Vec<bool>,
-    /// 4-connected steps from the start cell (`u32::MAX` where not reached).
+    /// 4-connected steps from the start cell; [`UNREACHED`] where the flood did not reach.
     steps: Vec<u32>,
 }
 
@@ -43,7 +45,7 @@ impl ReachMap {
         let nx = (((world.bounds[1][0] - origin[0] + 0.5) / res).ceil() as usize).clamp(1, 2000);
         let ny = (((world.bounds[1][1] - origin[1] + 0.5) / res).ceil() as usize).clamp(1, 2000);
         let center = |x: usize, y: usize| [origin[0] + (x as f64 + 0.5) * res, origin[1] + (y as f64 + 0.5) * res];
-        let mut map = ReachMap { origin, nx, ny, reached: vec![false; nx * ny], steps: vec![u32::MAX; nx * ny] };
+        let mut map = ReachMap { origin, nx, ny, steps: vec![UNREACHED; nx * ny] };
         let Some(s) = map.index(from) else {
             return map;
         };
@@ -61,15 +63,13 @@ impl ReachMap {
             return map;
         }
         let mut queue = VecDeque::new();
-        map.reached[s] = true;
         map.steps[s] = 0;
         queue.push_back(s);
         while let Some(i) = queue.pop_front() {
             let (x, y) = (i % nx, i / nx);
             let next = map.steps[i] + 1;
             let mut visit = |j: usize, map: &mut ReachMap, state: &mut Vec<u8>| {
-                if !map.reached[j] && free(j, state) {
-                    map.reached[j] = true;
+                if map.steps[j] == UNREACHED && free(j, state) {
                     map.steps[j] = next;
                     queue.push_back(j);
                 }
@@ -107,9 +107,13 @@ impl ReachMap {
         ]
     }
 
+    fn reached(&self, i: usize) -> bool {
+        self.steps[i] != UNREACHED
+    }
+
     /// Was the cell containing `p` reached?
     pub fn is_reached(&self, p: P2) -> bool {
-        self.index(p).is_some_and(|i| self.reached[i])
+        self.index(p).is_some_and(|i| self.reached(i))
     }
 
     /// Centres of the reached cells within `radius` of `p`.
@@ -121,7 +125,7 @@ impl ReachMap {
         for y in (cy - r).max(0)..=(cy + r).min(self.ny as isize - 1) {
             for x in (cx - r).max(0)..=(cx + r).min(self.nx as isize - 1) {
                 let i = y as usize * self.nx + x as usize;
-                if self.reached[i] {
+                if self.reached(i) {
                     let c = self.center(i);
                     if dist(c, p) <= radius {
                         out.push(c);
@@ -136,13 +140,13 @@ impl ReachMap {
     /// metres (an overestimate of the true shortest path by at most a factor of √2), or `None`
     /// where the flood did not reach.
     pub fn path_m(&self, p: P2) -> Option<f64> {
-        self.index(p).filter(|&i| self.reached[i]).map(|i| self.steps[i] as f64 * REACH_RESOLUTION_M)
+        self.index(p).filter(|&i| self.reached(i)).map(|i| self.steps[i] as f64 * REACH_RESOLUTION_M)
     }
 
     /// Centres of all reached cells whose [`ReachMap::path_m`] lies in `lo..=hi`, in cell order.
     pub fn reached_within(&self, lo: f64, hi: f64) -> Vec<(P2, f64)> {
-        (0..self.reached.len())
-            .filter(|&i| self.reached[i])
+        (0..self.steps.len())
+            .filter(|&i| self.reached(i))
             .map(|i| (self.center(i), self.steps[i] as f64 * REACH_RESOLUTION_M))
             .filter(|&(_, d)| d >= lo && d <= hi)
             .collect()
@@ -150,7 +154,7 @@ impl ReachMap {
 
     /// Number of reached cells.
     pub fn reached_count(&self) -> usize {
-        self.reached.iter().filter(|&&r| r).count()
+        self.steps.iter().filter(|&&s| s != UNREACHED).count()
     }
 
     /// Is any cell inside the axis-aligned box `[min, max]` reached?
@@ -159,7 +163,7 @@ impl ReachMap {
         let y0 = ((bb[0][1] - self.origin[1]) / REACH_RESOLUTION_M).floor().max(0.0) as usize;
         let x1 = (((bb[1][0] - self.origin[0]) / REACH_RESOLUTION_M).floor().max(0.0) as usize).min(self.nx - 1);
         let y1 = (((bb[1][1] - self.origin[1]) / REACH_RESOLUTION_M).floor().max(0.0) as usize).min(self.ny - 1);
-        (y0..=y1).any(|y| (x0..=x1).any(|x| self.reached[y * self.nx + x]))
+        (y0..=y1).any(|y| (x0..=x1).any(|x| self.reached(y * self.nx + x)))
     }
 }
 
