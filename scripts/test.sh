@@ -72,8 +72,8 @@ fi
 need qemu-system-arm "apt-get install -y qemu-system-arm (Debian/Ubuntu), or your distribution's QEMU Arm system emulator"
 qemu-system-arm --version | head -1
 # The images: mcu-node (real time), mcu-lockstep, mcu-trace (golden trace + timing), mcu-selftest.
-cargo build --release --target "$TARGET" -p firmware --features mcu --bins
-LIVES_MCU_DIR="${CARGO_TARGET_DIR:-target}/$TARGET/release"
+cargo build --profile mcu --target "$TARGET" -p firmware --features mcu --bins
+LIVES_MCU_DIR="${CARGO_TARGET_DIR:-target}/$TARGET/mcu"
 case "$LIVES_MCU_DIR" in /*) ;; *) LIVES_MCU_DIR="$PWD/$LIVES_MCU_DIR" ;; esac
 export LIVES_MCU_DIR
 # The memory report (static RAM and flash of each image against memory.x), the per-stage

@@ -9,12 +9,12 @@
 //! `cargo test`; `scripts/test.sh` builds the images and runs them with `--ignored`:
 //!
 //! ```sh
-//! cargo build --release --target thumbv7em-none-eabihf -p firmware --features mcu --bins
+//! cargo build --profile mcu --target thumbv7em-none-eabihf -p firmware --features mcu --bins
 //! cargo test --release -p lives-tests --test mcu -- --ignored
 //! ```
 //!
 //! The images are looked for in `$LIVES_MCU_DIR`, else `$CARGO_TARGET_DIR` (or `target/`)
-//! `/thumbv7em-none-eabihf/release/`. Missing QEMU or images fail the tests with what to do.
+//! `/thumbv7em-none-eabihf/mcu/`. Missing QEMU or images fail the tests with what to do.
 
 use firmware::mcu::trace::{Digest, Trace};
 use firmware::node::{Node, NodeConfig, TimeMode};
@@ -50,14 +50,14 @@ fn image_dir() -> PathBuf {
         return PathBuf::from(d);
     }
     let target = std::env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| Path::new(WORKSPACE).join("target"));
-    target.join("thumbv7em-none-eabihf/release")
+    target.join("thumbv7em-none-eabihf/mcu")
 }
 
 fn image(name: &str) -> PathBuf {
     let p = image_dir().join(name);
     assert!(
         p.is_file(),
-        "{} is missing: build the MCU images with `cargo build --release --target thumbv7em-none-eabihf -p firmware --features mcu --bins` \
+        "{} is missing: build the MCU images with `cargo build --profile mcu --target thumbv7em-none-eabihf -p firmware --features mcu --bins` \
          (or set LIVES_MCU_DIR)",
         p.display()
     );
