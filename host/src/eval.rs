@@ -70,6 +70,11 @@ pub struct CellSummary {
     pub lidar_sighted: usize,
     /// Mean time of the LiDAR's first sighting over those trials (s; NaN if none).
     pub mean_lidar_sighting_s: f64,
+    /// Failed trials in which a target had been within the camera's reach
+    /// ([`SearchResult::target_in_camera_reach_s`]): the camera did not look that way then
+    /// (or saw too little of it). The other
+    /// failures never came that close (the route's fault).
+    pub missed_in_reach: usize,
     /// Every trial's time (s), in seed order (for plots).
     pub times_s: Vec<f64>,
 }
@@ -121,6 +126,7 @@ pub fn summarise(results: &[SearchResult]) -> Vec<CellSummary> {
             let found = rs.iter().filter(|r| r.found).count();
             let sightings: Vec<f64> = rs.iter().filter_map(|r| r.lidar_saw_target_s).collect();
             CellSummary {
+                missed_in_reach: rs.iter().filter(|r| !r.found && r.target_in_camera_reach_s.is_some()).count(),
                 lidar_sighted: sightings.len(),
                 mean_lidar_sighting_s: mean_ci(&sightings).0,
                 trials: rs.len(),
@@ -165,18 +171,30 @@ pub fn markdown_table(cells: &[CellSummary]) -> String {
     }
     out.push_str("\nMean time to find in seconds (a failure counts as the time limit) and success rate.\n\n");
     out.push_str(
-        "| planner | setting | trials | found | mean time (s) | 95 % CI (s) | mean path (m) | LiDAR saw the target | its first sighting, mean (s) |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| planner | setting | trials | found | mean time (s) | 95 % CI (s) | mean path (m) | LiDAR saw the target | its first sighting, mean (s) | missed within camera reach |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for c in cells {
         let sighting = if c.lidar_sighted > 0 { format!("{:.1}", c.mean_lidar_sighting_s) } else { "—".into() };
         out.push_str(&format!(
-            "| {} | {} {} | {} | {} | {:.1} | ± {:.1} | {:.1} | {} | {} |\n",
-            c.planner, c.world, c.scenario, c.trials, c.found, c.mean_time_s, c.ci95_s, c.mean_path_m, c.lidar_sighted, sighting
+            "| {} | {} {} | {} | {} | {:.1} | ± {:.1} | {:.1} | {} | {} | {} |\n",
+            c.planner,
+            c.world,
+            c.scenario,
+            c.trials,
+            c.found,
+            c.mean_time_s,
+            c.ci95_s,
+            c.mean_path_m,
+            c.lidar_sighted,
+            sighting,
+            c.missed_in_reach
         ));
     }
     out.push_str(
-        "\nThe last two columns: in how many trials the LiDAR had a target in view (3 or more beams on it in one scan) and, over \
-         those, when it first did; the camera's detection came at the mean time (or never).\n",
+        "\nThe last three columns: in how many trials the LiDAR had a target in view (3 or more beams on it in one scan) and, over \
+         those, when it first did (the camera's detection came at the mean time, or never); and how many failed trials had the \
+         target within the camera's reach at some time (3 or more beams on it, none farther than the camera's range): the \
+         camera did not look that way then, or saw too little of it. The other failures never came that close.\n",
     );
     out
 }
@@ -272,12 +290,12 @@ pub fn claims(results: &[SearchResult]) -> Option<String> {
 /// The summary as CSV (one line per planner and setting).
 pub fn csv(cells: &[CellSummary]) -> String {
     let mut out = String::from(
-        "planner,world,scenario,trials,found,success_rate,mean_time_s,ci95_s,mean_path_m,time_limit_s,lidar_sighted,mean_lidar_sighting_s\n",
+        "planner,world,scenario,trials,found,success_rate,mean_time_s,ci95_s,mean_path_m,time_limit_s,lidar_sighted,mean_lidar_sighting_s,missed_in_reach\n",
     );
     for c in cells {
         let sighting = if c.lidar_sighted > 0 { format!("{:.3}", c.mean_lidar_sighting_s) } else { String::new() };
         out.push_str(&format!(
-            "{},{},{},{},{},{:.4},{:.3},{:.3},{:.3},{:.1},{},{}\n",
+            "{},{},{},{},{},{:.4},{:.3},{:.3},{:.3},{:.1},{},{},{}\n",
             c.planner,
             c.world,
             c.scenario,
@@ -289,7 +307,8 @@ pub fn csv(cells: &[CellSummary]) -> String {
             c.mean_path_m,
             c.time_limit_s,
             c.lidar_sighted,
-            sighting
+            sighting,
+            c.missed_in_reach
         ));
     }
     out
@@ -452,6 +471,7 @@ mod tests {
             targets: vec![],
             motion: None,
             lidar_saw_target_s: None,
+            target_in_camera_reach_s: None,
         }
     }
 
@@ -460,6 +480,9 @@ mod tests {
         let mut rs = [result("a", true, 30.0), result("a", false, 0.0), result("a", true, 60.0), result("b", true, 10.0)];
         rs[0].lidar_saw_target_s = Some(5.0);
         rs[1].lidar_saw_target_s = Some(8.0);
+        // Trial 2 failed with the target once within the camera's reach; trial 1 found it.
+        rs[0].target_in_camera_reach_s = Some(20.0);
+        rs[1].target_in_camera_reach_s = Some(9.0);
         let cells = summarise(&rs);
         assert_eq!(cells.len(), 2);
         let a = &cells[0];
@@ -473,9 +496,10 @@ mod tests {
         assert!(csv(&cells).lines().nth(1).unwrap().starts_with("a,apartment,easy,3,2,0.6667,70.000"));
         // The LiDAR sighting: 2 of 3 trials, mean 6.5 s; none in `b`.
         assert_eq!((a.lidar_sighted, a.mean_lidar_sighting_s), (2, 6.5));
-        assert!(md.contains("| 2 | 6.5 |") && md.contains("| 0 | — |"), "{md}");
-        assert!(csv(&cells).lines().nth(1).unwrap().ends_with(",2,6.500"));
-        assert!(csv(&cells).lines().nth(2).unwrap().ends_with(",0,"));
+        assert_eq!((a.missed_in_reach, cells[1].missed_in_reach), (1, 0));
+        assert!(md.contains("| 2 | 6.5 | 1 |") && md.contains("| 0 | — | 0 |"), "{md}");
+        assert!(csv(&cells).lines().nth(1).unwrap().ends_with(",2,6.500,1"));
+        assert!(csv(&cells).lines().nth(2).unwrap().ends_with(",0,,0"));
     }
 
     #[test]

@@ -625,7 +625,16 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 if let Some(m) = r.motion {
                     let lidar =
                         r.lidar_saw_target_s.map_or("never saw the target".to_string(), |t| format!("first saw the target at {t:.1} s"));
-                    say!("time: {:.1} s moving, {:.1} s turning, {:.1} s still; the LiDAR {lidar}", m.moving_s, m.turning_s, m.still_s);
+                    let reach = match (r.found, r.target_in_camera_reach_s) {
+                        (false, Some(t)) => format!("; it was within the camera's reach at {t:.1} s, but the camera did not look that way (or saw too little of it)"),
+                        _ => String::new(),
+                    };
+                    say!(
+                        "time: {:.1} s moving, {:.1} s turning, {:.1} s still; the LiDAR {lidar}{reach}",
+                        m.moving_s,
+                        m.turning_s,
+                        m.still_s
+                    );
                 }
                 if planner == PlannerChoice::Lives && r.labels == "ground-truth" {
                     say!("note: no --model given, so `lives` runs on the simulator's ground-truth labels (same as lives-gt)");

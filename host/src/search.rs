@@ -175,6 +175,12 @@ pub struct SearchResult {
     /// scan), `None` if never (or on the real robot): with `time_s` it shows how long the camera
     /// took to look where the LiDAR had already seen something.
     pub lidar_saw_target_s: Option<f64>,
+    /// When a target was first within the camera's reach: [`LIDAR_SIGHTING_BEAMS`] beams of one
+    /// scan on it, none farther than the camera's range. The camera would have seen it had it
+    /// faced that way, so a gap to `time_s` is time lost to where the camera looked (not to the
+    /// route). `None` if never (or on the real robot).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub target_in_camera_reach_s: Option<f64>,
 }
 
 /// Where a run's time went, tick by tick.
@@ -188,20 +194,36 @@ pub struct Motion {
     pub still_s: f64,
 }
 
-/// Tallies a simulated run for [`SearchResult::motion`] and [`SearchResult::lidar_saw_target_s`];
-/// the in-process loop and the serial bridge both feed one.
-#[derive(Clone, Debug, Default)]
+/// Tallies a simulated run for [`SearchResult::motion`], [`SearchResult::lidar_saw_target_s`]
+/// and [`SearchResult::target_in_camera_reach_s`]; the in-process loop and the serial bridge both
+/// feed one.
+#[derive(Clone, Debug)]
 pub struct RunTally {
     /// Seconds moving, turning, still.
     split: [f64; 3],
+    camera_range_m: f64,
     lidar_saw_target_s: Option<f64>,
+    in_camera_reach_s: Option<f64>,
 }
 
 impl RunTally {
+    /// A tally for a camera of this range.
+    pub fn new(camera_range_m: f64) -> Self {
+        Self { split: [0.0; 3], camera_range_m, lidar_saw_target_s: None, in_camera_reach_s: None }
+    }
+
     /// A scan taken at `now_us`.
     pub fn scan(&mut self, now_us: u64, scan: &Scan) {
-        if self.lidar_saw_target_s.is_none() && scan.hits.iter().filter(|&&h| h == HitKind::Target).count() >= LIDAR_SIGHTING_BEAMS {
-            self.lidar_saw_target_s = Some(round3(now_us as f64 / 1e6));
+        let t = round3(now_us as f64 / 1e6);
+        let on_target = || scan.hits.iter().zip(&scan.ranges_m).filter(|&(&h, _)| h == HitKind::Target);
+        if self.lidar_saw_target_s.is_none() && on_target().count() >= LIDAR_SIGHTING_BEAMS {
+            self.lidar_saw_target_s = Some(t);
+        }
+        if self.in_camera_reach_s.is_none() {
+            let near = on_target().filter(|&(_, &r)| (r as f64) <= self.camera_range_m).count();
+            if near >= LIDAR_SIGHTING_BEAMS {
+                self.in_camera_reach_s = Some(t);
+            }
         }
     }
 
@@ -227,6 +249,11 @@ impl RunTally {
     /// When the LiDAR first saw a target.
     pub fn lidar_saw_target_s(&self) -> Option<f64> {
         self.lidar_saw_target_s
+    }
+
+    /// When a target was first within the camera's reach.
+    pub fn target_in_camera_reach_s(&self) -> Option<f64> {
+        self.in_camera_reach_s
     }
 }
 
@@ -421,7 +448,7 @@ fn run_with(
     let mut found_at = None;
     let mut outcome = "time-limit";
     let mut status: firmware::Status;
-    let mut tally = RunTally::default();
+    let mut tally = RunTally::new(spec.sim.camera_range_m);
     let tick_s = TICK_US as f64 / 1e6;
     loop {
         let now_us = ticks as u64 * TICK_US;
@@ -514,6 +541,7 @@ fn run_with(
         targets: sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
         motion: Some(tally.motion()),
         lidar_saw_target_s: tally.lidar_saw_target_s(),
+        target_in_camera_reach_s: tally.target_in_camera_reach_s(),
     };
     SearchRun { result, controller: ctrl, sim, trajectory, start, found_at, goals }
 }
@@ -537,5 +565,27 @@ mod tests {
         assert_eq!(encode_range(1e9, min), RANGE_NO_RETURN, "beyond what u16 millimetres hold");
         assert_eq!(encode_range(1.2344, min), 1234);
         assert_eq!(encode_range(65.534, min), 65_534);
+    }
+
+    #[test]
+    fn the_tally_times_the_first_lidar_sighting_and_the_first_within_camera_reach() {
+        let scan = |target_ranges: &[f32]| {
+            let mut ranges_m = vec![6.0f32; 20];
+            let mut hits = vec![HitKind::Wall; 20];
+            for (i, &r) in target_ranges.iter().enumerate() {
+                ranges_m[i] = r;
+                hits[i] = HitKind::Target;
+            }
+            Scan { angle_min: -std::f64::consts::PI, angle_increment: std::f64::consts::TAU / 20.0, ranges_m, hits }
+        };
+        let mut t = RunTally::new(4.0);
+        t.scan(0, &scan(&[5.0, 5.0]));
+        assert_eq!((t.lidar_saw_target_s(), t.target_in_camera_reach_s()), (None, None), "two beams are not a sighting");
+        t.scan(200_000, &scan(&[5.0, 4.5, 4.2]));
+        assert_eq!((t.lidar_saw_target_s(), t.target_in_camera_reach_s()), (Some(0.2), None), "seen, but beyond 4 m");
+        t.scan(400_000, &scan(&[4.5, 3.9, 3.8, 4.0]));
+        assert_eq!(t.target_in_camera_reach_s(), Some(0.4), "three beams within 4 m");
+        t.scan(600_000, &scan(&[1.0, 1.0, 1.0]));
+        assert_eq!((t.lidar_saw_target_s(), t.target_in_camera_reach_s()), (Some(0.2), Some(0.4)), "the first times stay");
     }
 }

@@ -26,6 +26,9 @@ fn lives_gt_finds_the_target_in_apartment_easy_seed_1() {
     assert!(m.moving_s > m.turning_s && m.moving_s > m.still_s, "{m:?}");
     let seen = r.lidar_saw_target_s.expect("the LiDAR saw the target");
     assert!(seen < r.time_s, "LiDAR {seen} s, camera {} s", r.time_s);
+    // The camera detects within its range, so the target was within its reach by then.
+    let reach = r.target_in_camera_reach_s.expect("within the camera's reach before the detection");
+    assert!(seen <= reach && reach <= r.time_s, "LiDAR {seen} s, reach {reach} s, camera {} s", r.time_s);
 }
 
 #[test]

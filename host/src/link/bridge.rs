@@ -575,7 +575,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
     let mut goals = Vec::new();
     let mut recorded_seq = None;
     let (mut ticks, mut blocked_count, mut collisions) = (0u32, 0u32, 0u32);
-    let mut tally = RunTally::default();
+    let mut tally = RunTally::new(spec.sim.camera_range_m);
     let mut base_blocked = false;
     let mut outcome = "time-limit";
     let mut need_start = true;
@@ -803,6 +803,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         targets: b.sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
         motion: Some(tally.motion()),
         lidar_saw_target_s: tally.lidar_saw_target_s(),
+        target_in_camera_reach_s: tally.target_in_camera_reach_s(),
     };
     Ok(BridgeResult {
         result,
