@@ -420,12 +420,12 @@ impl Controller {
         }
 
         // Look while walking (see [`Config::gaze`]): scored every tick from where the robot is.
-        self.status.gaze = None;
+        let last_gaze = self.status.gaze.take();
         if self.mode == Mode::Exploring && self.cfg.gaze {
             if let (Some(pose), Some(g)) = (self.pose, &self.goal) {
                 if hypot(g.pose.x - pose.x, g.pose.y - pose.y) > crate::planner::GAZE_HANDOVER_M {
                     obs.begin(Stage::Gaze);
-                    let (gaze, work) = self.planner.gaze(&self.cfg, &self.lidar, &self.visual, &self.nonmap, &pose);
+                    let (gaze, work) = self.planner.gaze(&self.cfg, &self.lidar, &self.visual, &self.nonmap, &pose, last_gaze);
                     obs.end(Stage::Gaze);
                     self.status.gaze = gaze.map(|(h, _)| h);
                     self.status.cost.gaze = work;

@@ -675,6 +675,8 @@ impl Planner {
     /// [`GAZE_HEADINGS`] headings is scored with the utility's view terms — camera-unseen cells
     /// and, for `lives`, non-map points in the cone — and the best is returned with its score
     /// (Q16.16 utility bits), or `None` when no heading offers at least `cfg.gaze_min_gain`.
+    /// `current` is the heading returned on the last tick: it is kept while it offers at least
+    /// half of `gaze_min_gain` and no heading beats it by `gaze_min_gain` (hysteresis).
     /// Reads the grids, writes only scratch; its work units are returned too.
     pub fn gaze(
         &mut self,
@@ -683,6 +685,7 @@ impl Planner {
         visual: &VisualGrid,
         nonmap: &NonMapStore,
         pose: &Pose2,
+        current: Option<BinaryAngle>,
     ) -> (Option<(BinaryAngle, i64)>, u32) {
         let robot = lidar.geom.cell_of(pose.x, pose.y);
         if !PackedGrid::in_bounds(robot.0, robot.1) {
@@ -692,6 +695,7 @@ impl Planner {
         let w_nonmap = cfg.effective_w_nonmap();
         let mut work = if w_nonmap != Weight::ZERO { self.visible_nonmap(lidar, nonmap, robot, range_cells) } else { 0 };
         let mut best: Option<(BinaryAngle, i64)> = None;
+        let mut kept: Option<(BinaryAngle, i64)> = None;
         for i in 0..GAZE_HEADINGS {
             let heading = BinaryAngle((i as u32).wrapping_mul(u32::MAX / GAZE_HEADINGS as u32 + 1) as i32);
             let view = visual.unseen_in_cone(
@@ -709,11 +713,23 @@ impl Planner {
             let gain = cfg.w_unknown_per_cell.to_bits() as i64 * view.unseen_cells as i64
                 + cfg.w_surface_per_ray.to_bits() as i64 * view.unseen_surface_rays as i64
                 + w_nonmap.to_bits() as i64 * nm as i64;
+            if current == Some(heading) {
+                kept = Some((heading, gain));
+            }
             if best.is_none_or(|(_, g)| gain > g) {
                 best = Some((heading, gain));
             }
         }
-        (best.filter(|&(_, g)| g >= cfg.gaze_min_gain.to_bits() as i64), work)
+        // Hysteresis (the base turns at a finite rate, and a heading re-chosen every tick among
+        // near-equal scores is never reached): the last tick's heading stays while it offers at
+        // least half the least gain and no heading beats it by the least gain.
+        let min_gain = cfg.gaze_min_gain.to_bits() as i64;
+        if let (Some(k), Some(b)) = (kept, best) {
+            if 2 * k.1 >= min_gain && b.1 < k.1 + min_gain {
+                return (Some(k), work);
+            }
+        }
+        (best.filter(|&(_, g)| g >= min_gain), work)
     }
 
     /// Visible non-map points (from the last [`Planner::visible_nonmap`]) within the cone.

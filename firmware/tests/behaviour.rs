@@ -473,7 +473,7 @@ fn the_gaze_turns_to_what_is_unseen_and_to_non_map_points() {
     let mut planner = Box::new(Planner::new());
     let robot = pose(7.55, 7.55, 0.0); // the room's centre, facing east
     let cfg = Config { planner: PlannerKind::Multisensor, ..Config::DEFAULT };
-    let (gaze, work) = planner.gaze(&cfg, &lidar, &vis, &store, &robot);
+    let (gaze, work) = planner.gaze(&cfg, &lidar, &vis, &store, &robot, None);
     let (h, _) = gaze.expect("half the room unseen is worth a look");
     assert!(
         (h - firmware::BinaryAngle::HALF).unsigned_abs() <= firmware::BinaryAngle::from_degrees(45).unsigned_abs(),
@@ -487,7 +487,7 @@ fn the_gaze_turns_to_what_is_unseen_and_to_non_map_points() {
             vis.grid.set(x, y, Cell::Free);
         }
     }
-    assert_eq!(planner.gaze(&cfg, &lidar, &vis, &store, &robot).0, None);
+    assert_eq!(planner.gaze(&cfg, &lidar, &vis, &store, &robot, None).0, None);
 
     // Non-map points to the north pull the gaze of `lives`, not of `multisensor`.
     let mut store = Box::new(NonMapStore::new());
@@ -495,11 +495,48 @@ fn the_gaze_turns_to_what_is_unseen_and_to_non_map_points() {
         store.insert(&geom(), Config::mm(7_000 + 150 * k), Config::mm(9_400), cfg.nonmap_pool_radius_m);
     }
     let lives = Config { planner: PlannerKind::Lives, ..Config::DEFAULT };
-    let (g, _) = planner.gaze(&lives, &lidar, &vis, &store, &robot);
+    let (g, _) = planner.gaze(&lives, &lidar, &vis, &store, &robot, None);
     let (h, _) = g.expect("points in view are worth a look");
     assert!(
         (h - firmware::BinaryAngle::QUARTER).unsigned_abs() <= firmware::BinaryAngle::from_degrees(45).unsigned_abs(),
         "looks north: {h:?}"
     );
-    assert_eq!(planner.gaze(&cfg, &lidar, &vis, &store, &robot).0, None);
+    assert_eq!(planner.gaze(&cfg, &lidar, &vis, &store, &robot, None).0, None);
+}
+
+#[test]
+fn the_gaze_keeps_its_heading_until_another_is_clearly_better_or_it_has_little_left() {
+    // The room, all free to the LiDAR; the camera has seen all but a strip along the west wall.
+    let lidar = room_grid(false);
+    let mut vis = Box::new(VisualGrid::new());
+    for y in 51..100 {
+        for x in 64..100 {
+            vis.grid.set(x, y, Cell::Free);
+        }
+    }
+    let store = Box::new(NonMapStore::new());
+    let mut planner = Box::new(Planner::new());
+    let robot = pose(7.55, 7.55, 0.0);
+    let cfg = Config { planner: PlannerKind::Multisensor, ..Config::DEFAULT };
+    let step = firmware::BinaryAngle::from_fraction(1, firmware::planner::GAZE_HEADINGS as i64);
+    let gain = |planner: &mut Planner, h: firmware::BinaryAngle| {
+        // A heading's own gain: what the gaze reports when it keeps that heading.
+        planner.gaze(&cfg, &lidar, &vis, &store, &robot, Some(h)).0.filter(|g| g.0 == h).map(|g| g.1)
+    };
+    let (best, best_gain) = planner.gaze(&cfg, &lidar, &vis, &store, &robot, None).0.expect("the strip is worth a look");
+    assert!((best - firmware::BinaryAngle::HALF).unsigned_abs() <= step.unsigned_abs(), "looks west: {best:?}");
+    let margin = cfg.gaze_min_gain.to_bits() as i64;
+    for i in 0..firmware::planner::GAZE_HEADINGS as i64 {
+        let h = firmware::BinaryAngle::from_fraction(i, firmware::planner::GAZE_HEADINGS as i64);
+        let (chosen, g) = planner.gaze(&cfg, &lidar, &vis, &store, &robot, Some(h)).0.expect("west is still worth a look");
+        if chosen == h && h != best {
+            // Kept: it still offers half the least gain, and the best does not beat it by the margin.
+            assert!(2 * g >= margin && best_gain < g + margin, "{h:?} kept with {g} against {best_gain}");
+        } else {
+            assert_eq!((chosen, g), (best, best_gain), "from {h:?}");
+        }
+    }
+    // Both outcomes occur: the headings next to west are kept, east (nothing unseen) is not.
+    assert!(gain(&mut planner, best + step).is_some() && gain(&mut planner, best - step).is_some());
+    assert_eq!(gain(&mut planner, firmware::BinaryAngle::ZERO), None);
 }
