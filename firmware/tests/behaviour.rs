@@ -140,12 +140,7 @@ fn a_closed_room_has_no_frontier_and_an_open_doorway_has_one() {
 /// tell the four viewpoints apart when the unknown/frontier weights are zero.
 fn score_headings(kind: PlannerKind, with_points: bool) -> [i64; 4] {
     let lidar = room_grid(true);
-    let mut vis = Box::new(VisualGrid::new());
-    for y in 51..100 {
-        for x in 51..100 {
-            vis.grid.set(x, y, Cell::Free);
-        }
-    }
+    let vis = seen_east_of(51);
     let mut f = Box::new(FrontierSet::new());
     let mut store = Box::new(NonMapStore::new());
     let cfg = Config {
@@ -459,16 +454,22 @@ fn a_goal_blocked_for_too_long_is_blacklisted_and_replaced() {
     }
 }
 
+/// A visual map in which the camera has seen the room's interior from column `x0` eastwards.
+fn seen_east_of(x0: i32) -> Box<VisualGrid> {
+    let mut vis = Box::new(VisualGrid::new());
+    for y in 51..100 {
+        for x in x0..100 {
+            vis.grid.set(x, y, Cell::Free);
+        }
+    }
+    vis
+}
+
 #[test]
 fn the_gaze_turns_to_what_is_unseen_and_to_non_map_points() {
     // The room, all free to the LiDAR; the camera has seen everything but the west half.
     let lidar = room_grid(false);
-    let mut vis = Box::new(VisualGrid::new());
-    for y in 51..100 {
-        for x in 75..100 {
-            vis.grid.set(x, y, Cell::Free);
-        }
-    }
+    let vis = seen_east_of(75);
     let store = Box::new(NonMapStore::new());
     let mut planner = Box::new(Planner::new());
     let robot = pose(7.55, 7.55, 0.0); // the room's centre, facing east
@@ -482,11 +483,7 @@ fn the_gaze_turns_to_what_is_unseen_and_to_non_map_points() {
     assert!(work > 0);
 
     // Everything seen: nothing is worth turning for (the camera faces the way it walks).
-    for y in 51..100 {
-        for x in 51..100 {
-            vis.grid.set(x, y, Cell::Free);
-        }
-    }
+    let vis = seen_east_of(51);
     assert_eq!(planner.gaze(&cfg, &lidar, &vis, &store, &robot, None).0, None);
 
     // Non-map points to the north pull the gaze of `lives`, not of `multisensor`.
@@ -508,12 +505,7 @@ fn the_gaze_turns_to_what_is_unseen_and_to_non_map_points() {
 fn the_gaze_keeps_its_heading_until_another_is_clearly_better_or_it_has_little_left() {
     // The room, all free to the LiDAR; the camera has seen all but a strip along the west wall.
     let lidar = room_grid(false);
-    let mut vis = Box::new(VisualGrid::new());
-    for y in 51..100 {
-        for x in 64..100 {
-            vis.grid.set(x, y, Cell::Free);
-        }
-    }
+    let vis = seen_east_of(64);
     let store = Box::new(NonMapStore::new());
     let mut planner = Box::new(Planner::new());
     let robot = pose(7.55, 7.55, 0.0);
