@@ -99,6 +99,13 @@ pub struct Config {
     /// At most this many non-map points count per 0.8 m block in the non-map term (0 = no cap,
     /// the paper's plain count). Default 0.
     pub nonmap_block_cap: u8,
+    /// At most this many non-map points count in one view (a viewpoint's or the gaze's cone;
+    /// 0 = no cap, the paper's plain count). The target is one object: beyond a few points, more
+    /// points in view mean more furniture, not a better chance of seeing the target, and an
+    /// uncapped count sends the robot across the building to the largest furniture cluster.
+    /// Default 0: on the tuning worlds a cap of 8 did not hold up on held-out worlds
+    /// (docs/architecture.md, "Capping the non-map count").
+    pub nonmap_view_cap: u16,
     /// `lives` and `multisensor` also score the four headings at the robot's own cell (turning in
     /// place to look is an action). Default false (the paper's candidates).
     pub look_around_here: bool,
@@ -185,6 +192,7 @@ impl Config {
         gaze: true,
         gaze_min_gain: w(4_000),
         nonmap_block_cap: 0,
+        nonmap_view_cap: 0,
         nonmap_viewpoints: true,
         nonmap_standoff_m: m(1_500),
         frontier_near_path_blocks: 1,

@@ -644,7 +644,7 @@ impl Planner {
                 );
                 work += view.work;
                 let unseen = view.unseen_cells;
-                let nm = if w_nonmap != Weight::ZERO { self.in_cone(heading, cfg.camera_fov, cfg.nonmap_block_cap) } else { 0 };
+                let nm = if w_nonmap != Weight::ZERO { self.in_cone(cfg, heading) } else { 0 };
                 let gain = cfg.w_unknown_per_cell.to_bits() as i64 * unseen as i64
                     + cfg.w_surface_per_ray.to_bits() as i64 * view.unseen_surface_rays as i64
                     + cfg.w_frontier_per_cell.to_bits() as i64 * near as i64
@@ -709,7 +709,7 @@ impl Planner {
                 cfg.unseen_unknown_eighths,
             );
             work += view.work;
-            let nm = if w_nonmap != Weight::ZERO { self.in_cone(heading, cfg.camera_fov, cfg.nonmap_block_cap) } else { 0 };
+            let nm = if w_nonmap != Weight::ZERO { self.in_cone(cfg, heading) } else { 0 };
             let gain = cfg.w_unknown_per_cell.to_bits() as i64 * view.unseen_cells as i64
                 + cfg.w_surface_per_ray.to_bits() as i64 * view.unseen_surface_rays as i64
                 + w_nonmap.to_bits() as i64 * nm as i64;
@@ -732,10 +732,19 @@ impl Planner {
         (best.filter(|&(_, g)| g >= min_gain), work)
     }
 
-    /// Visible non-map points (from the last [`Planner::visible_nonmap`]) within the cone.
-    /// With `cap > 0`, at most `cap` points count per 0.8 m block (a scaled count: several
-    /// distinct objects outweigh one large piece of furniture).
-    fn in_cone(&self, heading: BinaryAngle, fov: BinaryAngle, cap: u8) -> u32 {
+    /// Visible non-map points (from the last [`Planner::visible_nonmap`]) within the camera cone
+    /// facing `heading`, at most `cfg.nonmap_view_cap` of them (0 = no cap).
+    fn in_cone(&self, cfg: &Config, heading: BinaryAngle) -> u32 {
+        let n = self.in_cone_per_block(heading, cfg.camera_fov, cfg.nonmap_block_cap);
+        match cfg.nonmap_view_cap {
+            0 => n,
+            cap => n.min(cap as u32),
+        }
+    }
+
+    /// The points within the cone; with `cap > 0`, at most `cap` count per 0.8 m block (a scaled
+    /// count: several distinct objects outweigh one large piece of furniture).
+    fn in_cone_per_block(&self, heading: BinaryAngle, fov: BinaryAngle, cap: u8) -> u32 {
         let half = fov.0 as u32 / 2;
         let in_view = self.visible.iter().filter(|(a, _)| (*a - heading).unsigned_abs() <= half);
         if cap == 0 {

@@ -139,6 +139,11 @@ fn a_closed_room_has_no_frontier_and_an_open_doorway_has_one() {
 /// Room with a doorway; the visual map has seen everything inside, so only the non-map term can
 /// tell the four viewpoints apart when the unknown/frontier weights are zero.
 fn score_headings(kind: PlannerKind, with_points: bool) -> [i64; 4] {
+    score_headings_capped(kind, with_points, 0)
+}
+
+/// [`score_headings`] with `nonmap_view_cap` set.
+fn score_headings_capped(kind: PlannerKind, with_points: bool, nonmap_view_cap: u16) -> [i64; 4] {
     let lidar = room_grid(true);
     let vis = seen_east_of(51);
     let mut f = Box::new(FrontierSet::new());
@@ -149,6 +154,7 @@ fn score_headings(kind: PlannerKind, with_points: bool) -> [i64; 4] {
         w_frontier_per_cell: Config::weight_milli(0),
         // Only frontier viewpoints here: the test compares the four headings of one site.
         nonmap_viewpoints: false,
+        nonmap_view_cap,
         ..Config::DEFAULT
     };
     if with_points {
@@ -186,6 +192,20 @@ fn non_map_points_make_a_viewpoint_win_under_lives_but_not_multisensor() {
     // And under lives without points, the west viewpoint has no advantage either.
     let empty = score_headings(PlannerKind::Lives, false);
     assert!(empty.iter().all(|&u| u == empty[0]), "{empty:?}");
+}
+
+#[test]
+fn at_most_nonmap_view_cap_points_count_in_one_view() {
+    // West (heading 2) sees the cluster; the other headings see none of it.
+    let w = Config::DEFAULT.w_nonmap_per_point.to_bits() as i64;
+    let uncapped = score_headings_capped(PlannerKind::Lives, true, 0);
+    let points = (uncapped[2] - uncapped[0]) / w;
+    assert!(points >= 3 && (uncapped[2] - uncapped[0]) % w == 0, "{points} points in view: {uncapped:?}");
+    let capped = score_headings_capped(PlannerKind::Lives, true, 2);
+    assert_eq!(capped[2] - capped[0], 2 * w, "{capped:?}");
+    assert_eq!((capped[0], capped[1], capped[3]), (uncapped[0], uncapped[1], uncapped[3]), "views without points are unchanged");
+    // A cap above the count changes nothing.
+    assert_eq!(score_headings_capped(PlannerKind::Lives, true, points as u16), uncapped);
 }
 
 #[test]

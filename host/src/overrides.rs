@@ -20,6 +20,7 @@ pub const NAMES: &[(&str, &str)] = &[
     ("min_frontier_cells", "smallest frontier kept, cells"),
     ("unseen_unknown_eighths", "weight of LiDAR-unknown cells in the unseen term, eighths (8 = paper)"),
     ("nonmap_block_cap", "non-map points counted per 0.8 m block (0 = all)"),
+    ("nonmap_view_cap", "non-map points counted in one view (0 = all)"),
     ("look_around_here", "true/false: score turning in place at the robot's cell"),
     ("gaze", "true/false: look while walking (camera faces the best heading, not the travel direction)"),
     ("gaze_min_gain", "least view utility worth turning the camera for while walking"),
@@ -89,6 +90,7 @@ pub fn apply(cfg: &mut Config, assignment: &str) -> Result<(), String> {
                 v.parse().ok().filter(|e| *e <= 8).ok_or_else(|| format!("`{name}`: expected 0 to 8, got `{v}`"))?
         }
         "nonmap_block_cap" => cfg.nonmap_block_cap = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a count (0-255)"))?,
+        "nonmap_view_cap" => cfg.nonmap_view_cap = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a count (0-65535)"))?,
         "look_around_here" => cfg.look_around_here = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
         "gaze" => cfg.gaze = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
         "gaze_min_gain" => cfg.gaze_min_gain = weight(name, v)?,
@@ -123,7 +125,7 @@ mod tests {
         for (name, _) in NAMES {
             let value = match *name {
                 "nonmap_viewpoints" | "look_around_here" | "gaze" => "true",
-                "min_frontier_cells" | "nonmap_block_cap" | "unseen_unknown_eighths" => "5",
+                "min_frontier_cells" | "nonmap_block_cap" | "nonmap_view_cap" | "unseen_unknown_eighths" => "5",
                 "camera_fov_deg" => "90",
                 _ => "1",
             };

@@ -31,7 +31,7 @@ use serde::{Deserialize, Serialize};
 /// * v1: the first release.
 /// * v2: `HostToCore::ScanSegment` (tag 8): a scan may cross in segments; the configuration
 ///   carries `gaze` and `gaze_min_gain`, the status the gaze heading and its stage cost.
-pub const PROTOCOL_VERSION: u16 = 2;
+pub const PROTOCOL_VERSION: u16 = 3;
 
 /// Most beams one scan carries, whole ([`ScanMsg`]) or in segments ([`ScanSegmentMsg`]): a 360°
 /// scan at 0.33° (1091 beams) fits. Larger scans are refused ([`WireError::TooManyBeams`]).
@@ -577,6 +577,8 @@ pub struct ConfigMsg {
     pub w_nonmap_per_point: i32,
     /// [`Config::nonmap_block_cap`].
     pub nonmap_block_cap: u8,
+    /// [`Config::nonmap_view_cap`] (v3).
+    pub nonmap_view_cap: u16,
     /// [`Config::look_around_here`].
     pub look_around_here: bool,
     /// [`Config::gaze`] (v2).
@@ -638,6 +640,7 @@ impl ConfigMsg {
             w_frontier_per_cell: c.w_frontier_per_cell.to_bits(),
             w_nonmap_per_point: c.w_nonmap_per_point.to_bits(),
             nonmap_block_cap: c.nonmap_block_cap,
+            nonmap_view_cap: c.nonmap_view_cap,
             look_around_here: c.look_around_here,
             gaze: c.gaze,
             gaze_min_gain: c.gaze_min_gain.to_bits(),
@@ -688,6 +691,7 @@ impl ConfigMsg {
             w_frontier_per_cell: w(self.w_frontier_per_cell),
             w_nonmap_per_point: w(self.w_nonmap_per_point),
             nonmap_block_cap: self.nonmap_block_cap,
+            nonmap_view_cap: self.nonmap_view_cap,
             look_around_here: self.look_around_here,
             gaze: self.gaze,
             gaze_min_gain: w(self.gaze_min_gain),
