@@ -307,9 +307,13 @@ enum Cmd {
     /// Tune planner parameters on procedurally generated worlds only (never the built-in ones):
     /// scores every combination of the `--grid` values by mean time to find / time limit.
     Tune {
-        /// Random worlds `--world random --seed 1..=N`.
+        /// How many random worlds: `--world random --seed F..F+N-1`, F = `--first-world`.
         #[arg(long, default_value_t = 48)]
         worlds: u64,
+        /// The first random world's seed. Choose values on one range, then confirm them on
+        /// another that played no part in the choice, e.g. `--first-world 193 --worlds 192`.
+        #[arg(long, default_value_t = 1)]
+        first_world: u64,
         /// Planners the score averages over, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "lives-gt,multisensor")]
         planners: Vec<PlannerChoice>,
@@ -1007,7 +1011,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Eval { trials, worlds, scenarios, planners, threads, out, no_pictures, set } => {
             eval_cmd(trials, &worlds, &scenarios, &planners, threads, &out, no_pictures, &set)
         }
-        Cmd::Tune { worlds, planners, scenarios, grid, threads, out } => {
+        Cmd::Tune { worlds, first_world, planners, scenarios, grid, threads, out } => {
             let grid: Vec<(String, Vec<String>)> = grid.iter().map(|g| host::eval::parse_grid_axis(g)).collect::<Result<_, _>>()?;
             // Reject unknown names and bad values before spending minutes.
             for a in host::eval::grid_assignments(&grid) {
@@ -1019,15 +1023,17 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             if worlds == 0 {
                 return Err("--worlds must be at least 1".into());
             }
+            let last_world = first_world.checked_add(worlds - 1).ok_or("--first-world + --worlds is past the last seed")?;
             if scenarios.is_empty() || planners.is_empty() {
                 return Err("--scenarios and --planners need at least one value each".into());
             }
             let pb = count_bar();
             let t0 = Instant::now();
-            let scores = host::eval::tune(&grid, &planners, &scenarios, 1..=worlds, threads.unwrap_or_else(cores), |n, total| {
-                pb.set_length(total as u64);
-                pb.set_position(n as u64);
-            })?;
+            let scores =
+                host::eval::tune(&grid, &planners, &scenarios, first_world..=last_world, threads.unwrap_or_else(cores), |n, total| {
+                    pb.set_length(total as u64);
+                    pb.set_position(n as u64);
+                })?;
             pb.finish_and_clear();
             say!("| rank | assignment | mean time / limit | 95 % CI | found | paired Δ vs defaults |\n|---|---|---|---|---|---|");
             let label = |sets: &[String]| if sets.is_empty() { "(defaults)".to_string() } else { sets.join(" ") };
@@ -1045,14 +1051,14 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             }
             if let Some(best) = scores.first().filter(|b| !b.sets.is_empty()) {
                 say!(
-                    "best on random worlds 1..={worlds}, {} ({} searches each, {:.0} s): --set {}",
+                    "best on random worlds {first_world}..={last_world}, {} ({} searches each, {:.0} s): --set {}",
                     scenarios.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(" and "),
                     best.searches,
                     t0.elapsed().as_secs_f64(),
                     best.sets.join(" --set ")
                 );
             } else {
-                say!("best on random worlds 1..={worlds}: the defaults ({:.0} s)", t0.elapsed().as_secs_f64());
+                say!("best on random worlds {first_world}..={last_world}: the defaults ({:.0} s)", t0.elapsed().as_secs_f64());
             }
             write_file(&out, &serde_json::to_string_pretty(&scores).map_err(|e| e.to_string())?)?;
             say!("ranking: {}", out.display());

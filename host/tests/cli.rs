@@ -181,5 +181,19 @@ fn tune_rejects_unknown_parameters_before_running_and_ranks_a_grid() {
     assert_eq!((three["vs_defaults"].as_f64(), three["vs_defaults_ci95"].as_f64()), (Some(0.0), Some(0.0)));
     assert!(ranking.iter().any(|r| r["sets"] == serde_json::json!([])));
     assert!(String::from_utf8_lossy(&out.stdout).contains("best on random worlds 1..=1"));
+    // A held-out range: other worlds, so other searches.
+    let held_out = lives()
+        .args(["tune", "--first-world", "7", "--worlds", "1", "--planners", "nearest", "--grid", "replan_interval_s=2", "--out"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(held_out.status.success(), "{}", String::from_utf8_lossy(&held_out.stderr));
+    assert!(String::from_utf8_lossy(&held_out.stdout).contains("on random worlds 7..=7"));
+    let other: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let defaults = |r: &[serde_json::Value]| r.iter().find(|r| r["sets"] == serde_json::json!([])).unwrap()["per_search"].clone();
+    assert_ne!(defaults(ranking), defaults(other.as_array().unwrap()), "world 7 is not world 1");
+    let out =
+        lives().args(["tune", "--first-world", "18446744073709551615", "--worlds", "2", "--grid", "w_dist_per_m=1"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "a range past the last seed is refused");
     let _ = std::fs::remove_file(&path);
 }
