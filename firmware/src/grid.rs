@@ -270,7 +270,8 @@ pub fn mm_to_meters(mm: u16) -> Meters {
 }
 
 /// The LiDAR search map: every cell a beam crosses up to its hit is free, the hit cell occupied;
-/// a "no return" beam clears up to the maximum range and marks nothing.
+/// a "no return" beam clears up to the maximum range and marks nothing. A beam that grazes its
+/// surface ([`grazing`]) frees only unknown cells: occupied cells on its way stay occupied.
 #[derive(Clone)]
 pub struct LidarGrid {
     /// The cells.
@@ -308,6 +309,10 @@ impl LidarGrid {
             let no_return = r == RANGE_NO_RETURN || mm_to_meters(r) >= max_range;
             let len = if no_return { max_range } else { mm_to_meters(r) };
             let (ex, ey) = ray_end(&self.geom, pose.x, pose.y, a, len);
+            // A beam that meets its surface at a grazing angle runs inside the surface's own cells
+            // (a wall seen edge-on, discretised) for many cells before its hit: it frees unknown
+            // cells but erases no occupied one, or the wall would come out full of gaps.
+            let grazing = !no_return && grazing(scan, b);
             for (x, y) in Line::new(rx, ry, ex, ey) {
                 if !PackedGrid::in_bounds(x, y) {
                     break;
@@ -315,6 +320,9 @@ impl LidarGrid {
                 work += 1;
                 if !no_return && x == ex && y == ey {
                     break;
+                }
+                if grazing && self.grid.get(x, y) == Cell::Occupied {
+                    continue;
                 }
                 self.grid.set(x, y, Cell::Free);
             }
@@ -329,6 +337,22 @@ impl LidarGrid {
         work + nhits as u32
     }
 }
+
+/// Whether beam `b` meets its surface at a grazing angle: a neighbouring beam's range differs
+/// from its own by more than [`GRAZING_STEP_PER_MILLE`] thousandths of it (a wall seen edge-on,
+/// or a depth edge).
+pub fn grazing(scan: &BeamScan, b: usize) -> bool {
+    let r = scan.ranges_mm[b];
+    let step = r as u64 * GRAZING_STEP_PER_MILLE / 1000;
+    [(b + BEAMS - 1) % BEAMS, (b + 1) % BEAMS].iter().any(|&n| {
+        let rn = scan.ranges_mm[n];
+        rn != RANGE_INVALID && rn != RANGE_NO_RETURN && (rn as i64 - r as i64).unsigned_abs() > step
+    })
+}
+
+/// See [`grazing`]: 28 mm per metre of range is 4 beam spacings (2π/897 rad each) across the
+/// beam, so a surface met at under about 14° counts as grazed.
+pub const GRAZING_STEP_PER_MILLE: u64 = 28;
 
 /// Rays needed so that neighbouring rays are at most half a cell apart at `range_cells`.
 pub fn camera_rays(fov: BinaryAngle, range_cells: i32) -> usize {

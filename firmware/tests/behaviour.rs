@@ -67,6 +67,50 @@ fn a_beam_clears_the_cells_it_crosses_and_marks_its_hit() {
 }
 
 #[test]
+fn a_beam_that_grazes_its_surface_frees_unknown_cells_but_erases_no_occupied_one() {
+    // Three neighbouring beams straight ahead from the centre of cell (100, 100); a cell marked
+    // occupied by an earlier scan lies on all three, 1.5 m out.
+    let p = pose(10.05, 10.05, 0.0);
+    let run = |ranges: [u16; 3]| {
+        let mut s = BeamScan::new();
+        s.resample(&firmware::ScanInput {
+            angle_min: BinaryAngle::from_fraction(-1, 897),
+            angle_increment: BinaryAngle::from_fraction(1, 897),
+            ranges_mm: &ranges,
+            labels: None,
+        })
+        .unwrap();
+        let mut g = Box::new(LidarGrid::new(geom()));
+        g.grid.set(115, 100, Cell::Occupied);
+        g.integrate(&p, &s, Config::DEFAULT.lidar_max_range_m);
+        g
+    };
+    // A surface facing the robot (the neighbours' ranges agree): the stale cell is cleared.
+    let g = run([3000, 3000, 3000]);
+    assert_eq!(g.get(115, 100), Cell::Free, "a steep beam clears what moved away");
+    assert_eq!(g.get(130, 100), Cell::Occupied);
+    // A wall seen edge-on (the neighbours' ranges 1 m shorter and longer): it stays occupied,
+    // and the unknown cells on the way are freed as before.
+    let g = run([2000, 3000, 4000]);
+    assert_eq!(g.get(115, 100), Cell::Occupied, "a grazing beam does not erase the wall");
+    assert_eq!(g.get(110, 100), Cell::Free);
+    assert_eq!(g.get(130, 100), Cell::Occupied);
+    // The threshold: a neighbour more than 28 mm per metre of the beam's own range away; invalid
+    // and no-return neighbours say nothing; the beams wrap around the circle.
+    let mut s = BeamScan::new();
+    let step = (3000 * firmware::grid::GRAZING_STEP_PER_MILLE / 1000) as u16;
+    s.ranges_mm[0] = 3000;
+    s.ranges_mm[1] = 3000 + step;
+    assert!(!firmware::grid::grazing(&s, 0), "at the threshold");
+    s.ranges_mm[1] = 3000 + step + 1;
+    assert!(firmware::grid::grazing(&s, 0), "just past it");
+    s.ranges_mm[1] = RANGE_NO_RETURN;
+    assert!(!firmware::grid::grazing(&s, 0));
+    s.ranges_mm[firmware::capacity::BEAMS - 1] = 1000;
+    assert!(firmware::grid::grazing(&s, 0), "beam 0's other neighbour is the last beam");
+}
+
+#[test]
 fn the_camera_does_not_see_through_an_occupied_cell() {
     let mut lidar = Box::new(LidarGrid::new(geom()));
     // Known free ahead of the robot, and a wall 2 m ahead spanning the whole cone.
