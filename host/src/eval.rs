@@ -71,9 +71,8 @@ pub struct CellSummary {
     /// Mean time of the LiDAR's first sighting over those trials (s; NaN if none).
     pub mean_lidar_sighting_s: f64,
     /// Failed trials in which a target had been within the camera's reach
-    /// ([`SearchResult::target_in_camera_reach_s`]): the camera did not look that way then
-    /// (or saw too little of it). The other
-    /// failures never came that close (the route's fault).
+    /// ([`SearchResult::target_in_camera_reach_s`]): the camera did not look that way then (or
+    /// saw too little of it). The other failures never came that close (the route's fault).
     pub missed_in_reach: usize,
     /// Every trial's time (s), in seed order (for plots).
     pub times_s: Vec<f64>,
