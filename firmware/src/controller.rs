@@ -268,10 +268,15 @@ impl Controller {
     }
 
     /// Installs the classifier's int8 model blob after validating it (magic, version, shapes,
-    /// checksum). The bytes are read in place (flash on the MCU); a blob that fails validation is
+    /// checksum): a `LabelPoseNet` blob (`docs/model-format.md`) or a geometric one (magic `LVGM`,
+    /// [`crate::classifier::geo`]). The bytes are read in place (flash on the MCU); a blob that fails validation is
     /// refused and the previous model, if any, stays.
     pub fn set_model(&mut self, blob: &'static [u8]) -> Result<(), ModelError> {
-        self.classifier.set_model(ModelView::parse(blob)?);
+        if crate::classifier::geo::GeoView::is_geo(blob) {
+            self.classifier.set_geo_model(crate::classifier::geo::GeoView::parse(blob)?);
+        } else {
+            self.classifier.set_model(ModelView::parse(blob)?);
+        }
         Ok(())
     }
 

@@ -74,6 +74,35 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
         Err(_) => None,
     };
 
+    // The geometric classifier (the default for `lives`): its features and int8 MLP through the
+    // firmware, and the same MLP in f32 on the same features (weights dequantised from the blob).
+    let mut geo_work = 0;
+    let (t_geo, t_geo_float) = match firmware::classifier::geo::GeoView::parse(firmware::classifier::EMBEDDED_GEO_MODEL) {
+        Ok(model) => {
+            use firmware::classifier::geo::{GeoScratch, GEO_FEATURES, GEO_HIDDEN};
+            classifier.set_geo_model(model);
+            let mut labels = [firmware::scan::BeamLabel::Unlabelled; firmware::capacity::BEAMS];
+            let t_int8 = time(reps, || geo_work = classifier.classify(&pose, &beams, &mut labels));
+            let mut scratch = Box::new(GeoScratch::new());
+            scratch.prepare(&beams.ranges_mm);
+            let feats: Vec<[f32; GEO_FEATURES]> =
+                (0..firmware::capacity::BEAMS).map(|b| scratch.features(&beams.ranges_mm, b).map(|v| v as f32 / 127.0)).collect();
+            let w1: Vec<[f32; GEO_FEATURES]> =
+                (0..GEO_HIDDEN).map(|j| std::array::from_fn(|i| model.hidden_weights(j)[i] as i8 as f32 / 127.0)).collect();
+            let w2: Vec<f32> = model.output_weights().iter().map(|&v| v as i8 as f32 / 127.0).collect();
+            let t_f32 = time(reps, || {
+                let mut map = 0usize;
+                for x in &feats {
+                    let o: f32 = w1.iter().zip(&w2).map(|(row, v)| v * row.iter().zip(x).map(|(a, b)| a * b).sum::<f32>().tanh()).sum();
+                    map += (o >= 0.0) as usize;
+                }
+                std::hint::black_box(map);
+            });
+            (Some(t_int8), Some(t_f32))
+        }
+        Err(_) => (None, None),
+    };
+
     // The float reference of the same network (`host::model`, f32, the committed model's
     // shapes; the weights do not change the time) on the same scan, filled history.
     let float_model = crate::model::FloatModel::random(1);
@@ -119,6 +148,13 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
         None => println!("{:<36} {:>12} {:>14}", "classify (int8, embedded model)", "no model", ""),
     }
     println!("{:<36} {:>12.3} {:>14}", "classify (f32 reference, host)", t_float, "");
+    match (t_geo, t_geo_float) {
+        (Some(t), Some(f)) => {
+            println!("{:<36} {:>12.3} {:>14}", "classify geometric (int8, default)", t, geo_work);
+            println!("{:<36} {:>12.3} {:>14}", "classify geometric (f32 MLP only)", f, "");
+        }
+        _ => println!("{:<36} {:>12} {:>14}", "classify geometric (int8)", "no model", ""),
+    }
     println!("{:<36} {:>12.3} {:>14}", "labeller (ground truth, per scan)", t_labeller, "");
     println!("{:<36} {:>12.3} {:>14}", "LiDAR update (897 beams)", t_lidar, lidar_work);
     println!("{:<36} {:>12.3} {:>14}", "visual update (camera cone)", t_visual, visual_work);

@@ -18,3 +18,5 @@ pub mod sim;
 pub mod trace;
 #[cfg(feature = "train")]
 pub mod train;
+#[cfg(feature = "train")]
+pub mod train_geo;

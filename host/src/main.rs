@@ -48,8 +48,9 @@ enum Cmd {
         /// Print every goal the controller chooses, with its utility terms, to stderr.
         #[arg(long)]
         trace: bool,
-        /// The int8 classifier blob for `lives` (see docs/model-format.md); without it `lives`
-        /// runs on the simulator's ground-truth labels.
+        /// The int8 classifier blob for `lives` (docs/model-format.md: a `LabelPoseNet` blob such
+        /// as `firmware/model/lives-int8.bin`, or a geometric one); without it `lives` runs the
+        /// committed geometric classifier (`firmware/model/lives-geo-int8.bin`).
         #[arg(long)]
         model: Option<PathBuf>,
         /// Override a controller parameter, e.g. `--set w_dist_per_m=2` (repeatable; `lives params` lists them).
@@ -224,6 +225,40 @@ enum Cmd {
         /// Cosine learning-rate decay to lr / 20 over the run.
         #[arg(long)]
         lr_decay: bool,
+    },
+    /// Train the geometric classifier (per-beam shape features of the newest scan, an int8 MLP;
+    /// docs/model-card-geo.md), quantise it, evaluate it through the firmware on the dataset's
+    /// validation split and in the built-in buildings, write the blob and a model card.
+    /// (Built with `--features train`.)
+    #[cfg(feature = "train")]
+    TrainGeo {
+        /// The dataset directory (`lives dataset --out DIR`; procedural worlds only).
+        #[arg(long)]
+        data: PathBuf,
+        /// Where to write the int8 blob.
+        #[arg(long, default_value = "firmware/model/lives-geo-int8.bin")]
+        out: PathBuf,
+        /// Where to write the model card (Markdown).
+        #[arg(long)]
+        card: Option<PathBuf>,
+        /// Passes over the training samples.
+        #[arg(long, default_value_t = 6)]
+        epochs: usize,
+        /// Initial SGD learning rate (divided by 1 + epoch).
+        #[arg(long, default_value_t = 0.02)]
+        lr: f32,
+        /// Seed of the initialisation and shuffles.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Train on every N-th step of the training split.
+        #[arg(long, default_value_t = 7)]
+        step_stride: usize,
+        /// … and every N-th labelled beam of those steps.
+        #[arg(long, default_value_t = 5)]
+        beam_stride: usize,
+        /// Seconds of random walk in each built-in world and scenario for the unseen-building figures.
+        #[arg(long, default_value_t = 60.0)]
+        unseen_seconds: f64,
     },
     /// Calibrate the decision bias of a model without label history on a dataset's validation
     /// split: scores shifts of the scan encoder's linear bias, writes the best as a checkpoint.
@@ -489,7 +524,7 @@ fn eval_cmd(
         }
         Ok(())
     };
-    let specs = eval::eval_specs(worlds, scenarios, planners, trials, firmware::classifier::EMBEDDED_MODEL, configure)?;
+    let specs = eval::eval_specs(worlds, scenarios, planners, trials, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?;
     let pb = count_bar();
     pb.set_length(specs.len() as u64);
     let t0 = Instant::now();
@@ -592,6 +627,9 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             if let Some(path) = &model {
                 let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
                 spec.model = Some(Box::leak(bytes.into_boxed_slice()));
+            } else if planner == PlannerChoice::Lives {
+                // The committed geometric classifier (docs/model-card-geo.md).
+                spec.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
             }
             let mut recorder =
                 record.as_ref().map(|p| host::record::Recorder::create(p, Default::default())).transpose().map_err(|e| e.to_string())?;
@@ -639,9 +677,6 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                         m.turning_s,
                         m.still_s
                     );
-                }
-                if planner == PlannerChoice::Lives && r.labels == "ground-truth" {
-                    say!("note: no --model given, so `lives` runs on the simulator's ground-truth labels (same as lives-gt)");
                 }
                 if let Some(p) = &png {
                     say!("picture: {}", p.display());
@@ -857,6 +892,10 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 }
             }
             Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
+        }
+        #[cfg(feature = "train")]
+        Cmd::TrainGeo { data, out, card, epochs, lr, seed, step_stride, beam_stride, unseen_seconds } => {
+            train_geo_command(&data, &out, card.as_deref(), epochs, lr, seed, step_stride, beam_stride, unseen_seconds)
         }
         #[cfg(feature = "train")]
         Cmd::Train {
@@ -1079,4 +1118,105 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         }
         Cmd::Lidar(cmd) => host::sensors::run(cmd),
     }
+}
+
+/// `lives train-geo`: train, quantise, evaluate through the firmware, write the blob and a card.
+#[cfg(feature = "train")]
+#[allow(clippy::too_many_arguments)]
+fn train_geo_command(
+    data: &std::path::Path,
+    out: &std::path::Path,
+    card: Option<&std::path::Path>,
+    epochs: usize,
+    lr: f32,
+    seed: u64,
+    step_stride: usize,
+    beam_stride: usize,
+    unseen_seconds: f64,
+) -> Result<ExitCode, String> {
+    use host::dataset::Split;
+    use host::train::{load_split, unseen_episodes, Confusion};
+    use host::train_geo::{evaluate_float, evaluate_int8, quantise, samples, train, GeoTrainConfig};
+    let t0 = Instant::now();
+    let e = |e: host::train::TrainError| e.0;
+    let train_eps = load_split(data, Split::Train).map_err(e)?;
+    let val_eps = load_split(data, Split::Val).map_err(e)?;
+    let unseen = unseen_episodes(unseen_seconds, 1).map_err(e)?;
+    let tr = samples(&train_eps, step_stride, beam_stride);
+    let va = samples(&val_eps, 10, 3);
+    say!("{} training samples (every {step_stride}th step, every {beam_stride}th beam), {} validation samples", tr.len(), va.len());
+    let cfg = GeoTrainConfig { epochs, lr, seed };
+    let mut log = Vec::new();
+    let m = train(&cfg, &tr, |ep, loss, m| {
+        let v = evaluate_float(m, &va);
+        say!(
+            "epoch {}: loss {loss:.4}, validation (float, sampled) {:.2} % (always map {:.2} %)",
+            ep + 1,
+            100.0 * v.accuracy(),
+            100.0 * v.always_map()
+        );
+        log.push((ep + 1, loss, v.accuracy()));
+    })
+    .map_err(e)?;
+    let train_s = t0.elapsed().as_secs_f64();
+    let q = quantise(&m, &tr[..tr.len().min(200_000)]).map_err(e)?;
+    let (val_int8, val_agree) = evaluate_int8(&q.blob, &val_eps, Some(&m)).map_err(e)?;
+    let (un_int8, un_agree) = evaluate_int8(&q.blob, &unseen, Some(&m)).map_err(e)?;
+    if let Some(dir) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    std::fs::write(out, &q.blob).map_err(|e| format!("{}: {e}", out.display()))?;
+    let crc = firmware::classifier::geo::GeoView::parse(&q.blob).map(|v| v.crc()).unwrap_or(0);
+    let row = |name: &str, c: &Confusion, agree: Option<f64>| {
+        format!(
+            "| {name} | {} | **{:.2} %** | {:.2} % | {:.2} % | {:.2} % | {:.2} % |",
+            c.total(),
+            100.0 * c.accuracy(),
+            100.0 * c.always_map(),
+            100.0 * c.map_recall(),
+            100.0 * c.non_map_recall(),
+            100.0 * agree.unwrap_or(0.0)
+        )
+    };
+    let table = [
+        "| set | labelled beams | int8 accuracy | always map | map recall | non-map recall | float/int8 agreement |".to_string(),
+        "|---|---|---|---|---|---|---|".to_string(),
+        row(&format!("validation (unseen random worlds, {} episodes)", val_eps.len()), &val_int8, val_agree),
+        row(&format!("built-in apartment, office, hallway ({} random walks of {unseen_seconds:.0} s)", unseen.len()), &un_int8, un_agree),
+    ]
+    .join("\n");
+    say!("{table}");
+    say!("blob {} ({} bytes, CRC-32 {crc:08x}); {:.0} s in all", out.display(), q.blob.len(), t0.elapsed().as_secs_f64());
+    if let Some(card) = card {
+        let epochs_md: String = log.iter().map(|(ep, l, a)| format!("| {ep} | {l:.4} | {:.2} % |\n", 100.0 * a)).collect();
+        let cmd = std::env::args().collect::<Vec<_>>().join(" ");
+        let dataset_cmd = std::fs::read_to_string(data.join("meta.json"))
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .and_then(|m| m["generator"]["command"].as_str().map(str::to_string))
+            .unwrap_or_else(|| "(not recorded in meta.json)".into());
+        let text = format!(
+            "# Model card: geometric scan classifier (`LVGM`, int8)\n\n\
+             Generated by `lives train-geo`; every number below was measured by that command.\n\n\
+             - command: `{cmd}`\n\
+             - blob: `{}`, {} bytes, CRC-32 `{crc:08x}`\n\
+             - data: `{}` ({} training episodes, {} validation episodes; split by world), made by `{dataset_cmd}`\n\
+             - training: {} samples, {epochs} epochs of SGD on the logistic loss, lr {lr} / (1 + epoch), seed {seed}; {train_s:.0} s\n\
+             - quantisation: hidden pre-activations calibrated on {} training samples, max |pre| {:.2}, table range ±{:.2}\n\n\
+             | epoch | training loss | validation accuracy (float, sampled beams) |\n|---|---|---|\n{epochs_md}\n\
+             Int8, run through the firmware classifier over every step (every labelled beam with a return):\n\n{table}\n",
+            out.display(),
+            q.blob.len(),
+            data.display(),
+            train_eps.len(),
+            val_eps.len(),
+            tr.len(),
+            tr.len().min(200_000),
+            q.max_pre,
+            q.pre_range,
+        );
+        std::fs::write(card, text).map_err(|e| format!("{}: {e}", card.display()))?;
+        say!("card {}", card.display());
+    }
+    Ok(ExitCode::SUCCESS)
 }

@@ -36,6 +36,7 @@
 //! One [`Classifier::classify`] is [`WORK_PER_CLASSIFY`] multiply-accumulates (≈ 1.83 M), 88 % of
 //! them in the two 897 × 897 matrices.
 
+pub mod geo;
 mod history;
 mod kernels;
 /// The int8 inner product (public for the MCU self-test that checks the DSP path against the reference).
@@ -69,6 +70,12 @@ pub const POSE_FLAT: usize = POSE_CHANNELS * HISTORY;
 /// model card in `docs/model-card.md`), embedded at build time. Install it with
 /// `Controller::set_model(EMBEDDED_MODEL)`, which validates it first.
 pub static EMBEDDED_MODEL: &[u8] = include_bytes!("../../model/lives-int8.bin");
+
+/// The trained geometric model (`firmware/model/lives-geo-int8.bin`, [`geo`], its card in
+/// `docs/model-card-geo.md`), embedded at build time: the model `lives` runs by default (89 % per
+/// point in the built-in buildings, where `LabelPoseNet` stays below "always map").
+/// `Controller::set_model` tells the two formats apart by their magic.
+pub static EMBEDDED_GEO_MODEL: &[u8] = include_bytes!("../../model/lives-geo-int8.bin");
 
 /// Multiply-accumulates per [`Classifier::classify`]: two encoder convolutions, two 897 × 897
 /// layers, the pose convolution, the 81 → 897 layer and the output products.
@@ -123,6 +130,9 @@ impl Scratch {
 #[derive(Clone)]
 pub struct Classifier<'m> {
     model: Option<ModelView<'m>>,
+    /// The geometric model, when installed instead of `LabelPoseNet` ([`geo`]).
+    geo: Option<geo::GeoView<'m>>,
+    geo_scratch: geo::GeoScratch,
     cfg: ClassifierConfig,
     history: ScanHistory,
     scratch: Scratch,
@@ -134,7 +144,16 @@ impl<'m> Classifier<'m> {
     /// A classifier with no model: [`Classifier::classify`] labels nothing until
     /// [`Classifier::set_model`].
     pub const fn new(cfg: ClassifierConfig) -> Self {
-        Self { model: None, cfg, history: ScanHistory::new(), scratch: Scratch::new(), scores: [0; BEAMS], output: [0; BEAMS] }
+        Self {
+            model: None,
+            geo: None,
+            geo_scratch: geo::GeoScratch::new(),
+            cfg,
+            history: ScanHistory::new(),
+            scratch: Scratch::new(),
+            scores: [0; BEAMS],
+            output: [0; BEAMS],
+        }
     }
 
     /// A classifier with `model`.
@@ -147,7 +166,20 @@ impl<'m> Classifier<'m> {
     /// Installs `model` and clears the history (a different network must not read another's labels).
     pub fn set_model(&mut self, model: ModelView<'m>) {
         self.model = Some(model);
+        self.geo = None;
         self.reset();
+    }
+
+    /// Installs a geometric model ([`geo`]) in place of any `LabelPoseNet`, and clears the history.
+    pub fn set_geo_model(&mut self, model: geo::GeoView<'m>) {
+        self.geo = Some(model);
+        self.model = None;
+        self.reset();
+    }
+
+    /// The geometric model, if one is installed.
+    pub fn geo_model(&self) -> Option<&geo::GeoView<'m>> {
+        self.geo.as_ref()
     }
 
     /// The model, if one is installed.
@@ -236,6 +268,20 @@ impl<'m> Classifier<'m> {
 
     /// [`Classifier::classify`] on bare ranges.
     pub fn classify_ranges(&mut self, pose: &Pose2, ranges_mm: &[u16; BEAMS], out: &mut [BeamLabel; BEAMS]) -> u32 {
+        if let Some(g) = self.geo {
+            self.geo_scratch.prepare(ranges_mm);
+            for b in 0..BEAMS {
+                let (score, o) = geo::geo_forward(&g, &self.geo_scratch.features(ranges_mm, b));
+                self.scores[b] = score.clamp(i16::MIN as i32, i16::MAX as i32) as i16;
+                self.output[b] = o;
+                out[b] = match ranges_mm[b] {
+                    RANGE_INVALID | RANGE_NO_RETURN => BeamLabel::Unlabelled,
+                    _ if score >= 0 => BeamLabel::Map,
+                    _ => BeamLabel::NonMap,
+                };
+            }
+            return geo::WORK_PER_GEO_CLASSIFY;
+        }
         let Some(model) = self.model else {
             *out = [BeamLabel::Unlabelled; BEAMS];
             return 0;
@@ -507,7 +553,8 @@ mod tests {
     fn state_is_small_and_fixed() {
         let size = core::mem::size_of::<Classifier<'static>>();
         std::println!("size_of::<Classifier>() = {size} bytes, ScanHistory {}", core::mem::size_of::<ScanHistory>());
-        assert!(size < 24 * 1024, "{size}");
+        // ≈ 22 KiB of rings and activations, ≈ 21 KiB of the geometric model's scratch.
+        assert!(size < 48 * 1024, "{size}");
         assert_eq!(WORK_PER_CLASSIFY, 1_828_329);
     }
 

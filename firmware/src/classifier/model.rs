@@ -200,6 +200,10 @@ pub enum ShapeField {
     PoseFeatures,
     /// Number of tanh tables.
     TanhTables,
+    /// Features per beam of the geometric model ([`super::geo`]).
+    GeoFeatures,
+    /// Hidden units of the geometric model.
+    GeoHidden,
 }
 
 /// Why a blob was refused. Checked in this order, so a blob has exactly one error.
@@ -257,6 +261,12 @@ pub enum ModelError {
         /// The stage.
         layer: Layer,
         /// The channel (0 and 1 for the head's sum and product multipliers).
+        channel: u16,
+    },
+    /// A requantisation multiplier of the geometric model ([`super::geo`]) is not normalised:
+    /// hidden unit `channel`, or the output when `channel` is the hidden width.
+    BadGeoMultiplier {
+        /// The unit.
         channel: u16,
     },
 }

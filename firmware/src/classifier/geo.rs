@@ -1,0 +1,622 @@
+//! The geometric classifier: per-beam shape features of the newest scan and a small int8 MLP.
+//!
+//! `LabelPoseNet` (the paper's network, [`super::Classifier`]) sees each beam through one 9 × 9
+//! convolution channel, too narrow to tell the front of a wardrobe from the wall behind it: in
+//! the built-in buildings it stays below "always map" (docs/model-card.md). This model gives the
+//! network the shape of the scan around each beam instead, at scales from 2 to 128 beams, and
+//! classifies each beam on its own. It reads only the newest scan (no pose, no label history).
+//!
+//! ## Features (all int8, scale 1/127, integer arithmetic only)
+//! For beam `b` with a return, `r` its range:
+//! - for each width `w` in [`GEO_WIDTHS`]: the chord through the returns of beams `b − w` and
+//!   `b + w` (circular), and where beam `b`'s ray meets it, at range `t`: the protrusion
+//!   `(t − r) / r` clamped to ±1 (positive: the point stands in front of the chord), and a flag
+//!   (127) that the chord exists (both ends have returns, it is not parallel to the ray, `t > 0`);
+//! - on each side: the run of beams without a depth jump (consecutive returns differ by more than
+//!   0.1 m + 3 % of the range) or a missing return, as an arc length `n · r · 2π / 897` over 6 m
+//!   (capped at 1; runs of 300 beams or more count as 300 with no end), the jump's direction (+127:
+//!   the next surface is farther, −127: nearer, 0: no jump) and a flag for a missing return;
+//! - the inverse range `min(1, 0.5 m / r)`.
+//!
+//! ## Network
+//! `GEO_FEATURES → GEO_HIDDEN` (int8 weights per output channel, int32 bias and accumulator,
+//! requantised by a fixed-point multiplier into a 256-entry tanh table) `→ 1` (int8 weights; the
+//! sign of the int32 accumulator plus bias is the label: ≥ 0 map, < 0 non-map).
+//!
+//! ## Blob (`GEO_MAGIC`, little-endian; docs/model-format.md)
+//! | offset | bytes | field |
+//! |---|---|---|
+//! | 0 | 4 | magic `LVGM` |
+//! | 4 | 2 | version (1) |
+//! | 6 | 2 | header length (32) |
+//! | 8 | 2 | features (21) |
+//! | 10 | 2 | hidden units (48) |
+//! | 12 | 4 | payload length (bytes after the header) |
+//! | 16 | 4 | CRC-32/ISO-HDLC of bytes 0–15 and 20–end |
+//! | 20 | 12 | reserved, zero |
+//! | 32 | 12 × hidden | per hidden unit: bias `i32`, multiplier `i32`, shift `i32` |
+//! | … | 12 | output: bias `i32`, multiplier `i32`, shift `i32` (accumulator → int8 output, for display) |
+//! | … | 256 | tanh table, `i8`, indexed by pre-activation + 128 |
+//! | … | hidden × features | hidden weights, `i8`, row-major |
+//! | … | hidden | output weights, `i8` |
+
+use super::model::ModelError;
+use crate::capacity::BEAMS;
+use crate::grid::beam_angle;
+use crate::scan::{RANGE_INVALID, RANGE_NO_RETURN};
+use fixed_point::{requantize_i8, sin_cos, QuantizedMultiplier};
+
+/// Chord half-widths, beams.
+pub const GEO_WIDTHS: [usize; 7] = [2, 4, 8, 16, 32, 64, 128];
+/// Features per beam.
+pub const GEO_FEATURES: usize = 2 * GEO_WIDTHS.len() + 7;
+/// Hidden units.
+pub const GEO_HIDDEN: usize = 48;
+/// First four bytes of a geometric model blob.
+pub const GEO_MAGIC: [u8; 4] = *b"LVGM";
+/// The blob format version this firmware reads.
+pub const GEO_VERSION: u16 = 1;
+/// Header bytes.
+pub const GEO_HEADER_LEN: usize = 32;
+/// Bytes of one bias / multiplier / shift record.
+const RECORD: usize = 12;
+/// Offset of the output record.
+const OUT_RECORD: usize = GEO_HEADER_LEN + GEO_HIDDEN * RECORD;
+/// Offset of the tanh table.
+const TANH: usize = OUT_RECORD + RECORD;
+/// Offset of the hidden weights.
+const W1: usize = TANH + 256;
+/// Offset of the output weights.
+const W2: usize = W1 + GEO_HIDDEN * GEO_FEATURES;
+/// Total blob length.
+pub const GEO_BLOB_LEN: usize = W2 + GEO_HIDDEN;
+/// Multiply-accumulates per scan.
+pub const WORK_PER_GEO_CLASSIFY: u32 = (BEAMS * (GEO_FEATURES * GEO_HIDDEN + GEO_HIDDEN)) as u32;
+
+/// Longest run of beams the side features count.
+const RUN_CAP: u32 = 300;
+
+/// The CRC-32 a geometric blob stores: bytes 0–15 and 20–end. `None` if shorter than the header.
+pub fn geo_checksum(blob: &[u8]) -> Option<u32> {
+    const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+    let head = blob.get(..16)?;
+    let tail = blob.get(20..)?;
+    let mut d = CRC32.digest();
+    d.update(head);
+    d.update(tail);
+    Some(d.finalize())
+}
+
+fn u16_at(b: &[u8], off: usize) -> u16 {
+    u16::from_le_bytes([b[off], b[off + 1]])
+}
+
+fn i32_at(b: &[u8], off: usize) -> i32 {
+    i32::from_le_bytes([b[off], b[off + 1], b[off + 2], b[off + 3]])
+}
+
+/// A bias and requantisation multiplier record.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GeoChannel {
+    /// Bias at the accumulator's scale.
+    pub bias: i32,
+    /// Accumulator → int8.
+    pub multiplier: QuantizedMultiplier,
+}
+
+/// A checked view of a geometric model blob (borrowed, not copied).
+#[derive(Clone, Copy, Debug)]
+pub struct GeoView<'a> {
+    bytes: &'a [u8],
+}
+
+impl<'a> GeoView<'a> {
+    /// True if `bytes` starts with [`GEO_MAGIC`] (then [`GeoView::parse`] is the parser to use).
+    pub fn is_geo(bytes: &[u8]) -> bool {
+        bytes.get(..4) == Some(&GEO_MAGIC[..])
+    }
+
+    /// Checks the blob: magic, version, header length, shapes, reserved bytes, length, CRC and
+    /// every multiplier, in that order.
+    pub fn parse(bytes: &'a [u8]) -> Result<Self, ModelError> {
+        if !Self::is_geo(bytes) {
+            return Err(ModelError::BadMagic);
+        }
+        if bytes.len() < GEO_HEADER_LEN {
+            return Err(ModelError::Truncated { needed: GEO_HEADER_LEN, got: bytes.len() });
+        }
+        let version = u16_at(bytes, 4);
+        if version != GEO_VERSION {
+            return Err(ModelError::UnsupportedVersion(version));
+        }
+        let header = u16_at(bytes, 6);
+        if header as usize != GEO_HEADER_LEN {
+            return Err(ModelError::BadHeaderLength(header));
+        }
+        for (off, field, expected) in [(8, super::ShapeField::GeoFeatures, GEO_FEATURES), (10, super::ShapeField::GeoHidden, GEO_HIDDEN)] {
+            let found = u16_at(bytes, off) as u32;
+            if found != expected as u32 {
+                return Err(ModelError::ShapeMismatch { field, expected: expected as u32, found });
+            }
+        }
+        if bytes[20..GEO_HEADER_LEN].iter().any(|&b| b != 0) {
+            return Err(ModelError::ReservedNotZero);
+        }
+        let payload = i32_at(bytes, 12) as u32;
+        let expected = (GEO_BLOB_LEN - GEO_HEADER_LEN) as u32;
+        if payload != expected {
+            return Err(ModelError::PayloadLength { expected, found: payload });
+        }
+        if bytes.len() < GEO_BLOB_LEN {
+            return Err(ModelError::Truncated { needed: GEO_BLOB_LEN, got: bytes.len() });
+        }
+        if bytes.len() > GEO_BLOB_LEN {
+            return Err(ModelError::TrailingBytes { extra: bytes.len() - GEO_BLOB_LEN });
+        }
+        let stored = i32_at(bytes, 16) as u32;
+        let computed = geo_checksum(bytes).unwrap_or(0);
+        if stored != computed {
+            return Err(ModelError::ChecksumMismatch { stored, computed });
+        }
+        let view = GeoView { bytes };
+        for c in 0..=GEO_HIDDEN {
+            let off = if c < GEO_HIDDEN { GEO_HEADER_LEN + c * RECORD } else { OUT_RECORD };
+            let shift = i32_at(bytes, off + 8);
+            let q = QuantizedMultiplier::from_raw(i32_at(bytes, off + 4), shift.clamp(-128, 127) as i8);
+            let shift_ok = (QuantizedMultiplier::MIN_SHIFT as i32..=QuantizedMultiplier::MAX_SHIFT as i32).contains(&shift);
+            if !shift_ok || !q.is_normalised() {
+                return Err(ModelError::BadGeoMultiplier { channel: c as u16 });
+            }
+        }
+        Ok(view)
+    }
+
+    /// The blob.
+    pub fn bytes(&self) -> &'a [u8] {
+        self.bytes
+    }
+
+    /// The stored CRC-32.
+    pub fn crc(&self) -> u32 {
+        i32_at(self.bytes, 16) as u32
+    }
+
+    fn record(&self, off: usize) -> GeoChannel {
+        GeoChannel {
+            bias: i32_at(self.bytes, off),
+            multiplier: QuantizedMultiplier::from_raw(i32_at(self.bytes, off + 4), i32_at(self.bytes, off + 8) as i8),
+        }
+    }
+
+    /// Hidden unit `j`'s bias and multiplier.
+    pub fn hidden(&self, j: usize) -> GeoChannel {
+        self.record(GEO_HEADER_LEN + j * RECORD)
+    }
+
+    /// The output's bias and multiplier.
+    pub fn output(&self) -> GeoChannel {
+        self.record(OUT_RECORD)
+    }
+
+    /// The tanh table.
+    pub fn tanh_table(&self) -> &'a [u8] {
+        &self.bytes[TANH..TANH + 256]
+    }
+
+    /// Hidden unit `j`'s weights.
+    pub fn hidden_weights(&self, j: usize) -> &'a [u8] {
+        &self.bytes[W1 + j * GEO_FEATURES..W1 + (j + 1) * GEO_FEATURES]
+    }
+
+    /// The output weights.
+    pub fn output_weights(&self) -> &'a [u8] {
+        &self.bytes[W2..W2 + GEO_HIDDEN]
+    }
+}
+
+/// Writes a geometric blob: header, records, table and weights, then the CRC.
+pub fn write_geo_blob(
+    hidden: &[GeoChannel; GEO_HIDDEN],
+    output: GeoChannel,
+    tanh: &[i8; 256],
+    w1: &[[i8; GEO_FEATURES]; GEO_HIDDEN],
+    w2: &[i8; GEO_HIDDEN],
+    out: &mut [u8; GEO_BLOB_LEN],
+) {
+    out.fill(0);
+    out[..4].copy_from_slice(&GEO_MAGIC);
+    out[4..6].copy_from_slice(&GEO_VERSION.to_le_bytes());
+    out[6..8].copy_from_slice(&(GEO_HEADER_LEN as u16).to_le_bytes());
+    out[8..10].copy_from_slice(&(GEO_FEATURES as u16).to_le_bytes());
+    out[10..12].copy_from_slice(&(GEO_HIDDEN as u16).to_le_bytes());
+    out[12..16].copy_from_slice(&((GEO_BLOB_LEN - GEO_HEADER_LEN) as u32).to_le_bytes());
+    let mut put = |off: usize, c: &GeoChannel| {
+        out[off..off + 4].copy_from_slice(&c.bias.to_le_bytes());
+        out[off + 4..off + 8].copy_from_slice(&c.multiplier.multiplier.to_le_bytes());
+        out[off + 8..off + 12].copy_from_slice(&(c.multiplier.shift as i32).to_le_bytes());
+    };
+    for (j, c) in hidden.iter().enumerate() {
+        put(GEO_HEADER_LEN + j * RECORD, c);
+    }
+    put(OUT_RECORD, &output);
+    for (i, &v) in tanh.iter().enumerate() {
+        out[TANH + i] = v as u8;
+    }
+    for (j, row) in w1.iter().enumerate() {
+        for (i, &v) in row.iter().enumerate() {
+            out[W1 + j * GEO_FEATURES + i] = v as u8;
+        }
+    }
+    for (j, &v) in w2.iter().enumerate() {
+        out[W2 + j] = v as u8;
+    }
+    let crc = geo_checksum(&out[..]).unwrap_or(0);
+    out[16..20].copy_from_slice(&crc.to_le_bytes());
+}
+
+#[inline]
+fn has_return(r: u16) -> bool {
+    r != RANGE_INVALID && r != RANGE_NO_RETURN
+}
+
+/// Scratch for the features: beam directions, return points and runs of the last scan given to
+/// [`GeoScratch::prepare`] (fixed arrays, about 21 KiB, reused every scan).
+#[derive(Clone)]
+pub struct GeoScratch {
+    /// Beam directions in Q14, robot frame.
+    dirs: [(i32, i32); BEAMS],
+    /// Return points, 1/16 mm, robot frame.
+    points: [(i32, i32); BEAMS],
+    /// Left runs: count (saturating) and end kind (0 none, 1 farther, 2 nearer, 3 no return).
+    left: [(u16, u8); BEAMS],
+    /// Right runs.
+    right: [(u16, u8); BEAMS],
+}
+
+impl GeoScratch {
+    /// Zeroed (`const`, so it can live in a `static`).
+    pub const fn new() -> Self {
+        GeoScratch { dirs: [(0, 0); BEAMS], points: [(0, 0); BEAMS], left: [(0, 0); BEAMS], right: [(0, 0); BEAMS] }
+    }
+
+    /// Computes the points and runs of a scan; then [`GeoScratch::features`] gives each beam's
+    /// features. Returns the work done (beams visited).
+    pub fn prepare(&mut self, ranges_mm: &[u16; BEAMS]) -> u32 {
+        for (b, (&range, (dir, point))) in ranges_mm.iter().zip(self.dirs.iter_mut().zip(self.points.iter_mut())).enumerate() {
+            let (sn, c) = sin_cos(beam_angle(b));
+            let (c, sn) = (c.to_bits() >> 16, sn.to_bits() >> 16);
+            *dir = (c, sn);
+            let r = range as i64 * 16;
+            *point = (((r * c as i64) >> 14) as i32, ((r * sn as i64) >> 14) as i32);
+        }
+        // Two laps around the circle, so every run that ends within the scan is counted from its
+        // end; a run with no end saturates and is capped with no end kind.
+        let mut prev: (u16, u8) = (u16::MAX, 0);
+        for lap in 0..2 * BEAMS {
+            let b = lap % BEAMS;
+            let k = break_kind(ranges_mm[b], ranges_mm[(b + BEAMS - 1) % BEAMS]);
+            prev = if k != 0 { (0, k) } else { (prev.0.saturating_add(1), prev.1) };
+            self.left[b] = prev;
+        }
+        let mut prev: (u16, u8) = (u16::MAX, 0);
+        for lap in 0..2 * BEAMS {
+            let b = BEAMS - 1 - lap % BEAMS;
+            let k = break_kind(ranges_mm[b], ranges_mm[(b + 1) % BEAMS]);
+            prev = if k != 0 { (0, k) } else { (prev.0.saturating_add(1), prev.1) };
+            self.right[b] = prev;
+        }
+        5 * BEAMS as u32
+    }
+
+    /// Beam `b`'s features (zeros for a beam without a return), from the scan last given to
+    /// [`GeoScratch::prepare`] (`ranges_mm` must be that scan). Integer arithmetic only.
+    pub fn features(&self, ranges_mm: &[u16; BEAMS], b: usize) -> [i8; GEO_FEATURES] {
+        let mut f = [0i8; GEO_FEATURES];
+        let rb = ranges_mm[b];
+        if !has_return(rb) {
+            return f;
+        }
+        let r16 = rb as i64 * 16;
+        let (dx, dy) = (self.dirs[b].0 as i64, self.dirs[b].1 as i64);
+        for (k, &w) in GEO_WIDTHS.iter().enumerate() {
+            let (l, h) = ((b + BEAMS - w) % BEAMS, (b + w) % BEAMS);
+            if !has_return(ranges_mm[l]) || !has_return(ranges_mm[h]) {
+                continue;
+            }
+            let (p, q) = (self.points[l], self.points[h]);
+            let (px, py) = (p.0 as i64, p.1 as i64);
+            let (ex, ey) = (q.0 as i64 - px, q.1 as i64 - py);
+            // Where the ray meets the chord: t = (p × e) / (d × e), d in Q14.
+            let den = dx * ey - dy * ex;
+            if den == 0 {
+                continue;
+            }
+            let t = ((px * ey - py * ex) << 14) / den;
+            if t <= 0 {
+                continue;
+            }
+            f[2 * k] = ((t - r16) * 127 / r16).clamp(-127, 127) as i8;
+            f[2 * k + 1] = 127;
+        }
+        let base = 2 * GEO_WIDTHS.len();
+        for (side, run) in [self.left[b], self.right[b]].into_iter().enumerate() {
+            let (n, kind) = if run.0 as u32 >= RUN_CAP { (RUN_CAP, 0) } else { (run.0 as u32, run.1) };
+            // n · r · 2π / 897 over 6 m, in 1/127: 2π · 127 ≈ 797 964 / 1000.
+            f[base + 3 * side] = (n as i64 * rb as i64 * 797_964 / 5_382_000_000).min(127) as i8;
+            f[base + 3 * side + 1] = match kind {
+                1 => 127,
+                2 => -127,
+                _ => 0,
+            };
+            f[base + 3 * side + 2] = if kind == 3 { 127 } else { 0 };
+        }
+        f[GEO_FEATURES - 1] = (500 * 127 / rb as i32).min(127) as i8;
+        f
+    }
+}
+
+impl Default for GeoScratch {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The break between consecutive beams `a` → `b` (walking from `a`): 0 none, 1 the next surface
+/// is farther, 2 nearer (by more than 0.1 m + 3 % of `a`'s range), 3 `b` has no return.
+#[inline]
+fn break_kind(ra: u16, rb: u16) -> u8 {
+    if !has_return(rb) {
+        return 3;
+    }
+    let (a, b) = (ra as i64, rb as i64);
+    if (b - a).abs() * 100 > 10_000 + 3 * a {
+        if b > a {
+            1
+        } else {
+            2
+        }
+    } else {
+        0
+    }
+}
+
+/// The network on one beam's features: `(score, output)`, the int32 score (≥ 0 map) and its
+/// int8 requantisation.
+#[inline]
+pub fn geo_forward(m: &GeoView<'_>, x: &[i8; GEO_FEATURES]) -> (i32, i8) {
+    let table = m.tanh_table();
+    let w2 = m.output_weights();
+    let mut acc2: i32 = 0;
+    for (j, &v2) in w2.iter().enumerate() {
+        let w = m.hidden_weights(j);
+        let mut acc: i32 = 0;
+        for (&wi, &xi) in w.iter().zip(x.iter()) {
+            acc += wi as i8 as i32 * xi as i32;
+        }
+        let c = m.hidden(j);
+        let pre = requantize_i8(acc.saturating_add(c.bias), c.multiplier);
+        let h = table[(pre as i32 + 128) as usize] as i8;
+        acc2 += v2 as i8 as i32 * h as i32;
+    }
+    let o = m.output();
+    let score = acc2.saturating_add(o.bias);
+    (score, requantize_i8(score, o.multiplier))
+}
+
+#[cfg(test)]
+#[allow(clippy::needless_range_loop)] // the reference is index loops on purpose
+mod tests {
+    extern crate std;
+    use super::super::testing::Rng;
+    use super::*;
+    use std::vec::Vec;
+
+    /// A valid blob with random weights, biases and multipliers and a steep odd table.
+    fn random_geo_blob(seed: u64) -> [u8; GEO_BLOB_LEN] {
+        let mut rng = Rng(seed);
+        let mut mult = |shift: i8| QuantizedMultiplier::from_raw((1 << 30) + (rng.next() % (1 << 30)) as i32, shift);
+        let hidden: [GeoChannel; GEO_HIDDEN] = core::array::from_fn(|_| GeoChannel { bias: 0, multiplier: mult(-8) });
+        let output = GeoChannel { bias: 0, multiplier: mult(-9) };
+        let mut rng = Rng(seed ^ 0xABCD);
+        let mut hidden = hidden;
+        for h in hidden.iter_mut() {
+            h.bias = (rng.next() % 8001) as i32 - 4000;
+        }
+        let output = GeoChannel { bias: (rng.next() % 20001) as i32 - 10_000, ..output };
+        let tanh: [i8; 256] = core::array::from_fn(|q| ((q as i32 - 128) * 2).clamp(-127, 127) as i8);
+        let w1: [[i8; GEO_FEATURES]; GEO_HIDDEN] = core::array::from_fn(|_| core::array::from_fn(|_| rng.next() as i8));
+        let w2: [i8; GEO_HIDDEN] = core::array::from_fn(|_| rng.next() as i8);
+        let mut blob = [0u8; GEO_BLOB_LEN];
+        write_geo_blob(&hidden, output, &tanh, &w1, &w2, &mut blob);
+        blob
+    }
+
+    /// A room-like scan: a smooth range profile with steps (objects), dropouts and no-returns.
+    fn random_scan(rng: &mut Rng) -> [u16; BEAMS] {
+        let mut r = 1000 + (rng.next() % 8000) as i64;
+        core::array::from_fn(|_| {
+            match rng.next() % 40 {
+                0 => return RANGE_INVALID,
+                1 => return RANGE_NO_RETURN,
+                2 => r = 300 + (rng.next() % 20_000) as i64,
+                _ => r = (r + (rng.next() % 41) as i64 - 20).clamp(150, 60_000),
+            }
+            r as u16
+        })
+    }
+
+    /// The features written out the long way: walks for the runs (no laps), index loops.
+    fn reference_features(r: &[u16; BEAMS], b: usize) -> Vec<i8> {
+        let mut f = std::vec![0i8; GEO_FEATURES];
+        let ok = |x: u16| x != RANGE_INVALID && x != RANGE_NO_RETURN;
+        if !ok(r[b]) {
+            return f;
+        }
+        let dir = |k: usize| {
+            let (s, c) = sin_cos(beam_angle(k));
+            ((c.to_bits() >> 16) as i64, (s.to_bits() >> 16) as i64)
+        };
+        let pt = |k: usize| {
+            let (c, s) = dir(k);
+            let rr = r[k] as i64 * 16;
+            ((rr * c) >> 14, (rr * s) >> 14)
+        };
+        let (dx, dy) = dir(b);
+        let r16 = r[b] as i64 * 16;
+        for k in 0..GEO_WIDTHS.len() {
+            let w = GEO_WIDTHS[k] as i64;
+            let l = (b as i64 - w).rem_euclid(BEAMS as i64) as usize;
+            let h = (b as i64 + w).rem_euclid(BEAMS as i64) as usize;
+            if !ok(r[l]) || !ok(r[h]) {
+                continue;
+            }
+            let (p, q) = (pt(l), pt(h));
+            let (ex, ey) = (q.0 - p.0, q.1 - p.1);
+            let den = dx * ey - dy * ex;
+            if den == 0 {
+                continue;
+            }
+            let t = (p.0 * ey - p.1 * ex) * 16384 / den;
+            if t > 0 {
+                f[2 * k] = ((t - r16) * 127 / r16).clamp(-127, 127) as i8;
+                f[2 * k + 1] = 127;
+            }
+        }
+        for (side, step) in [(0usize, -1i64), (1, 1)] {
+            let (mut n, mut kind, mut prev, mut cur) = (0i64, 0u8, r[b] as i64, b as i64);
+            while n < 300 {
+                cur += step;
+                let x = r[cur.rem_euclid(BEAMS as i64) as usize];
+                if !ok(x) {
+                    kind = 3;
+                    break;
+                }
+                let x = x as i64;
+                if (x - prev).abs() * 100 > 10_000 + 3 * prev {
+                    kind = if x > prev { 1 } else { 2 };
+                    break;
+                }
+                prev = x;
+                n += 1;
+            }
+            let base = 2 * GEO_WIDTHS.len() + 3 * side;
+            f[base] = (n * r[b] as i64 * 797_964 / 5_382_000_000).min(127) as i8;
+            f[base + 1] = [0, 127, -127, 0][kind as usize];
+            f[base + 2] = if kind == 3 { 127 } else { 0 };
+        }
+        f[GEO_FEATURES - 1] = (63_500 / r[b] as i64).min(127) as i8;
+        f
+    }
+
+    fn reference_forward(m: &GeoView<'_>, x: &[i8]) -> i64 {
+        let b = m.bytes();
+        let mut acc2 = 0i64;
+        for j in 0..GEO_HIDDEN {
+            let mut acc = 0i64;
+            for i in 0..GEO_FEATURES {
+                acc += b[W1 + j * GEO_FEATURES + i] as i8 as i64 * x[i] as i64;
+            }
+            let c = m.hidden(j);
+            let pre = requantize_i8((acc + c.bias as i64) as i32, c.multiplier);
+            acc2 += b[W2 + j] as i8 as i64 * b[TANH + (pre as i32 + 128) as usize] as i8 as i64;
+        }
+        acc2 + m.output().bias as i64
+    }
+
+    #[test]
+    fn features_and_network_match_an_independent_reference_on_random_scans() {
+        let mut rng = Rng(7);
+        let mut s = GeoScratch::new();
+        for seed in 0..6 {
+            let blob = random_geo_blob(seed);
+            let m = GeoView::parse(&blob).unwrap();
+            for _ in 0..4 {
+                let r = random_scan(&mut rng);
+                s.prepare(&r);
+                for b in 0..BEAMS {
+                    let f = s.features(&r, b);
+                    assert_eq!(&f[..], &reference_features(&r, b)[..], "beam {b}");
+                    assert_eq!(geo_forward(&m, &f).0 as i64, reference_forward(&m, &f), "beam {b}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_straight_wall_has_no_protrusion_and_a_box_in_front_of_it_does() {
+        // A wall 3 m ahead across beams 400..=500 (beam 448 looks straight ahead), a box at 2 m
+        // on beams 440..=456.
+        let mut r = [RANGE_NO_RETURN; BEAMS];
+        // Range to a line `d` mm ahead along beam `b`: d / cos(angle off beam 448).
+        let to_line = |b: usize, d: i64| (d << 30) / fixed_point::cos(beam_angle(b) - beam_angle(448)).to_bits() as i64;
+        for b in 380..=520 {
+            r[b] = to_line(b, 3000) as u16;
+        }
+        let wall = r;
+        for b in 440..=456 {
+            r[b] = to_line(b, 2000) as u16;
+        }
+        let mut s = GeoScratch::new();
+        s.prepare(&wall);
+        let f = s.features(&wall, 448);
+        for k in 0..5 {
+            assert!(f[2 * k].abs() <= 1 && f[2 * k + 1] == 127, "width {}: {f:?}", GEO_WIDTHS[k]);
+        }
+        s.prepare(&r);
+        let f = s.features(&r, 448);
+        // The chords 16 and 32 beams wide span the box and meet the wall behind it: +50 %.
+        assert!(f[6] > 55 && f[8] > 55, "{f:?}");
+        // Depth jumps to a farther surface on both sides, 8 beams away.
+        let base = 2 * GEO_WIDTHS.len();
+        assert_eq!((f[base + 1], f[base + 4]), (127, 127));
+        assert_eq!((f[base + 2], f[base + 5]), (0, 0));
+        // Beams without a return have no features.
+        assert_eq!(s.features(&r, 0), [0; GEO_FEATURES]);
+    }
+
+    #[test]
+    fn a_bad_blob_is_refused_with_its_reason_and_never_panics() {
+        let blob = random_geo_blob(1);
+        assert!(GeoView::parse(&blob).is_ok());
+        let mut b = blob;
+        b[GEO_BLOB_LEN - 1] ^= 1;
+        assert!(matches!(GeoView::parse(&b), Err(ModelError::ChecksumMismatch { .. })));
+        assert_eq!(GeoView::parse(&blob[..100]).unwrap_err(), ModelError::Truncated { needed: GEO_BLOB_LEN, got: 100 });
+        assert_eq!(GeoView::parse(&blob[..20]).unwrap_err(), ModelError::Truncated { needed: GEO_HEADER_LEN, got: 20 });
+        let mut long = blob.to_vec();
+        long.push(0);
+        assert_eq!(GeoView::parse(&long).unwrap_err(), ModelError::TrailingBytes { extra: 1 });
+        let mut b = blob;
+        b[4] = 2;
+        assert_eq!(GeoView::parse(&b).unwrap_err(), ModelError::UnsupportedVersion(2));
+        let mut b = blob;
+        b[8] = 20;
+        assert_eq!(
+            GeoView::parse(&b).unwrap_err(),
+            ModelError::ShapeMismatch { field: super::super::ShapeField::GeoFeatures, expected: GEO_FEATURES as u32, found: 20 }
+        );
+        let mut b = blob;
+        b[25] = 1;
+        assert_eq!(GeoView::parse(&b).unwrap_err(), ModelError::ReservedNotZero);
+        // A multiplier that is not normalised, with a valid CRC.
+        let mut b = blob;
+        b[GEO_HEADER_LEN + 4..GEO_HEADER_LEN + 8].copy_from_slice(&5i32.to_le_bytes());
+        let crc = geo_checksum(&b).unwrap();
+        b[16..20].copy_from_slice(&crc.to_le_bytes());
+        assert_eq!(GeoView::parse(&b).unwrap_err(), ModelError::BadGeoMultiplier { channel: 0 });
+        assert_eq!(GeoView::parse(b"LVG").unwrap_err(), ModelError::BadMagic);
+        // Random corruption: an error or a blob, never a panic.
+        let mut rng = Rng(9);
+        for _ in 0..2000 {
+            let mut b = blob;
+            let n = (rng.next() % 4 + 1) as usize;
+            for _ in 0..n {
+                let i = (rng.next() as usize) % GEO_BLOB_LEN;
+                b[i] = rng.next() as u8;
+            }
+            let cut = (rng.next() as usize) % (GEO_BLOB_LEN + 1);
+            let _ = GeoView::parse(&b[..cut]);
+            let _ = GeoView::parse(&b);
+        }
+    }
+}
