@@ -43,7 +43,11 @@ fn main() -> ! {
             dot_check();
             common::exit_ok()
         }
-        other => fault::stop(format_args!("unknown selftest mode `{}` (ok, panic, overflow, hardfault, dot)", other)),
+        "geo" => {
+            geo_check();
+            common::exit_ok()
+        }
+        other => fault::stop(format_args!("unknown selftest mode `{}` (ok, panic, overflow, hardfault, dot, geo)", other)),
     }
 }
 
@@ -116,6 +120,34 @@ fn dot_check() {
     let macs = (N * N) as u64;
     let ipc = clock::INSTRUCTIONS_PER_COUNT;
     hprintln!("DOTBENCH macs={} dsp_instructions={} reference_instructions={}", macs, (t1 - t0) * ipc, (t2 - t1) * ipc);
+}
+
+/// The geometric classifier's state (44 KiB with `LabelPoseNet`'s rings), in `.data`.
+#[cfg(target_os = "none")]
+static GEO_CLASSIFIER: common::slot::Slot<firmware::classifier::Classifier<'static>> =
+    common::slot::Slot::with(firmware::classifier::Classifier::new(firmware::classifier::ClassifierConfig {
+        feedback: firmware::classifier::LabelFeedback::Raw,
+    }));
+
+/// See the `geo` mode.
+#[cfg(target_os = "none")]
+fn geo_check() {
+    use common::{clock, fault};
+    use cortex_m_semihosting::hprintln;
+    use firmware::classifier::geo::{synthetic_digest, GeoView};
+    let cls = GEO_CLASSIFIER.take();
+    match GeoView::parse(firmware::classifier::EMBEDDED_GEO_MODEL) {
+        Ok(m) => cls.set_geo_model(m),
+        Err(e) => fault::stop(format_args!("the embedded geometric model does not validate: {:?}", e)),
+    }
+    let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| fault::stop(format_args!("peripherals taken twice")));
+    clock::start(&mut cp.SYST);
+    const SCANS: u32 = 3;
+    let t0 = clock::now_counts();
+    let (digest, nonmap) = synthetic_digest(cls, SCANS);
+    let t1 = clock::now_counts();
+    let per_scan = (t1 - t0) * clock::INSTRUCTIONS_PER_COUNT / SCANS as u64;
+    hprintln!("GEO digest={:08x} nonmap={} instructions_per_scan={}", digest, nonmap, per_scan);
 }
 
 #[cfg(not(target_os = "none"))]

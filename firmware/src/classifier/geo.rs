@@ -403,6 +403,63 @@ pub fn geo_forward(m: &GeoView<'_>, x: &[i8; GEO_FEATURES]) -> (i32, i8) {
     (score, requantize_i8(score, o.multiplier))
 }
 
+/// A synthetic scan for cross-target checks (integer only): the robot 1–3 m off the centre of a
+/// 10 m square room, a box in front of one wall, a person-sized post, a dropout every 97 beams.
+#[doc(hidden)]
+pub fn synthetic_scan(seed: u32) -> [u16; BEAMS] {
+    let off = 1000 + (seed as i64 % 3) * 1000;
+    core::array::from_fn(|b| {
+        if b % 97 == seed as usize % 97 {
+            return RANGE_INVALID;
+        }
+        let (sn, c) = sin_cos(beam_angle(b));
+        let (c, sn) = (c.to_bits() as i64, sn.to_bits() as i64);
+        // Walls at x = ±5 m, y = ±5 m around a robot at (off, 0): the nearest along the ray.
+        let mut r = i64::MAX;
+        for (d, w) in [(c, 5000 - off), (-c, 5000 + off), (sn, 5000), (-sn, 5000)] {
+            if d > 0 {
+                r = r.min((w << 30) / d);
+            }
+        }
+        // A box face 1.2 m wide at x = 3.5 m (world), and a post at y = -2 m.
+        if c > 0 {
+            let t = ((3500 - off) << 30) / c;
+            let y = t * sn >> 30;
+            if (-600..=600).contains(&y) && t > 0 && t < r {
+                r = t;
+            }
+        }
+        if sn < 0 {
+            let t = (2000i64 << 30) / -sn;
+            let x = off + (t * c >> 30);
+            if (-250..=250).contains(&x) && t < r {
+                r = t;
+            }
+        }
+        r.clamp(1, 60_000) as u16
+    })
+}
+
+/// Labels `n` synthetic scans ([`synthetic_scan`]) with `cls` (a geometric model installed) and
+/// returns an FNV-1a digest of every score and the non-map count: the same on every target.
+#[doc(hidden)]
+pub fn synthetic_digest(cls: &mut super::Classifier<'_>, n: u32) -> (u32, u32) {
+    let mut digest: u32 = 0x811c_9dc5;
+    let mut nonmap = 0;
+    let mut out = [crate::scan::BeamLabel::Unlabelled; BEAMS];
+    for seed in 0..n {
+        let scan = synthetic_scan(seed);
+        cls.classify_ranges(&fixed_point::Pose2::default(), &scan, &mut out);
+        for (&s, &l) in cls.scores().iter().zip(out.iter()) {
+            for byte in s.to_le_bytes() {
+                digest = (digest ^ byte as u32).wrapping_mul(0x0100_0193);
+            }
+            nonmap += (l == crate::scan::BeamLabel::NonMap) as u32;
+        }
+    }
+    (digest, nonmap)
+}
+
 #[cfg(test)]
 #[allow(clippy::needless_range_loop)] // the reference is index loops on purpose
 mod tests {
