@@ -89,7 +89,7 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
                 (0..firmware::capacity::BEAMS).map(|b| scratch.features(&beams.ranges_mm, b).map(|v| v as f32 / 127.0)).collect();
             let w1: Vec<[f32; GEO_FEATURES]> =
                 (0..GEO_HIDDEN).map(|j| std::array::from_fn(|i| model.hidden_weights(j)[i] as i8 as f32 / 127.0)).collect();
-            let w2: Vec<f32> = model.output_weights().iter().map(|&v| v as i8 as f32 / 127.0).collect();
+            let w2: Vec<f32> = model.output_weights().chunks_exact(2).map(|v| i16::from_le_bytes([v[0], v[1]]) as f32 / 32_767.0).collect();
             let t_f32 = time(reps, || {
                 let mut map = 0usize;
                 for x in &feats {

@@ -11,8 +11,10 @@
 
 use crate::train::{Confusion, Episode, Result, TrainError};
 use firmware::capacity::BEAMS;
-use firmware::classifier::geo::{write_geo_blob, GeoChannel, GeoScratch, GeoView, GEO_BLOB_LEN, GEO_FEATURES, GEO_HIDDEN};
-use firmware::classifier::{Classifier, ClassifierConfig};
+use firmware::classifier::geo::{
+    history_features, write_geo_blob, GeoChannel, GeoScratch, GeoView, GEO_BLOB_LEN, GEO_FEATURES, GEO_HIDDEN, SCAN_FEATURES,
+};
+use firmware::classifier::{Classifier, ClassifierConfig, Normalisation, ScanHistory};
 use firmware::scan::BeamLabel;
 use fixed_point::QuantizedMultiplier;
 use rand::{Rng, SeedableRng};
@@ -21,8 +23,8 @@ use rand_chacha::ChaCha8Rng;
 /// One training sample: a beam's features and whether the labeller calls it map.
 pub type Sample = ([i8; GEO_FEATURES], bool);
 
-/// The features of every `beam_stride`-th labelled beam (offset varying with the step) of every
-/// `step_stride`-th step.
+/// The shape features (label-history features zero) of every `beam_stride`-th labelled beam
+/// (offset varying with the step) of every `step_stride`-th step.
 pub fn samples(episodes: &[Episode], step_stride: usize, beam_stride: usize) -> Vec<Sample> {
     let mut out = Vec::new();
     let mut scratch = Box::new(GeoScratch::new());
@@ -61,11 +63,12 @@ pub struct GeoMlp {
 }
 
 impl GeoMlp {
-    /// Uniform ±1/√fan-in hidden weights, ±0.2 output weights, zero biases.
+    /// Uniform ±1/√fan-in hidden weights (zero on the label-history inputs, so a model trained
+    /// without history ignores them at run time), ±0.2 output weights, zero biases.
     pub fn init(rng: &mut ChaCha8Rng) -> Self {
         let s = 1.0 / (GEO_FEATURES as f32).sqrt();
         GeoMlp {
-            w1: (0..GEO_HIDDEN).map(|_| core::array::from_fn(|_| rng.gen_range(-s..s))).collect(),
+            w1: (0..GEO_HIDDEN).map(|_| core::array::from_fn(|i| if i < SCAN_FEATURES { rng.gen_range(-s..s) } else { 0.0 })).collect(),
             b1: vec![0.0; GEO_HIDDEN],
             w2: (0..GEO_HIDDEN).map(|_| rng.gen_range(-0.2..0.2)).collect(),
             b2: 0.0,
@@ -165,11 +168,13 @@ pub struct GeoQuantisation {
     pub pre_range: f32,
 }
 
-/// The tanh table's input range is clipped here (tanh(4) ≈ 0.9993).
-const PRE_CLIP: f32 = 4.0;
+/// The default clip of the tanh table's input range: tanh(3) ≈ 0.995, and a table step of
+/// 3/127 in the pre-activation.
+pub const DEFAULT_PRE_CLIP: f32 = 3.0;
 
-/// Quantises `m`, calibrating the hidden pre-activation scale on `calibration`.
-pub fn quantise(m: &GeoMlp, calibration: &[Sample]) -> Result<GeoQuantisation> {
+/// Quantises `m`, calibrating the hidden pre-activation scale on `calibration`: the table covers
+/// the largest |pre-activation| seen, at most `pre_clip` (larger values saturate).
+pub fn quantise(m: &GeoMlp, calibration: &[Sample], pre_clip: f32) -> Result<GeoQuantisation> {
     let mut max_pre = 0f32;
     let mut pre = [0f32; GEO_HIDDEN];
     for (x, _) in calibration {
@@ -179,7 +184,7 @@ pub fn quantise(m: &GeoMlp, calibration: &[Sample]) -> Result<GeoQuantisation> {
     if !max_pre.is_finite() {
         return Err(TrainError("non-finite pre-activations: the model diverged".into()));
     }
-    let pre_range = max_pre.clamp(1e-3, PRE_CLIP);
+    let pre_range = max_pre.clamp(1e-3, pre_clip.max(1e-3));
     let s_pre = pre_range as f64 / 127.0;
     let mult = |real: f64| QuantizedMultiplier::from_f64(real).ok_or_else(|| TrainError(format!("multiplier {real} not representable")));
     let mut hidden = [GeoChannel { bias: 0, multiplier: QuantizedMultiplier::ZERO }; GEO_HIDDEN];
@@ -195,9 +200,10 @@ pub fn quantise(m: &GeoMlp, calibration: &[Sample]) -> Result<GeoQuantisation> {
         hidden[j] = GeoChannel { bias: (m.b1[j] as f64 / acc_scale).round() as i32, multiplier: mult(acc_scale / s_pre)? };
     }
     let tanh: [i8; 256] = core::array::from_fn(|i| ((((i as f64) - 128.0) * s_pre).tanh() * 127.0).round() as i8);
+    // The output weights are int16 (one scale for the layer).
     let max_w2 = m.w2.iter().fold(0f32, |a, w| a.max(w.abs())).max(1e-8) as f64;
-    let s2 = max_w2 / 127.0;
-    let w2: [i8; GEO_HIDDEN] = core::array::from_fn(|j| (m.w2[j] as f64 / s2).round().clamp(-127.0, 127.0) as i8);
+    let s2 = max_w2 / 32_767.0;
+    let w2: [i16; GEO_HIDDEN] = core::array::from_fn(|j| (m.w2[j] as f64 / s2).round().clamp(-32_767.0, 32_767.0) as i16);
     let acc2_scale = s2 / 127.0;
     // The int8 output shows the logit over 4 (127 = a logit of 4 or more).
     let output = GeoChannel { bias: (m.b2 as f64 / acc2_scale).round() as i32, multiplier: mult(acc2_scale / (4.0 / 127.0))? };
@@ -216,40 +222,102 @@ pub fn evaluate_float(m: &GeoMlp, samples: &[Sample]) -> Confusion {
     c
 }
 
-/// The int8 blob run through the firmware's classifier (`Controller`'s own path) over every step
-/// of `episodes`, against the labeller; with the float model's agreement with it (sign per
-/// labelled beam) when `float` is given.
-pub fn evaluate_int8(blob: &[u8], episodes: &[Episode], float: Option<&GeoMlp>) -> Result<(Confusion, Option<f64>)> {
+/// Runs `blob` through the firmware's classifier over every step of `episodes` (each from the
+/// bootstrap state, as on the robot), calling `visit(step, features, int8 labels)` with every
+/// beam's full input — shape and label-history features exactly as the firmware built them —
+/// before the step is classified, and the labels it then gave.
+fn run_firmware(
+    blob: &[u8],
+    episodes: &[Episode],
+    mut visit: impl FnMut(&crate::train::Step, &dyn Fn(usize) -> [i8; GEO_FEATURES], &[BeamLabel; BEAMS]),
+) -> Result<()> {
     let view = GeoView::parse(blob).map_err(|e| TrainError(format!("the firmware refuses the blob: {e:?}")))?;
     let mut cls = Box::new(Classifier::new(ClassifierConfig::default()));
     cls.set_geo_model(view);
     let mut scratch = Box::new(GeoScratch::new());
-    let mut c = Confusion::default();
-    let (mut agree, mut total) = (0u64, 0u64);
+    let mut mirror = Box::new(ScanHistory::new());
     let mut out = [BeamLabel::Unlabelled; BEAMS];
     for ep in episodes {
         cls.reset();
+        mirror.clear();
         for st in &ep.steps {
             let ranges = <&[u16; BEAMS]>::try_from(&st.ranges_mm[..])
                 .map_err(|_| TrainError(format!("{}: a scan without {BEAMS} beams", ep.name)))?;
+            // The same history the classifier reads: this scan's pose, the earlier outputs.
+            mirror.push_scan(&st.pose, ranges, &Normalisation::DEFAULT);
+            scratch.prepare(ranges);
             cls.classify_ranges(&st.pose, ranges, &mut out);
-            if float.is_some() {
-                scratch.prepare(ranges);
-            }
-            for b in 0..BEAMS {
-                let code = st.labels[b];
-                if code == 0 || out[b] == BeamLabel::Unlabelled {
-                    continue;
-                }
-                let int8_map = out[b] == BeamLabel::Map;
-                c.add(code == 1, int8_map);
-                if let Some(f) = float {
-                    total += 1;
-                    agree += ((f.logit(&scratch.features(ranges, b)) >= 0.0) == int8_map) as u64;
-                }
-            }
+            let (s, h) = (&*scratch, &*mirror);
+            let features = |b: usize| {
+                let mut x = s.features(ranges, b);
+                let [last, avg] = history_features(h, b);
+                x[SCAN_FEATURES] = last;
+                x[SCAN_FEATURES + 1] = avg;
+                x
+            };
+            visit(st, &features, &out);
+            mirror.push_labels(cls.output());
         }
     }
+    Ok(())
+}
+
+/// Training samples with the label history of `blob`'s own autoregressive outputs (the firmware
+/// run on `episodes`), every `step_stride`-th step and `beam_stride`-th labelled beam; each history
+/// feature negated with probability `flip` (the paper corrupts 10 % of the history labels).
+pub fn rollout_samples(
+    blob: &[u8],
+    episodes: &[Episode],
+    step_stride: usize,
+    beam_stride: usize,
+    flip: f64,
+    seed: u64,
+) -> Result<Vec<Sample>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut v = Vec::new();
+    let mut k = 0usize;
+    run_firmware(blob, episodes, |st, features, _| {
+        k += 1;
+        if k % step_stride.max(1) != 0 {
+            return;
+        }
+        for b in (k % beam_stride.max(1)..BEAMS).step_by(beam_stride.max(1)) {
+            let code = st.labels[b];
+            if code == 0 || st.ranges_mm[b] == 0 || st.ranges_mm[b] == u16::MAX {
+                continue;
+            }
+            let mut x = features(b);
+            for i in [SCAN_FEATURES, SCAN_FEATURES + 1] {
+                if rng.gen_bool(flip.clamp(0.0, 1.0)) {
+                    x[i] = x[i].saturating_neg();
+                }
+            }
+            v.push((x, code == 1));
+        }
+    })?;
+    Ok(v)
+}
+
+/// The int8 blob run through the firmware's classifier (`Controller`'s own path, autoregressive)
+/// over every step of `episodes`, against the labeller; with the float model's agreement with it
+/// (sign per labelled beam, on the same inputs) when `float` is given.
+pub fn evaluate_int8(blob: &[u8], episodes: &[Episode], float: Option<&GeoMlp>) -> Result<(Confusion, Option<f64>)> {
+    let mut c = Confusion::default();
+    let (mut agree, mut total) = (0u64, 0u64);
+    run_firmware(blob, episodes, |st, features, out| {
+        for b in 0..BEAMS {
+            let code = st.labels[b];
+            if code == 0 || out[b] == BeamLabel::Unlabelled {
+                continue;
+            }
+            let int8_map = out[b] == BeamLabel::Map;
+            c.add(code == 1, int8_map);
+            if let Some(f) = float {
+                total += 1;
+                agree += ((f.logit(&features(b)) >= 0.0) == int8_map) as u64;
+            }
+        }
+    })?;
     Ok((c, float.map(|_| agree as f64 / total.max(1) as f64)))
 }
 
@@ -302,13 +370,25 @@ mod tests {
         assert!(losses.last().unwrap() < &(losses[0] * 0.8), "loss fell: {losses:?}");
         let fl = evaluate_float(&m, &data);
         assert!(fl.accuracy() > fl.always_map() + 0.05, "float {} vs always map {}", fl.accuracy(), fl.always_map());
-        let q = quantise(&m, &data).unwrap();
+        let q = quantise(&m, &data, DEFAULT_PRE_CLIP).unwrap();
         let (int8, agree) = evaluate_int8(&q.blob, &ep, Some(&m)).unwrap();
         assert!(int8.accuracy() > int8.always_map() + 0.05, "int8 {} vs always map {}", int8.accuracy(), int8.always_map());
         assert!(agree.unwrap() > 0.98, "float/int8 agreement {agree:?}");
         // Same data, same seed: the same blob.
         let m2 = train(&GeoTrainConfig { epochs: 4, lr: 0.05, seed: 3 }, &data, |_, _, _| {}).unwrap();
-        assert_eq!(quantise(&m2, &data).unwrap().blob, q.blob);
+        assert_eq!(quantise(&m2, &data, DEFAULT_PRE_CLIP).unwrap().blob, q.blob);
+        // Trained without history, the model ignores its history inputs.
+        assert!(m.w1.iter().all(|row| row[SCAN_FEATURES..].iter().all(|&w| w == 0.0)));
+        // A DAgger round: the history comes from the model's own outputs through the firmware,
+        // and the history model still classifies the room and agrees with its int8 self.
+        let hist = rollout_samples(&q.blob, &ep, 1, 1, 0.1, 5).unwrap();
+        assert_eq!(hist.len(), data.len());
+        assert!(hist.iter().skip(BEAMS).any(|(x, _)| x[SCAN_FEATURES] != 0), "no history after the first scan");
+        let mh = train(&GeoTrainConfig { epochs: 4, lr: 0.05, seed: 3 }, &hist, |_, _, _| {}).unwrap();
+        let qh = quantise(&mh, &hist, DEFAULT_PRE_CLIP).unwrap();
+        let (int8, agree) = evaluate_int8(&qh.blob, &ep, Some(&mh)).unwrap();
+        assert!(int8.accuracy() > int8.always_map() + 0.05, "history model int8 {} vs always map {}", int8.accuracy(), int8.always_map());
+        assert!(agree.unwrap() > 0.98, "history model float/int8 agreement {agree:?}");
     }
 
     #[test]

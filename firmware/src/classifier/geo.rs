@@ -4,7 +4,8 @@
 //! convolution channel, too narrow to tell the front of a wardrobe from the wall behind it: in
 //! the built-in buildings it stays below "always map" (docs/model-card.md). This model gives the
 //! network the shape of the scan around each beam instead, at scales from 2 to 128 beams, and
-//! classifies each beam on its own. It reads only the newest scan (no pose, no label history).
+//! classifies each beam on its own, from the newest scan and, as the paper's label encoder does,
+//! its own earlier outputs for the same direction ([`history_features`]).
 //!
 //! ## Features (all int8, scale 1/127, integer arithmetic only)
 //! For beam `b` with a return, `r` its range:
@@ -16,20 +17,23 @@
 //!   0.1 m + 3 % of the range) or a missing return, as an arc length `n · r · 2π / 897` over 6 m
 //!   (capped at 1; runs of 300 beams or more count as 300 with no end), the jump's direction (+127:
 //!   the next surface is farther, −127: nearer, 0: no jump) and a flag for a missing return;
-//! - the inverse range `min(1, 0.5 m / r)`.
+//! - the inverse range `min(1, 0.5 m / r)`;
+//! - the label history ([`history_features`]): the model's own output one step earlier for the
+//!   same direction, and the weighted average of its 8 earlier outputs (zero when the model was
+//!   trained without them: their weights are then zero).
 //!
 //! ## Network
 //! `GEO_FEATURES → GEO_HIDDEN` (int8 weights per output channel, int32 bias and accumulator,
-//! requantised by a fixed-point multiplier into a 256-entry tanh table) `→ 1` (int8 weights; the
+//! requantised by a fixed-point multiplier into a 256-entry tanh table) `→ 1` (int16 weights; the
 //! sign of the int32 accumulator plus bias is the label: ≥ 0 map, < 0 non-map).
 //!
 //! ## Blob (`GEO_MAGIC`, little-endian; docs/model-format.md)
 //! | offset | bytes | field |
 //! |---|---|---|
 //! | 0 | 4 | magic `LVGM` |
-//! | 4 | 2 | version (1) |
+//! | 4 | 2 | version (2; 1 had 21 features and int8 output weights) |
 //! | 6 | 2 | header length (32) |
-//! | 8 | 2 | features (21) |
+//! | 8 | 2 | features (23) |
 //! | 10 | 2 | hidden units (48) |
 //! | 12 | 4 | payload length (bytes after the header) |
 //! | 16 | 4 | CRC-32/ISO-HDLC of bytes 0–15 and 20–end |
@@ -38,7 +42,8 @@
 //! | … | 12 | output: bias `i32`, multiplier `i32`, shift `i32` (accumulator → int8 output, for display) |
 //! | … | 256 | tanh table, `i8`, indexed by pre-activation + 128 |
 //! | … | hidden × features | hidden weights, `i8`, row-major |
-//! | … | hidden | output weights, `i8` |
+//! | … | 2 × hidden | output weights, `i16` (the output layer's one scale would leave its small
+//! weights a few int8 steps) |
 
 use super::model::ModelError;
 use crate::capacity::BEAMS;
@@ -48,14 +53,16 @@ use fixed_point::{requantize_i8, sin_cos, QuantizedMultiplier};
 
 /// Chord half-widths, beams.
 pub const GEO_WIDTHS: [usize; 7] = [2, 4, 8, 16, 32, 64, 128];
-/// Features per beam.
-pub const GEO_FEATURES: usize = 2 * GEO_WIDTHS.len() + 7;
+/// Shape features per beam (from the newest scan).
+pub const SCAN_FEATURES: usize = 2 * GEO_WIDTHS.len() + 7;
+/// Features per beam: the shape features and the two label-history features.
+pub const GEO_FEATURES: usize = SCAN_FEATURES + 2;
 /// Hidden units.
 pub const GEO_HIDDEN: usize = 48;
 /// First four bytes of a geometric model blob.
 pub const GEO_MAGIC: [u8; 4] = *b"LVGM";
 /// The blob format version this firmware reads.
-pub const GEO_VERSION: u16 = 1;
+pub const GEO_VERSION: u16 = 2;
 /// Header bytes.
 pub const GEO_HEADER_LEN: usize = 32;
 /// Bytes of one bias / multiplier / shift record.
@@ -69,7 +76,7 @@ const W1: usize = TANH + 256;
 /// Offset of the output weights.
 const W2: usize = W1 + GEO_HIDDEN * GEO_FEATURES;
 /// Total blob length.
-pub const GEO_BLOB_LEN: usize = W2 + GEO_HIDDEN;
+pub const GEO_BLOB_LEN: usize = W2 + 2 * GEO_HIDDEN;
 /// Multiply-accumulates per scan.
 pub const WORK_PER_GEO_CLASSIFY: u32 = (BEAMS * (GEO_FEATURES * GEO_HIDDEN + GEO_HIDDEN)) as u32;
 
@@ -208,9 +215,9 @@ impl<'a> GeoView<'a> {
         &self.bytes[W1 + j * GEO_FEATURES..W1 + (j + 1) * GEO_FEATURES]
     }
 
-    /// The output weights.
+    /// The output weights, `i16` little-endian.
     pub fn output_weights(&self) -> &'a [u8] {
-        &self.bytes[W2..W2 + GEO_HIDDEN]
+        &self.bytes[W2..W2 + 2 * GEO_HIDDEN]
     }
 }
 
@@ -220,7 +227,7 @@ pub fn write_geo_blob(
     output: GeoChannel,
     tanh: &[i8; 256],
     w1: &[[i8; GEO_FEATURES]; GEO_HIDDEN],
-    w2: &[i8; GEO_HIDDEN],
+    w2: &[i16; GEO_HIDDEN],
     out: &mut [u8; GEO_BLOB_LEN],
 ) {
     out.fill(0);
@@ -248,7 +255,7 @@ pub fn write_geo_blob(
         }
     }
     for (j, &v) in w2.iter().enumerate() {
-        out[W2 + j] = v as u8;
+        out[W2 + 2 * j..W2 + 2 * j + 2].copy_from_slice(&v.to_le_bytes());
     }
     let crc = geo_checksum(&out[..]).unwrap_or(0);
     out[16..20].copy_from_slice(&crc.to_le_bytes());
@@ -350,7 +357,7 @@ impl GeoScratch {
             };
             f[base + 3 * side + 2] = if kind == 3 { 127 } else { 0 };
         }
-        f[GEO_FEATURES - 1] = (500 * 127 / rb as i32).min(127) as i8;
+        f[SCAN_FEATURES - 1] = (500 * 127 / rb as i32).min(127) as i8;
         f
     }
 }
@@ -380,6 +387,34 @@ fn break_kind(ra: u16, rb: u16) -> u8 {
     }
 }
 
+/// The label-history features of beam `b` (indices [`SCAN_FEATURES`] and [`SCAN_FEATURES`] + 1):
+/// the model's output for the same direction one step earlier, and the linear-weighted average
+/// of its 8 earlier outputs (row i of 1…8 weighted i/36, newest heaviest: the paper's label-average
+/// row). `h` holds the current scan's pose as its newest row and the earlier outputs as its label
+/// rows; each earlier row is read at the beam that pointed the same way then (the robot's turn
+/// since, rounded to a beam; its travel, ≤ 0.1 m a step, is ignored). Unfilled rows count zero.
+pub fn history_features(h: &super::ScanHistory, b: usize) -> [i8; 2] {
+    let Some(now) = h.pose(super::HISTORY - 1) else {
+        return [0, 0];
+    };
+    let mut last = 0i8;
+    let mut sum = 0i64;
+    for r in 0..super::LABEL_ROWS {
+        let Some(p) = h.pose(r) else { continue };
+        // Beams turned since row r: (θ_now − θ_r) · 897 / 2³², rounded half away from zero.
+        let d = (now.theta - p.theta).0 as i64 * BEAMS as i64;
+        let shift = if d >= 0 { (d + (1 << 31)) >> 32 } else { -((-d + (1 << 31)) >> 32) };
+        let v = h.label_row(r)[(b as i64 + shift).rem_euclid(BEAMS as i64) as usize];
+        sum += (r as i64 + 1) * v as i64;
+        if r == super::LABEL_ROWS - 1 {
+            last = v;
+        }
+    }
+    let w = super::LABEL_WEIGHT_SUM as i64;
+    let avg = if sum >= 0 { (2 * sum + w) / (2 * w) } else { -((-2 * sum + w) / (2 * w)) };
+    [last, avg.clamp(-127, 127) as i8]
+}
+
 /// The network on one beam's features: `(score, output)`, the int32 score (≥ 0 map) and its
 /// int8 requantisation.
 #[inline]
@@ -387,7 +422,8 @@ pub fn geo_forward(m: &GeoView<'_>, x: &[i8; GEO_FEATURES]) -> (i32, i8) {
     let table = m.tanh_table();
     let w2 = m.output_weights();
     let mut acc2: i32 = 0;
-    for (j, &v2) in w2.iter().enumerate() {
+    for (j, v2) in w2.chunks_exact(2).enumerate() {
+        let v2 = i16::from_le_bytes([v2[0], v2[1]]) as i32;
         let w = m.hidden_weights(j);
         let mut acc: i32 = 0;
         for (&wi, &xi) in w.iter().zip(x.iter()) {
@@ -396,7 +432,8 @@ pub fn geo_forward(m: &GeoView<'_>, x: &[i8; GEO_FEATURES]) -> (i32, i8) {
         let c = m.hidden(j);
         let pre = requantize_i8(acc.saturating_add(c.bias), c.multiplier);
         let h = table[(pre as i32 + 128) as usize] as i8;
-        acc2 += v2 as i8 as i32 * h as i32;
+        // |Σ| ≤ 48 · 32 767 · 127 < 2³¹.
+        acc2 += v2 * h as i32;
     }
     let o = m.output();
     let score = acc2.saturating_add(o.bias);
@@ -482,7 +519,7 @@ mod tests {
         let output = GeoChannel { bias: (rng.next() % 20001) as i32 - 10_000, ..output };
         let tanh: [i8; 256] = core::array::from_fn(|q| ((q as i32 - 128) * 2).clamp(-127, 127) as i8);
         let w1: [[i8; GEO_FEATURES]; GEO_HIDDEN] = core::array::from_fn(|_| core::array::from_fn(|_| rng.next() as i8));
-        let w2: [i8; GEO_HIDDEN] = core::array::from_fn(|_| rng.next() as i8);
+        let w2: [i16; GEO_HIDDEN] = core::array::from_fn(|_| rng.next() as i16);
         let mut blob = [0u8; GEO_BLOB_LEN];
         write_geo_blob(&hidden, output, &tanh, &w1, &w2, &mut blob);
         blob
@@ -561,7 +598,7 @@ mod tests {
             f[base + 1] = [0, 127, -127, 0][kind as usize];
             f[base + 2] = if kind == 3 { 127 } else { 0 };
         }
-        f[GEO_FEATURES - 1] = (63_500 / r[b] as i64).min(127) as i8;
+        f[SCAN_FEATURES - 1] = (63_500 / r[b] as i64).min(127) as i8;
         f
     }
 
@@ -575,7 +612,8 @@ mod tests {
             }
             let c = m.hidden(j);
             let pre = requantize_i8((acc + c.bias as i64) as i32, c.multiplier);
-            acc2 += b[W2 + j] as i8 as i64 * b[TANH + (pre as i32 + 128) as usize] as i8 as i64;
+            let v2 = i16::from_le_bytes([b[W2 + 2 * j], b[W2 + 2 * j + 1]]) as i64;
+            acc2 += v2 * b[TANH + (pre as i32 + 128) as usize] as i8 as i64;
         }
         acc2 + m.output().bias as i64
     }
@@ -632,6 +670,40 @@ mod tests {
     }
 
     #[test]
+    fn the_label_history_is_read_where_each_direction_was_then() {
+        use super::super::{ScanHistory, LABEL_ROWS};
+        use fixed_point::{BinaryAngle, Pose2};
+        let mut h = ScanHistory::new();
+        let scan = [1000u16; BEAMS];
+        // Before any scan, and on the first scan (no earlier outputs): zeros.
+        assert_eq!(history_features(&h, 10), [0, 0]);
+        h.push_scan(&Pose2::IDENTITY, &scan, &super::super::Normalisation::DEFAULT);
+        assert_eq!(history_features(&h, 10), [0, 0]);
+        // Output of that step: +127 at beam 100 only, −127 elsewhere.
+        let mut row = [-127i8; BEAMS];
+        row[100] = 127;
+        h.push_labels(&row);
+        // The robot then turns left by 10 beams' worth: the direction beam 100 saw is now beam 90.
+        let turn = BinaryAngle::from_fraction(10, BEAMS as i64);
+        h.push_scan(&Pose2 { theta: turn, ..Pose2::IDENTITY }, &scan, &super::super::Normalisation::DEFAULT);
+        let [last, avg] = history_features(&h, 90);
+        assert_eq!(last, 127);
+        // One filled label row of weight 8/36 (the newest): 127 · 8 / 36 = 28.2 → 28.
+        assert_eq!(avg, 28);
+        assert_eq!(history_features(&h, 100), [-127, -28]);
+        // Wrap-around: beam 0 now reads beam 10 then.
+        assert_eq!(history_features(&h, 0)[0], -127);
+        // A full history of +127: the average is +127.
+        let mut h = ScanHistory::new();
+        for _ in 0..=LABEL_ROWS {
+            h.push_scan(&Pose2::IDENTITY, &scan, &super::super::Normalisation::DEFAULT);
+            h.push_labels(&[127; BEAMS]);
+        }
+        h.push_scan(&Pose2::IDENTITY, &scan, &super::super::Normalisation::DEFAULT);
+        assert_eq!(history_features(&h, 400), [127, 127]);
+    }
+
+    #[test]
     fn a_bad_blob_is_refused_with_its_reason_and_never_panics() {
         let blob = random_geo_blob(1);
         assert!(GeoView::parse(&blob).is_ok());
@@ -644,8 +716,8 @@ mod tests {
         long.push(0);
         assert_eq!(GeoView::parse(&long).unwrap_err(), ModelError::TrailingBytes { extra: 1 });
         let mut b = blob;
-        b[4] = 2;
-        assert_eq!(GeoView::parse(&b).unwrap_err(), ModelError::UnsupportedVersion(2));
+        b[4] = 1;
+        assert_eq!(GeoView::parse(&b).unwrap_err(), ModelError::UnsupportedVersion(1));
         let mut b = blob;
         b[8] = 20;
         assert_eq!(

@@ -72,8 +72,8 @@ pub const POSE_FLAT: usize = POSE_CHANNELS * HISTORY;
 pub static EMBEDDED_MODEL: &[u8] = include_bytes!("../../model/lives-int8.bin");
 
 /// The trained geometric model (`firmware/model/lives-geo-int8.bin`, [`geo`], its card in
-/// `docs/model-card-geo.md`), embedded at build time: the model `lives` runs by default (89 % per
-/// point in the built-in buildings, where `LabelPoseNet` stays below "always map").
+/// `docs/model-card-geo.md`), embedded at build time: the model `lives` runs by default (about
+/// 90 % per point in the built-in buildings, where `LabelPoseNet` stays below "always map").
 /// `Controller::set_model` tells the two formats apart by their magic.
 pub static EMBEDDED_GEO_MODEL: &[u8] = include_bytes!("../../model/lives-geo-int8.bin");
 
@@ -269,9 +269,14 @@ impl<'m> Classifier<'m> {
     /// [`Classifier::classify`] on bare ranges.
     pub fn classify_ranges(&mut self, pose: &Pose2, ranges_mm: &[u16; BEAMS], out: &mut [BeamLabel; BEAMS]) -> u32 {
         if let Some(g) = self.geo {
+            self.history.push_scan(pose, ranges_mm, &Normalisation::DEFAULT);
             self.geo_scratch.prepare(ranges_mm);
             for b in 0..BEAMS {
-                let (score, o) = geo::geo_forward(&g, &self.geo_scratch.features(ranges_mm, b));
+                let mut x = self.geo_scratch.features(ranges_mm, b);
+                let [last, avg] = geo::history_features(&self.history, b);
+                x[geo::SCAN_FEATURES] = last;
+                x[geo::SCAN_FEATURES + 1] = avg;
+                let (score, o) = geo::geo_forward(&g, &x);
                 self.scores[b] = score.clamp(i16::MIN as i32, i16::MAX as i32) as i16;
                 self.output[b] = o;
                 out[b] = match ranges_mm[b] {
@@ -280,6 +285,8 @@ impl<'m> Classifier<'m> {
                     _ => BeamLabel::NonMap,
                 };
             }
+            // The outputs (raw, as `LabelFeedback::Raw`) are the next steps' label history.
+            self.history.push_labels(&self.output);
             return geo::WORK_PER_GEO_CLASSIFY;
         }
         let Some(model) = self.model else {
