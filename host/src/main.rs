@@ -226,10 +226,10 @@ enum Cmd {
         #[arg(long)]
         lr_decay: bool,
     },
-    /// Train the geometric classifier (per-beam shape features of the newest scan, an int8 MLP;
-    /// docs/model-card-geo.md), quantise it, evaluate it through the firmware on the dataset's
-    /// validation split and in the built-in buildings, write the blob and a model card.
-    /// (Built with `--features train`.)
+    /// Train the geometric classifier (per-beam shape features of the newest scan and its own
+    /// earlier outputs, an int8 MLP; docs/model-card-geo.md), quantise it, evaluate it through the
+    /// firmware on the dataset's validation split and in the built-in buildings, write the blob
+    /// and a model card. (Built with `--features train`.)
     #[cfg(feature = "train")]
     TrainGeo {
         /// The dataset directory (`lives dataset --out DIR`; procedural worlds only).
@@ -274,6 +274,21 @@ enum Cmd {
         /// The tanh table's input range: the largest hidden pre-activation seen, at most this.
         #[arg(long, default_value_t = host::train_geo::DEFAULT_PRE_CLIP)]
         pre_clip: f32,
+    },
+    /// Per-point accuracy of an int8 classifier blob (either format) through the firmware,
+    /// autoregressive as on the robot, in each built-in building and scenario (never in a
+    /// dataset), against the ground-truth labeller. (Built with `--features train`.)
+    #[cfg(feature = "train")]
+    ClassifierEval {
+        /// The blob (default: the committed geometric model).
+        #[arg(long, default_value = "firmware/model/lives-geo-int8.bin")]
+        model: PathBuf,
+        /// Seconds of random walk in each built-in world and scenario.
+        #[arg(long, default_value_t = 60.0)]
+        seconds: f64,
+        /// Print one JSON object instead of a table.
+        #[arg(long)]
+        json: bool,
     },
     /// Calibrate the decision bias of a model without label history on a dataset's validation
     /// split: scores shifts of the scan encoder's linear bias, writes the best as a checkpoint.
@@ -907,6 +922,47 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 }
             }
             Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
+        }
+        #[cfg(feature = "train")]
+        Cmd::ClassifierEval { model, seconds, json } => {
+            let blob = std::fs::read(&model).map_err(|e| format!("{}: {e}", model.display()))?;
+            let eps = host::train::unseen_episodes(seconds, 1).map_err(|e| e.0)?;
+            let per = host::train_geo::evaluate_blob_per_episode(&blob, &eps).map_err(|e| format!("{}: {}", model.display(), e.0))?;
+            let mut pooled = host::train::Confusion::default();
+            per.iter().for_each(|(_, c)| pooled.merge(c));
+            let mean = per.iter().map(|(_, c)| c.accuracy()).sum::<f64>() / per.len().max(1) as f64;
+            let set = |name: &str, c: &host::train::Confusion| {
+                serde_json::json!({
+                    "set": name, "beams": c.total(), "accuracy": c.accuracy(), "always_map": c.always_map(),
+                    "map_recall": c.map_recall(), "non_map_recall": c.non_map_recall(),
+                })
+            };
+            let format = if firmware::classifier::geo::GeoView::is_geo(&blob) { "LVGM (geometric)" } else { "LIVM (LabelPoseNet)" };
+            if json {
+                let sets: Vec<_> = per.iter().map(|(n, c)| set(n, c)).collect();
+                say!(
+                    "{}",
+                    serde_json::json!({
+                        "model": model.display().to_string(), "format": format, "random_walk_s": seconds,
+                        "per_world": sets, "pooled": set("pooled", &pooled), "mean_over_worlds": mean,
+                    })
+                );
+            } else {
+                say!("{} ({format}), int8 through the firmware, {seconds:.0} s random walk per world:", model.display());
+                say!("| world | beams | accuracy | always map | map recall | non-map recall |\n|---|---|---|---|---|---|");
+                for (n, c) in per.iter().chain(std::iter::once(&("pooled".to_string(), pooled))) {
+                    say!(
+                        "| {n} | {} | {:.2} % | {:.2} % | {:.2} % | {:.2} % |",
+                        c.total(),
+                        100.0 * c.accuracy(),
+                        100.0 * c.always_map(),
+                        100.0 * c.map_recall(),
+                        100.0 * c.non_map_recall()
+                    );
+                }
+                say!("mean over the {} worlds: {:.2} %", per.len(), 100.0 * mean);
+            }
+            Ok(ExitCode::SUCCESS)
         }
         #[cfg(feature = "train")]
         Cmd::TrainGeo {

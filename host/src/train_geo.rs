@@ -321,6 +321,22 @@ pub fn evaluate_int8(blob: &[u8], episodes: &[Episode], float: Option<&GeoMlp>) 
     Ok((c, float.map(|_| agree as f64 / total.max(1) as f64)))
 }
 
+/// Per-point accuracy of an int8 blob of either format (`LVGM` geometric, `LIVM` `LabelPoseNet`)
+/// through the firmware, autoregressive from a reset, for each episode: `(episode name, tally)`.
+pub fn evaluate_blob_per_episode(blob: &[u8], episodes: &[Episode]) -> Result<Vec<(String, Confusion)>> {
+    let mut out = Vec::new();
+    for ep in episodes {
+        let one = std::slice::from_ref(ep);
+        let c = if GeoView::is_geo(blob) {
+            evaluate_int8(blob, one, None)?.0
+        } else {
+            crate::train::evaluate_int8(blob, one, firmware::classifier::LabelFeedback::Raw)?.all
+        };
+        out.push((ep.name.clone(), c));
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -389,6 +405,22 @@ mod tests {
         let (int8, agree) = evaluate_int8(&qh.blob, &ep, Some(&mh)).unwrap();
         assert!(int8.accuracy() > int8.always_map() + 0.05, "history model int8 {} vs always map {}", int8.accuracy(), int8.always_map());
         assert!(agree.unwrap() > 0.98, "history model float/int8 agreement {agree:?}");
+    }
+
+    #[test]
+    fn train_geo_per_episode_evaluation_reads_both_formats_and_refuses_garbage() {
+        let eps = vec![room_episode(3), Episode { name: "again".into(), ..room_episode(2) }];
+        let data = samples(&eps, 1, 1);
+        let m = train(&GeoTrainConfig { epochs: 1, lr: 0.05, seed: 1 }, &data, |_, _, _| {}).unwrap();
+        let q = quantise(&m, &data, DEFAULT_PRE_CLIP).unwrap();
+        let per = evaluate_blob_per_episode(&q.blob, &eps).unwrap();
+        assert_eq!(per.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>(), ["room", "again"]);
+        let pooled = evaluate_int8(&q.blob, &eps, None).unwrap().0;
+        assert_eq!(per.iter().map(|(_, c)| c.total()).sum::<u64>(), pooled.total());
+        // A LabelPoseNet blob goes through its own path.
+        let lpn = evaluate_blob_per_episode(firmware::classifier::EMBEDDED_MODEL, &eps).unwrap();
+        assert_eq!(lpn.len(), 2);
+        assert!(evaluate_blob_per_episode(b"garbage", &eps).is_err());
     }
 
     #[test]
