@@ -42,8 +42,7 @@
 //! | … | 12 | output: bias `i32`, multiplier `i32`, shift `i32` (accumulator → int8 output, for display) |
 //! | … | 256 | tanh table, `i8`, indexed by pre-activation + 128 |
 //! | … | hidden × features | hidden weights, `i8`, row-major |
-//! | … | 2 × hidden | output weights, `i16` (the output layer's one scale would leave its small
-//! weights a few int8 steps) |
+//! | … | 2 × hidden | output weights, `i16` (int8 at one scale left the small ones a few steps) |
 
 use super::model::ModelError;
 use crate::capacity::BEAMS;
