@@ -951,14 +951,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 say!("{} ({format}), int8 through the firmware, {seconds:.0} s random walk per world:", model.display());
                 say!("| world | beams | accuracy | always map | map recall | non-map recall |\n|---|---|---|---|---|---|");
                 for (n, c) in per.iter().chain(std::iter::once(&("pooled".to_string(), pooled))) {
-                    say!(
-                        "| {n} | {} | {:.2} % | {:.2} % | {:.2} % | {:.2} % |",
-                        c.total(),
-                        100.0 * c.accuracy(),
-                        100.0 * c.always_map(),
-                        100.0 * c.map_recall(),
-                        100.0 * c.non_map_recall()
-                    );
+                    say!("| {n} | {} | {:.2} % | {} |", c.total(), 100.0 * c.accuracy(), rate_cells(c));
                 }
                 say!("mean over the {} worlds: {:.2} %", per.len(), 100.0 * mean);
             }
@@ -1207,6 +1200,12 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
     }
 }
 
+/// "always map | map recall | non-map recall" cells of a classifier table row, in per cent.
+#[cfg(feature = "train")]
+fn rate_cells(c: &host::train::Confusion) -> String {
+    format!("{:.2} % | {:.2} % | {:.2} %", 100.0 * c.always_map(), 100.0 * c.map_recall(), 100.0 * c.non_map_recall())
+}
+
 /// `lives train-geo`: train, quantise, evaluate through the firmware, write the blob and a card.
 #[cfg(feature = "train")]
 #[allow(clippy::too_many_arguments)]
@@ -1296,12 +1295,10 @@ fn train_geo_command(
     let crc = firmware::classifier::geo::GeoView::parse(&q.blob).map(|v| v.crc()).unwrap_or(0);
     let row = |name: &str, c: &Confusion, agree: Option<f64>| {
         format!(
-            "| {name} | {} | **{:.2} %** | {:.2} % | {:.2} % | {:.2} % | {:.2} % |",
+            "| {name} | {} | **{:.2} %** | {} | {:.2} % |",
             c.total(),
             100.0 * c.accuracy(),
-            100.0 * c.always_map(),
-            100.0 * c.map_recall(),
-            100.0 * c.non_map_recall(),
+            rate_cells(c),
             100.0 * agree.unwrap_or(0.0)
         )
     };

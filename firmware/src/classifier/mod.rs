@@ -268,38 +268,21 @@ impl<'m> Classifier<'m> {
 
     /// [`Classifier::classify`] on bare ranges.
     pub fn classify_ranges(&mut self, pose: &Pose2, ranges_mm: &[u16; BEAMS], out: &mut [BeamLabel; BEAMS]) -> u32 {
-        if let Some(g) = self.geo {
-            self.history.push_scan(pose, ranges_mm, &Normalisation::DEFAULT);
-            self.geo_scratch.prepare(ranges_mm);
-            for b in 0..BEAMS {
-                let mut x = self.geo_scratch.features(ranges_mm, b);
-                let [last, avg] = geo::history_features(&self.history, b);
-                x[geo::SCAN_FEATURES] = last;
-                x[geo::SCAN_FEATURES + 1] = avg;
-                let (score, o) = geo::geo_forward(&g, &x);
-                self.scores[b] = score.clamp(i16::MIN as i32, i16::MAX as i32) as i16;
-                self.output[b] = o;
-                out[b] = match ranges_mm[b] {
-                    RANGE_INVALID | RANGE_NO_RETURN => BeamLabel::Unlabelled,
-                    _ if score >= 0 => BeamLabel::Map,
-                    _ => BeamLabel::NonMap,
-                };
-            }
-            // The outputs (raw, as `LabelFeedback::Raw`) are the next steps' label history.
-            self.history.push_labels(&self.output);
-            return geo::WORK_PER_GEO_CLASSIFY;
-        }
-        let Some(model) = self.model else {
+        let work = if let Some(g) = self.geo {
+            self.geo_step(&g, pose, ranges_mm)
+        } else if let Some(model) = self.model {
+            self.history.push_scan(pose, ranges_mm, &model.normalisation());
+            let work = self.forward();
+            let feedback: [i8; BEAMS] = match self.cfg.feedback {
+                LabelFeedback::Raw => self.output,
+                LabelFeedback::Sign => core::array::from_fn(|b| if self.scores[b] >= 0 { 127 } else { -127 }),
+            };
+            self.history.push_labels(&feedback);
+            work
+        } else {
             *out = [BeamLabel::Unlabelled; BEAMS];
             return 0;
         };
-        self.history.push_scan(pose, ranges_mm, &model.normalisation());
-        let work = self.forward();
-        let feedback: [i8; BEAMS] = match self.cfg.feedback {
-            LabelFeedback::Raw => self.output,
-            LabelFeedback::Sign => core::array::from_fn(|b| if self.scores[b] >= 0 { 127 } else { -127 }),
-        };
-        self.history.push_labels(&feedback);
         for ((o, &s), &r) in out.iter_mut().zip(self.scores.iter()).zip(ranges_mm.iter()) {
             *o = match r {
                 RANGE_INVALID | RANGE_NO_RETURN => BeamLabel::Unlabelled,
@@ -308,6 +291,25 @@ impl<'m> Classifier<'m> {
             };
         }
         work
+    }
+
+    /// One step of the geometric model: fills [`Classifier::scores`] (the int32 score clamped
+    /// to `i16`, sign kept) and [`Classifier::output`], and feeds the output back into the label
+    /// history (raw, as `LabelFeedback::Raw`).
+    fn geo_step(&mut self, g: &geo::GeoView<'m>, pose: &Pose2, ranges_mm: &[u16; BEAMS]) -> u32 {
+        self.history.push_scan(pose, ranges_mm, &Normalisation::DEFAULT);
+        self.geo_scratch.prepare(ranges_mm);
+        for b in 0..BEAMS {
+            let mut x = self.geo_scratch.features(ranges_mm, b);
+            let [last, avg] = geo::history_features(&self.history, b);
+            x[geo::SCAN_FEATURES] = last;
+            x[geo::SCAN_FEATURES + 1] = avg;
+            let (score, o) = geo::geo_forward(g, &x);
+            self.scores[b] = score.clamp(i16::MIN as i32, i16::MAX as i32) as i16;
+            self.output[b] = o;
+        }
+        self.history.push_labels(&self.output);
+        geo::WORK_PER_GEO_CLASSIFY
     }
 }
 
