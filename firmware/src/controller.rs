@@ -267,6 +267,12 @@ impl Controller {
         &self.beams
     }
 
+    /// The last scan on the core's beam grid with the labels the core used for it (the
+    /// upstream labels, or the classifier's once it labels scans).
+    pub fn labelled_scan(&self) -> &BeamScan {
+        &self.beams
+    }
+
     /// Installs the classifier's int8 model blob after validating it (magic, version, shapes,
     /// checksum): a `LabelPoseNet` blob (`docs/model-format.md`) or a geometric one (magic `LVGM`,
     /// [`crate::classifier::geo`]). The bytes are read in place (flash on the MCU); a blob that fails validation is

@@ -11,7 +11,7 @@
 //! * [`tune`] scores parameter assignments on procedurally generated worlds only (never the
 //!   built-in ones, which are the evaluation's unseen buildings).
 
-use crate::search::{self, PlannerChoice, SearchResult, SearchSpec};
+use crate::search::{self, LabelScore, PlannerChoice, SearchResult, SearchSpec};
 use crate::sim::{Scenario, World};
 use serde::Serialize;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -76,6 +76,10 @@ pub struct CellSummary {
     pub missed_in_reach: usize,
     /// Every trial's time (s), in seed order (for plots).
     pub times_s: Vec<f64>,
+    /// The classifier's labels against the simulator's truth, pooled over the trials
+    /// (`lives` on a classifier only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub labels: Option<LabelScore>,
 }
 
 /// The two-sided 97.5 % quantile of Student's t with `dof` degrees of freedom.
@@ -124,7 +128,9 @@ pub fn summarise(results: &[SearchResult]) -> Vec<CellSummary> {
             let (mean, ci) = mean_ci(&times);
             let found = rs.iter().filter(|r| r.found).count();
             let sightings: Vec<f64> = rs.iter().filter_map(|r| r.lidar_saw_target_s).collect();
+            let scored: Vec<&LabelScore> = rs.iter().filter_map(|r| r.classifier.as_ref()).collect();
             CellSummary {
+                labels: (!scored.is_empty()).then(|| LabelScore::pooled(scored)),
                 missed_in_reach: rs.iter().filter(|r| !r.found && r.target_in_camera_reach_s.is_some()).count(),
                 lidar_sighted: sightings.len(),
                 mean_lidar_sighting_s: mean_ci(&sightings).0,
@@ -170,12 +176,13 @@ pub fn markdown_table(cells: &[CellSummary]) -> String {
     }
     out.push_str("\nMean time to find in seconds (a failure counts as the time limit) and success rate.\n\n");
     out.push_str(
-        "| planner | setting | trials | found | mean time (s) | 95 % CI (s) | mean path (m) | LiDAR saw the target | its first sighting, mean (s) | missed within camera reach |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| planner | setting | trials | found | mean time (s) | 95 % CI (s) | mean path (m) | LiDAR saw the target | its first sighting, mean (s) | missed within camera reach | classifier: right / non-map found |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for c in cells {
         let sighting = if c.lidar_sighted > 0 { format!("{:.1}", c.mean_lidar_sighting_s) } else { "—".into() };
+        let labels = c.labels.map_or("—".into(), |l| format!("{:.1} % / {:.1} %", 100.0 * l.accuracy, 100.0 * l.nonmap_recall));
         out.push_str(&format!(
-            "| {} | {} {} | {} | {} | {:.1} | ± {:.1} | {:.1} | {} | {} | {} |\n",
+            "| {} | {} {} | {} | {} | {:.1} | ± {:.1} | {:.1} | {} | {} | {} | {labels} |\n",
             c.planner,
             c.world,
             c.scenario,
@@ -193,7 +200,9 @@ pub fn markdown_table(cells: &[CellSummary]) -> String {
         "\nThe last three columns: in how many trials the LiDAR had a target in view (3 or more beams on it in one scan) and, over \
          those, when it first did (the camera's detection came at the mean time, or never); and how many failed trials had the \
          target within the camera's reach at some time (3 or more beams on it, none farther than the camera's range): the \
-         camera did not look that way then, or saw too little of it. The other failures never came that close.\n",
+         camera did not look that way then, or saw too little of it. The other failures never came that close. The last: for \
+         `lives` on its classifier, the share of beams it labelled as the simulator's truth does, and the share of the true \
+         non-map beams it labelled non-map, over every scan of every trial.\n",
     );
     out
 }
@@ -289,12 +298,14 @@ pub fn claims(results: &[SearchResult]) -> Option<String> {
 /// The summary as CSV (one line per planner and setting).
 pub fn csv(cells: &[CellSummary]) -> String {
     let mut out = String::from(
-        "planner,world,scenario,trials,found,success_rate,mean_time_s,ci95_s,mean_path_m,time_limit_s,lidar_sighted,mean_lidar_sighting_s,missed_in_reach\n",
+        "planner,world,scenario,trials,found,success_rate,mean_time_s,ci95_s,mean_path_m,time_limit_s,lidar_sighted,mean_lidar_sighting_s,missed_in_reach,classifier_accuracy,classifier_nonmap_recall\n",
     );
     for c in cells {
         let sighting = if c.lidar_sighted > 0 { format!("{:.3}", c.mean_lidar_sighting_s) } else { String::new() };
+        let (acc, recall) =
+            c.labels.map_or((String::new(), String::new()), |l| (format!("{:.4}", l.accuracy), format!("{:.4}", l.nonmap_recall)));
         out.push_str(&format!(
-            "{},{},{},{},{},{:.4},{:.3},{:.3},{:.3},{:.1},{},{},{}\n",
+            "{},{},{},{},{},{:.4},{:.3},{:.3},{:.3},{:.1},{},{},{},{acc},{recall}\n",
             c.planner,
             c.world,
             c.scenario,
@@ -390,13 +401,16 @@ pub fn parse_grid_axis(s: &str) -> Result<(String, Vec<String>), String> {
 /// Scores every assignment of `grid` with `planners` on procedurally generated worlds
 /// (`World::random_scenario(seed, s)` for `seeds` × `scenarios`), best (lowest mean normalised
 /// time) first. The defaults (no `--set`, sets empty) are always scored as well, first in the
-/// run, and every score carries its paired difference to them.
+/// run, and every score carries its paired difference to them. `lives` runs on `model` (the
+/// classifier's blob), as in [`eval_specs`].
+#[allow(clippy::too_many_arguments)]
 pub fn tune(
     grid: &[(String, Vec<String>)],
     planners: &[PlannerChoice],
     scenarios: &[Scenario],
     seeds: std::ops::RangeInclusive<u64>,
     threads: usize,
+    model: &'static [u8],
     done: impl Fn(usize, usize) + Sync,
 ) -> Result<Vec<TuneScore>, String> {
     let mut assignments = grid_assignments(grid);
@@ -408,6 +422,9 @@ pub fn tune(
                 let world = World::random_scenario(seed, scenario);
                 for &p in planners {
                     let mut spec = SearchSpec::new(&format!("random-{seed}"), world.clone(), scenario, p, seed);
+                    if p == PlannerChoice::Lives {
+                        spec.model = Some(model);
+                    }
                     for a in sets {
                         crate::overrides::apply(&mut spec.controller, a)?;
                     }
@@ -471,6 +488,7 @@ mod tests {
             motion: None,
             lidar_saw_target_s: None,
             target_in_camera_reach_s: None,
+            classifier: None,
         }
     }
 
@@ -482,6 +500,9 @@ mod tests {
         // Trial 2 failed with the target once within the camera's reach; trial 1 found it.
         rs[0].target_in_camera_reach_s = Some(20.0);
         rs[1].target_in_camera_reach_s = Some(9.0);
+        // Two of `a`'s trials scored a classifier: 14 beams pooled, 9 right, 2 of 4 non-map found.
+        rs[0].classifier = Some(LabelScore::from_confusion([[5, 1], [1, 1]]));
+        rs[2].classifier = Some(LabelScore::from_confusion([[2, 2], [1, 1]]));
         let cells = summarise(&rs);
         assert_eq!(cells.len(), 2);
         let a = &cells[0];
@@ -496,16 +517,21 @@ mod tests {
         // The LiDAR sighting: 2 of 3 trials, mean 6.5 s; none in `b`.
         assert_eq!((a.lidar_sighted, a.mean_lidar_sighting_s), (2, 6.5));
         assert_eq!((a.missed_in_reach, cells[1].missed_in_reach), (1, 0));
-        assert!(md.contains("| 2 | 6.5 | 1 |") && md.contains("| 0 | — | 0 |"), "{md}");
-        assert!(csv(&cells).lines().nth(1).unwrap().ends_with(",2,6.500,1"));
-        assert!(csv(&cells).lines().nth(2).unwrap().ends_with(",0,,0"));
+        assert!(md.contains("| 2 | 6.5 | 1 | 64.3 % / 50.0 % |") && md.contains("| 0 | — | 0 | — |"), "{md}");
+        assert!(csv(&cells).lines().nth(1).unwrap().ends_with(",2,6.500,1,0.6429,0.5000"));
+        assert!(csv(&cells).lines().nth(2).unwrap().ends_with(",0,,0,,"));
+        // The classifier's score pools the beams of the trials that have one.
+        assert_eq!(a.labels.map(|l| l.beams), Some(14));
+        assert_eq!(cells[1].labels, None);
     }
 
     #[test]
     fn tune_scores_the_defaults_and_pairs_every_assignment_with_them() {
         // `w_dist_per_m=1` is the default: the same searches, so a paired difference of exactly 0.
         let grid = vec![parse_grid_axis("w_dist_per_m=1,8").unwrap()];
-        let scores = tune(&grid, &[PlannerChoice::Multisensor], &Scenario::ALL, 1..=2, 2, |_, _| {}).unwrap();
+        let scores =
+            tune(&grid, &[PlannerChoice::Multisensor], &Scenario::ALL, 1..=2, 2, firmware::classifier::EMBEDDED_GEO_MODEL, |_, _| {})
+                .unwrap();
         assert_eq!(scores.len(), 3, "the defaults and the two grid values");
         assert!(scores.iter().all(|s| s.searches == 4), "2 worlds × 2 scenarios × 1 planner");
         for s in &scores {

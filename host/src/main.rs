@@ -379,7 +379,8 @@ enum Cmd {
         /// another that played no part in the choice, e.g. `--first-world 193 --worlds 192`.
         #[arg(long, default_value_t = 1)]
         first_world: u64,
-        /// Planners the score averages over, comma-separated.
+        /// Planners the score averages over, comma-separated (`lives` runs the committed geometric
+        /// classifier, as in `lives eval`).
         #[arg(long, value_delimiter = ',', default_value = "lives-gt,multisensor")]
         planners: Vec<PlannerChoice>,
         /// Settings of each random world, comma-separated: `easy` (the suitcase 2.5–8 m from the
@@ -706,6 +707,15 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                         m.moving_s,
                         m.turning_s,
                         m.still_s
+                    );
+                }
+                if let Some(c) = r.classifier {
+                    say!(
+                        "labels: the classifier agreed with the simulator's truth on {:.1} % of {} beams (non-map: {:.1} % found, {:.1} % of its non-map labels right)",
+                        100.0 * c.accuracy,
+                        c.beams,
+                        100.0 * c.nonmap_recall,
+                        100.0 * c.nonmap_precision
                     );
                 }
                 if let Some(p) = &png {
@@ -1148,11 +1158,18 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             }
             let pb = count_bar();
             let t0 = Instant::now();
-            let scores =
-                host::eval::tune(&grid, &planners, &scenarios, first_world..=last_world, threads.unwrap_or_else(cores), |n, total| {
+            let scores = host::eval::tune(
+                &grid,
+                &planners,
+                &scenarios,
+                first_world..=last_world,
+                threads.unwrap_or_else(cores),
+                firmware::classifier::EMBEDDED_GEO_MODEL,
+                |n, total| {
                     pb.set_length(total as u64);
                     pb.set_position(n as u64);
-                })?;
+                },
+            )?;
             pb.finish_and_clear();
             say!("| rank | assignment | mean time / limit | 95 % CI | found | paired Δ vs defaults |\n|---|---|---|---|---|---|");
             let label = |sets: &[String]| if sets.is_empty() { "(defaults)".to_string() } else { sets.join(" ") };

@@ -28,6 +28,7 @@ pub const NAMES: &[(&str, &str)] = &[
     ("nonmap_standoff_m", "distance of a non-map viewpoint from its cluster, metres"),
     ("nonmap_pool_radius_m", "pooling radius of non-map points, metres"),
     ("nonmap_wall_clearance_m", "non-map points nearer a wall point are dropped, metres"),
+    ("viewpoint_snap_radius_m", "how far from a frontier's anchor its viewpoint may stand, metres"),
 ];
 
 fn num(name: &str, v: &str) -> Result<f64, String> {
@@ -98,6 +99,7 @@ pub fn apply(cfg: &mut Config, assignment: &str) -> Result<(), String> {
         "nonmap_standoff_m" => cfg.nonmap_standoff_m = meters(name, v)?,
         "nonmap_pool_radius_m" => cfg.nonmap_pool_radius_m = meters(name, v)?,
         "nonmap_wall_clearance_m" => cfg.nonmap_wall_clearance_m = meters(name, v)?,
+        "viewpoint_snap_radius_m" => cfg.viewpoint_snap_radius_m = meters(name, v)?,
         _ => {
             let known: Vec<&str> = NAMES.iter().map(|n| n.0).collect();
             return Err(format!("unknown parameter `{name}`; known: {}", known.join(", ")));

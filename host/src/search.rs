@@ -6,7 +6,7 @@
 //! world, planner and seed give the same run bit for bit.
 
 use crate::sim::{BaseStatus, HitKind, Scan, Scenario, Sim, SimConfig, World};
-use firmware::scan::{BeamLabel, RANGE_INVALID, RANGE_NO_RETURN};
+use firmware::scan::{BeamLabel, BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
 use firmware::{BinaryAngle, Command, Config, Controller, Detection, Inputs, Mode, PlannerKind, Pose2, ScanInput};
 use serde::Serialize;
 use std::fmt;
@@ -181,6 +181,80 @@ pub struct SearchResult {
     /// route). `None` if never (or on the real robot).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub target_in_camera_reach_s: Option<f64>,
+    /// How the classifier's labels compared with the simulator's per-beam truth over the run
+    /// (`lives` on a classifier only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub classifier: Option<LabelScore>,
+}
+
+/// The classifier's labels against the simulator's truth, every beam of every scan of a run
+/// that both labelled (map or non-map).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct LabelScore {
+    /// Beams compared.
+    pub beams: u64,
+    /// Fraction labelled as the truth labels them.
+    pub accuracy: f64,
+    /// Fraction of the true non-map beams labelled non-map.
+    pub nonmap_recall: f64,
+    /// Fraction of the beams labelled non-map that are non-map.
+    pub nonmap_precision: f64,
+    /// The counts: `confusion[truth][label]`, index 0 map, 1 non-map.
+    pub confusion: [[u64; 2]; 2],
+}
+
+impl LabelScore {
+    /// The score of a confusion matrix (`[truth][label]`, 0 map, 1 non-map); ratios of nothing
+    /// are 0.
+    pub fn from_confusion(c: [[u64; 2]; 2]) -> Self {
+        let ratio = |a: u64, b: u64| if b == 0 { 0.0 } else { (a as f64 / b as f64 * 1e4).round() / 1e4 };
+        let beams = c[0][0] + c[0][1] + c[1][0] + c[1][1];
+        LabelScore {
+            beams,
+            accuracy: ratio(c[0][0] + c[1][1], beams),
+            nonmap_recall: ratio(c[1][1], c[1][0] + c[1][1]),
+            nonmap_precision: ratio(c[1][1], c[0][1] + c[1][1]),
+            confusion: c,
+        }
+    }
+
+    /// The score of several runs together (their beams pooled).
+    pub fn pooled<'a>(scores: impl IntoIterator<Item = &'a LabelScore>) -> Self {
+        let mut c = [[0u64; 2]; 2];
+        for s in scores {
+            for (row, srow) in c.iter_mut().zip(s.confusion.iter()) {
+                for (v, sv) in row.iter_mut().zip(srow.iter()) {
+                    *v += sv;
+                }
+            }
+        }
+        Self::from_confusion(c)
+    }
+}
+
+/// Counts for [`LabelScore`].
+#[derive(Clone, Copy, Debug, Default)]
+struct LabelTally {
+    counts: [[u64; 2]; 2],
+}
+
+impl LabelTally {
+    fn add(&mut self, truth: &BeamScan, used: &BeamScan) {
+        let class = |l: BeamLabel| match l {
+            BeamLabel::Map => Some(0),
+            BeamLabel::NonMap => Some(1),
+            BeamLabel::Unlabelled => None,
+        };
+        for (&t, &u) in truth.labels.iter().zip(used.labels.iter()) {
+            if let (Some(t), Some(u)) = (class(t), class(u)) {
+                self.counts[t][u] += 1;
+            }
+        }
+    }
+
+    fn score(&self) -> LabelScore {
+        LabelScore::from_confusion(self.counts)
+    }
 }
 
 /// Where a run's time went, tick by tick.
@@ -449,6 +523,7 @@ fn run_with(
     let mut outcome = "time-limit";
     let mut status: firmware::Status;
     let mut tally = RunTally::new(spec.sim.camera_range_m);
+    let mut labels_tally = LabelTally::default();
     let tick_s = TICK_US as f64 / 1e6;
     loop {
         let now_us = ticks as u64 * TICK_US;
@@ -465,6 +540,13 @@ fn run_with(
             base_blocked,
         };
         let out = ctrl.tick(now_us, &inputs);
+        if classifier {
+            // The truth on the core's beam grid, to score the labels the core used.
+            let mut truth = BeamScan::new();
+            if truth.resample(&encoded.input(true)).is_ok() {
+                labels_tally.add(&truth, ctrl.labelled_scan());
+            }
+        }
         observe(&TickView { t_us: now_us, inputs: &inputs, outputs: &out, controller: &ctrl });
         ticks += 1;
         status = out.status;
@@ -542,6 +624,7 @@ fn run_with(
         motion: Some(tally.motion()),
         lidar_saw_target_s: tally.lidar_saw_target_s(),
         target_in_camera_reach_s: tally.target_in_camera_reach_s(),
+        classifier: classifier.then(|| labels_tally.score()),
     };
     SearchRun { result, controller: ctrl, sim, trajectory, start, found_at, goals }
 }
@@ -553,6 +636,33 @@ fn round3(v: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_label_score_counts_every_beam_both_labelled() {
+        use BeamLabel::{Map, NonMap, Unlabelled};
+        let mut truth = BeamScan::new();
+        let mut used = BeamScan::new();
+        let pairs = [(Map, Map), (Map, NonMap), (NonMap, Map), (NonMap, NonMap), (NonMap, NonMap), (Unlabelled, NonMap), (Map, Unlabelled)];
+        for (b, &(t, u)) in pairs.iter().enumerate() {
+            truth.labels[b] = t;
+            used.labels[b] = u;
+        }
+        let mut tally = LabelTally::default();
+        tally.add(&truth, &used);
+        let s = tally.score();
+        assert_eq!(s.beams, 5, "beams either side left unlabelled are not scored");
+        assert_eq!(s.accuracy, 0.6);
+        assert_eq!(s.nonmap_recall, 0.6667);
+        assert_eq!(s.nonmap_precision, 0.6667);
+        assert_eq!(s.confusion, [[1, 1], [1, 2]]);
+        assert_eq!(LabelTally::default().score(), LabelScore::default(), "nothing to score is zeros, not NaN");
+        // Pooled runs add their counts: not the mean of their ratios.
+        let other = LabelScore::from_confusion([[0, 0], [3, 0]]);
+        let both = LabelScore::pooled([&s, &other]);
+        assert_eq!(both.beams, 8);
+        assert_eq!(both.nonmap_recall, 0.3333);
+        assert_eq!(both.nonmap_precision, s.nonmap_precision);
+    }
 
     #[test]
     fn ranges_cross_the_float_boundary_by_the_ros_conventions() {

@@ -32,6 +32,24 @@ fn lives_gt_finds_the_target_in_apartment_easy_seed_1() {
 }
 
 #[test]
+fn a_classifier_run_scores_its_labels_against_the_simulators_truth() {
+    // apartment easy seed 9: the suitcase is just inside the door beside the start, a short run.
+    let mut s = spec("apartment", Scenario::Easy, PlannerChoice::Lives, 9);
+    s.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
+    let r = search::try_run(&s, |_| {}).expect("the committed model validates").result;
+    assert_eq!(r.labels, "int8-classifier");
+    let c = r.classifier.expect("a classifier run scores its labels");
+    // Every beam of every scan with a return is scored: 897 per tick at most.
+    assert!(c.beams > 0 && c.beams <= r.ticks as u64 * 897, "{c:?} over {} ticks", r.ticks);
+    // Better than chance and not perfect: a real comparison, not a copy of the truth.
+    assert!(c.accuracy > 0.6 && c.accuracy < 1.0, "{c:?}");
+    assert!((0.0..=1.0).contains(&c.nonmap_recall) && (0.0..=1.0).contains(&c.nonmap_precision), "{c:?}");
+    // Runs on the simulator's own labels have nothing to score.
+    let gt = search::run(&spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 9), |_| {}).result;
+    assert_eq!(gt.classifier, None);
+}
+
+#[test]
 fn the_same_seed_gives_the_same_result_and_decisions() {
     for planner in [PlannerChoice::Lives, PlannerChoice::Nearest] {
         let a = search::run(&spec("apartment", Scenario::Easy, planner, 3), |_| {});

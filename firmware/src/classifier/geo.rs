@@ -460,14 +460,14 @@ pub fn synthetic_scan(seed: u32) -> [u16; BEAMS] {
         // A box face 1.2 m wide at x = 3.5 m (world), and a post at y = -2 m.
         if c > 0 {
             let t = ((3500 - off) << 30) / c;
-            let y = t * sn >> 30;
+            let y = (t * sn) >> 30;
             if (-600..=600).contains(&y) && t > 0 && t < r {
                 r = t;
             }
         }
         if sn < 0 {
             let t = (2000i64 << 30) / -sn;
-            let x = off + (t * c >> 30);
+            let x = off + ((t * c) >> 30);
             if (-250..=250).contains(&x) && t < r {
                 r = t;
             }

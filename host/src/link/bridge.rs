@@ -804,6 +804,8 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         motion: Some(tally.motion()),
         lidar_saw_target_s: tally.lidar_saw_target_s(),
         target_in_camera_reach_s: tally.target_in_camera_reach_s(),
+        // The core's labels stay in the node: the link carries no per-beam labels back.
+        classifier: None,
     };
     Ok(BridgeResult {
         result,

@@ -623,6 +623,8 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
         motion: None,
         lidar_saw_target_s: None,
         target_in_camera_reach_s: None,
+        // The core's labels stay in the node: the link carries no per-beam labels back.
+        classifier: None,
     };
     // Every goal the client was given a path for, once per `seq` (as the simulator's decisions).
     let origin = origin_used.map_or([0.0; 2], |o| o);
