@@ -130,8 +130,11 @@ pub struct Config {
     pub frontier_near_path_blocks: u8,
     /// Non-map points closer than this to a kept point are merged into it. Default 0.20 m.
     pub nonmap_pool_radius_m: Meters,
-    /// Non-map points closer than this to a map (wall) point are dropped (localisation drift).
-    /// Default 0.25 m.
+    /// Non-map points closer than this to a map (wall) point are dropped (the paper's rule
+    /// against localisation drift); zero turns the rule off. Default 0 (off): with the
+    /// classifier's labels half of every piece of furniture is labelled map, and the rule then
+    /// dropped nearly all the rest (docs/architecture.md, "The near-wall rule"). 0.25 m on a
+    /// robot whose localisation drifts.
     pub nonmap_wall_clearance_m: Meters,
     /// Replan at least this often while exploring. Default 3.0 s.
     pub replan_interval_us: u64,
@@ -197,7 +200,7 @@ impl Config {
         nonmap_standoff_m: m(1_500),
         frontier_near_path_blocks: 1,
         nonmap_pool_radius_m: m(200),
-        nonmap_wall_clearance_m: m(250),
+        nonmap_wall_clearance_m: Meters::ZERO,
         replan_interval_us: 3_000_000,
         switch_margin: w(6_000),
         goal_tolerance_m: m(300),

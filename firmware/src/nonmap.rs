@@ -90,8 +90,12 @@ impl NonMapStore {
         ((p.0 as u16 as u32) << 16) | p.1 as u16 as u32
     }
 
-    /// True if a wall point lies within `clearance` of world point `(x, y)`.
+    /// True if a wall point lies within `clearance` of world point `(x, y)`; never for a
+    /// clearance of zero or less (the rule is off).
     pub fn near_wall(&self, geom: &GridGeometry, x: Meters, y: Meters, clearance: Meters) -> bool {
+        if clearance <= Meters::ZERO {
+            return false;
+        }
         let (cx, cy) = geom.cell_of(x, y);
         let r = GridGeometry::cells(clearance);
         let r2 = r * r;
@@ -146,9 +150,11 @@ impl NonMapStore {
         if nonmap_beams == 0 {
             return work;
         }
-        let wall_window = {
+        let wall_window = if wall_clearance > Meters::ZERO {
             let r = GridGeometry::cells(wall_clearance) as u32;
             (2 * r + 1) * (2 * r + 1)
+        } else {
+            0
         };
         for b in 0..BEAMS {
             let r = scan.ranges_mm[b];
@@ -218,10 +224,11 @@ impl NonMapStore {
             let (cx, cy) = geom.cell_of(p.x, p.y);
             work += 9;
             let seen = Self::inspected(visual, cx, cy);
-            let drop = seen || {
-                work += 49;
-                self.near_wall(geom, p.x, p.y, wall_clearance)
-            };
+            let drop = seen
+                || (wall_clearance > Meters::ZERO && {
+                    work += 49;
+                    self.near_wall(geom, p.x, p.y, wall_clearance)
+                });
             if drop {
                 if seen {
                     self.stats.dropped_seen += 1;
@@ -310,6 +317,15 @@ mod tests {
             s.insert(&g, p.x, p.y, r);
         }
         assert_eq!(s.points().len(), 3);
+        // A clearance of zero turns the wall rule off: a point on a wall cell stays.
+        let (px, py) = (Config::mm(12_000), Config::mm(12_050));
+        s.walls.put(g.cell_of(px, py).0, g.cell_of(px, py).1, true);
+        assert!(s.near_wall(&g, px, py, Config::mm(250)));
+        assert!(!s.near_wall(&g, px, py, Meters::ZERO));
+        s.insert(&g, px, py, r);
+        s.filter(&g, &vis, r, Meters::ZERO);
+        assert_eq!(s.points().len(), 4);
+        assert_eq!(s.stats.dropped_near_wall, 1, "nothing more dropped near a wall");
     }
 
     trait ToVecFixed {

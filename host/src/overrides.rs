@@ -27,7 +27,7 @@ pub const NAMES: &[(&str, &str)] = &[
     ("nonmap_viewpoints", "true/false: viewpoints aimed at non-map clusters (lives)"),
     ("nonmap_standoff_m", "distance of a non-map viewpoint from its cluster, metres"),
     ("nonmap_pool_radius_m", "pooling radius of non-map points, metres"),
-    ("nonmap_wall_clearance_m", "non-map points nearer a wall point are dropped, metres"),
+    ("nonmap_wall_clearance_m", "non-map points nearer a wall point are dropped, metres (0: the rule is off)"),
     ("viewpoint_snap_radius_m", "how far from a frontier's anchor its viewpoint may stand, metres"),
 ];
 
