@@ -262,14 +262,9 @@ impl Controller {
         self.goal.as_ref()
     }
 
-    /// The latest resampled scan (labels included).
+    /// The latest resampled scan, with the labels the core used for it (the upstream labels, or
+    /// the classifier's once it labels scans).
     pub fn beams(&self) -> &BeamScan {
-        &self.beams
-    }
-
-    /// The last scan on the core's beam grid with the labels the core used for it (the
-    /// upstream labels, or the classifier's once it labels scans).
-    pub fn labelled_scan(&self) -> &BeamScan {
         &self.beams
     }
 

@@ -544,7 +544,7 @@ fn run_with(
             // The truth on the core's beam grid, to score the labels the core used.
             let mut truth = BeamScan::new();
             if truth.resample(&encoded.input(true)).is_ok() {
-                labels_tally.add(&truth, ctrl.labelled_scan());
+                labels_tally.add(&truth, ctrl.beams());
             }
         }
         observe(&TickView { t_us: now_us, inputs: &inputs, outputs: &out, controller: &ctrl });
