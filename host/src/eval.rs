@@ -197,7 +197,7 @@ pub fn markdown_table(cells: &[CellSummary]) -> String {
         ));
     }
     out.push_str(
-        "\nThe last three columns: in how many trials the LiDAR had a target in view (3 or more beams on it in one scan) and, over \
+        "\nThe three columns after the mean path: in how many trials the LiDAR had a target in view (3 or more beams on it in one scan) and, over \
          those, when it first did (the camera's detection came at the mean time, or never); and how many failed trials had the \
          target within the camera's reach at some time (3 or more beams on it, none farther than the camera's range): the \
          camera did not look that way then, or saw too little of it. The other failures never came that close. The last: for \
