@@ -232,28 +232,18 @@ impl LabelScore {
     }
 }
 
-/// Counts for [`LabelScore`].
-#[derive(Clone, Copy, Debug, Default)]
-struct LabelTally {
-    counts: [[u64; 2]; 2],
-}
-
-impl LabelTally {
-    fn add(&mut self, truth: &BeamScan, used: &BeamScan) {
-        let class = |l: BeamLabel| match l {
-            BeamLabel::Map => Some(0),
-            BeamLabel::NonMap => Some(1),
-            BeamLabel::Unlabelled => None,
-        };
-        for (&t, &u) in truth.labels.iter().zip(used.labels.iter()) {
-            if let (Some(t), Some(u)) = (class(t), class(u)) {
-                self.counts[t][u] += 1;
-            }
+/// Adds one scan's beams to `confusion` (`[truth][label]`, 0 map, 1 non-map): every beam both
+/// labelled.
+fn count_labels(confusion: &mut [[u64; 2]; 2], truth: &BeamScan, used: &BeamScan) {
+    let class = |l: BeamLabel| match l {
+        BeamLabel::Map => Some(0),
+        BeamLabel::NonMap => Some(1),
+        BeamLabel::Unlabelled => None,
+    };
+    for (&t, &u) in truth.labels.iter().zip(used.labels.iter()) {
+        if let (Some(t), Some(u)) = (class(t), class(u)) {
+            confusion[t][u] += 1;
         }
-    }
-
-    fn score(&self) -> LabelScore {
-        LabelScore::from_confusion(self.counts)
     }
 }
 
@@ -523,7 +513,7 @@ fn run_with(
     let mut outcome = "time-limit";
     let mut status: firmware::Status;
     let mut tally = RunTally::new(spec.sim.camera_range_m);
-    let mut labels_tally = LabelTally::default();
+    let mut confusion = [[0u64; 2]; 2];
     let tick_s = TICK_US as f64 / 1e6;
     loop {
         let now_us = ticks as u64 * TICK_US;
@@ -544,7 +534,7 @@ fn run_with(
             // The truth on the core's beam grid, to score the labels the core used.
             let mut truth = BeamScan::new();
             if truth.resample(&encoded.input(true)).is_ok() {
-                labels_tally.add(&truth, ctrl.beams());
+                count_labels(&mut confusion, &truth, ctrl.beams());
             }
         }
         observe(&TickView { t_us: now_us, inputs: &inputs, outputs: &out, controller: &ctrl });
@@ -624,7 +614,7 @@ fn run_with(
         motion: Some(tally.motion()),
         lidar_saw_target_s: tally.lidar_saw_target_s(),
         target_in_camera_reach_s: tally.target_in_camera_reach_s(),
-        classifier: classifier.then(|| labels_tally.score()),
+        classifier: classifier.then(|| LabelScore::from_confusion(confusion)),
     };
     SearchRun { result, controller: ctrl, sim, trajectory, start, found_at, goals }
 }
@@ -647,15 +637,15 @@ mod tests {
             truth.labels[b] = t;
             used.labels[b] = u;
         }
-        let mut tally = LabelTally::default();
-        tally.add(&truth, &used);
-        let s = tally.score();
+        let mut confusion = [[0u64; 2]; 2];
+        count_labels(&mut confusion, &truth, &used);
+        let s = LabelScore::from_confusion(confusion);
         assert_eq!(s.beams, 5, "beams either side left unlabelled are not scored");
         assert_eq!(s.accuracy, 0.6);
         assert_eq!(s.nonmap_recall, 0.6667);
         assert_eq!(s.nonmap_precision, 0.6667);
         assert_eq!(s.confusion, [[1, 1], [1, 2]]);
-        assert_eq!(LabelTally::default().score(), LabelScore::default(), "nothing to score is zeros, not NaN");
+        assert_eq!(LabelScore::from_confusion([[0; 2]; 2]), LabelScore::default(), "nothing to score is zeros, not NaN");
         // Pooled runs add their counts: not the mean of their ratios.
         let other = LabelScore::from_confusion([[0, 0], [3, 0]]);
         let both = LabelScore::pooled([&s, &other]);
