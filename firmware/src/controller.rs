@@ -387,7 +387,13 @@ impl Controller {
                         self.cfg.nonmap_pool_radius_m,
                         self.cfg.nonmap_wall_clearance_m,
                     );
-                    w += self.nonmap.filter(&geom, &self.visual, self.cfg.nonmap_pool_radius_m, self.cfg.nonmap_wall_clearance_m);
+                    w += self.nonmap.filter(
+                        &geom,
+                        &self.lidar,
+                        &self.visual,
+                        self.cfg.nonmap_pool_radius_m,
+                        self.cfg.nonmap_wall_clearance_m,
+                    );
                     obs.end(Stage::NonMap);
                     self.status.cost.nonmap = w;
                     self.budget_check(2, w);

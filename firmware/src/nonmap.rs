@@ -4,13 +4,16 @@
 //! `nonmap_pool_radius_m` of a kept point is merged into it), and filtered by the paper's two
 //! rules: points near map (wall) points are dropped (they come from localisation drift or a
 //! mislabelled wall), and points the camera has already looked at are dropped (the detector saw
-//! nothing there). Capacity is [`MAX_NONMAP_POINTS`]; when full, new points are refused and
-//! counted.
+//! nothing there). A third rule is ours: a point whose place the LiDAR has since seen empty is
+//! dropped ([`NonMapStore::vacated`]): whatever stood there (a person walking by) has moved on,
+//! and without the rule a walking person leaves a trail of points that draws the planner to
+//! where the person was. Capacity is [`MAX_NONMAP_POINTS`]; when full, new points are refused
+//! and counted.
 //!
 //! This module owns the points and the wall-point mask; it reads the grids, never writes them.
 
 use crate::capacity::{BEAMS, MAX_NONMAP_POINTS};
-use crate::grid::{beam_angle, mm_to_meters, BitGrid, GridGeometry, VisualGrid};
+use crate::grid::{beam_angle, mm_to_meters, BitGrid, Cell, GridGeometry, LidarGrid, VisualGrid};
 use crate::scan::{BeamLabel, BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
 use fixed_point::{cos, mul_unit, sin, Meters, Pose2};
 use heapless::index_map::FnvIndexMap;
@@ -37,6 +40,8 @@ pub struct NonMapStats {
     pub dropped_near_wall: u32,
     /// Points dropped because the camera had seen their cell.
     pub dropped_seen: u32,
+    /// Points dropped because the LiDAR has since seen their place empty ([`NonMapStore::vacated`]).
+    pub dropped_vacated: u32,
     /// Points refused because the store was full.
     pub dropped_full: u32,
     /// Points outside the search area (the grid).
@@ -60,7 +65,15 @@ impl NonMapStore {
             points: heapless::Vec::new(),
             index: FnvIndexMap::new(),
             walls: BitGrid::new(),
-            stats: NonMapStats { inserted: 0, pooled: 0, dropped_near_wall: 0, dropped_seen: 0, dropped_full: 0, dropped_outside: 0 },
+            stats: NonMapStats {
+                inserted: 0,
+                pooled: 0,
+                dropped_near_wall: 0,
+                dropped_seen: 0,
+                dropped_vacated: 0,
+                dropped_full: 0,
+                dropped_outside: 0,
+            },
         }
     }
 
@@ -116,6 +129,16 @@ impl NonMapStore {
     #[inline]
     pub fn inspected(visual: &VisualGrid, cx: i32, cy: i32) -> bool {
         (-1..=1).any(|dy| (-1..=1).any(|dx| visual.seen(cx + dx, cy + dy)))
+    }
+
+    /// True once the LiDAR map holds the point's place as empty: its cell and its 8 neighbours
+    /// are all free, so later beams have passed through where it was and nothing there is left
+    /// to hit. A point on anything still standing keeps an occupied cell within one cell (its
+    /// own surface), so range noise around a surface does not drop it; a point next to unknown
+    /// space is kept too (nothing says it has gone).
+    #[inline]
+    pub fn vacated(lidar: &LidarGrid, cx: i32, cy: i32) -> bool {
+        (-1..=1).all(|dy| (-1..=1).all(|dx| lidar.grid.get(cx + dx, cy + dy) == Cell::Free))
     }
 
     /// Adds the labelled points of one scan taken at `pose`: map points go into the wall mask
@@ -214,17 +237,26 @@ impl NonMapStore {
         }
     }
 
-    /// Drops the points the camera has since looked at or that a wall point has since come near.
-    /// Returns the work done.
-    pub fn filter(&mut self, geom: &GridGeometry, visual: &VisualGrid, pool_radius: Meters, wall_clearance: Meters) -> u32 {
+    /// Drops the points the camera has since looked at, whose place the LiDAR has since seen
+    /// empty, or that a wall point has since come near. Returns the work done.
+    pub fn filter(
+        &mut self,
+        geom: &GridGeometry,
+        lidar: &LidarGrid,
+        visual: &VisualGrid,
+        pool_radius: Meters,
+        wall_clearance: Meters,
+    ) -> u32 {
         let mut i = 0;
         let mut work = 0;
         while i < self.points.len() {
             let p = self.points[i];
             let (cx, cy) = geom.cell_of(p.x, p.y);
-            work += 9;
+            work += 18;
             let seen = Self::inspected(visual, cx, cy);
+            let vacated = !seen && Self::vacated(lidar, cx, cy);
             let drop = seen
+                || vacated
                 || (wall_clearance > Meters::ZERO && {
                     work += 49;
                     self.near_wall(geom, p.x, p.y, wall_clearance)
@@ -232,6 +264,8 @@ impl NonMapStore {
             if drop {
                 if seen {
                     self.stats.dropped_seen += 1;
+                } else if vacated {
+                    self.stats.dropped_vacated += 1;
                 } else {
                     self.stats.dropped_near_wall += 1;
                 }
@@ -306,7 +340,8 @@ mod tests {
         // A wall point 0.2 m from the third point.
         let (wx, wy) = g.cell_of(Config::mm(7_000), Config::mm(5_250));
         s.walls.put(wx, wy, true);
-        s.filter(&g, &vis, r, Config::mm(250));
+        let lidar = LidarGrid::new(g);
+        s.filter(&g, &lidar, &vis, r, Config::mm(250));
         assert_eq!(s.points().len(), 3);
         let xs: heapless::Vec<i32, 8> = s.points().iter().map(|p| p.x.to_num::<i32>()).collect();
         assert!(!xs.contains(&5) && !xs.contains(&7));
@@ -323,9 +358,47 @@ mod tests {
         assert!(s.near_wall(&g, px, py, Config::mm(250)));
         assert!(!s.near_wall(&g, px, py, Meters::ZERO));
         s.insert(&g, px, py, r);
-        s.filter(&g, &vis, r, Meters::ZERO);
+        s.filter(&g, &lidar, &vis, r, Meters::ZERO);
         assert_eq!(s.points().len(), 4);
         assert_eq!(s.stats.dropped_near_wall, 1, "nothing more dropped near a wall");
+    }
+
+    #[test]
+    fn drops_points_whose_place_the_lidar_has_since_seen_empty() {
+        let g = geom();
+        let r = Config::mm(200);
+        let mut s = NonMapStore::new();
+        let mut lidar = LidarGrid::new(g);
+        let vis = VisualGrid::new();
+        // Three points in a row, 1 m apart; the LiDAR has since seen a free 5 × 5 m square
+        // around all of them, except: the second still has its own cell occupied (something
+        // stands there), the third has an occupied neighbour (the surface it lies on).
+        let at = |i: i32| (Config::mm(5_000 + i * 1000), Config::mm(5_050));
+        for i in 0..3 {
+            s.insert(&g, at(i).0, at(i).1, r);
+        }
+        let (x0, y0) = g.cell_of(Config::mm(4_000), Config::mm(3_000));
+        for y in y0..y0 + 50 {
+            for x in x0..x0 + 50 {
+                lidar.grid.set(x, y, Cell::Free);
+            }
+        }
+        let c1 = g.cell_of(at(1).0, at(1).1);
+        lidar.grid.set(c1.0, c1.1, Cell::Occupied);
+        let c2 = g.cell_of(at(2).0, at(2).1);
+        lidar.grid.set(c2.0 + 1, c2.1 - 1, Cell::Occupied);
+        s.filter(&g, &lidar, &vis, r, Meters::ZERO);
+        let xs: heapless::Vec<i32, 8> = s.points().iter().map(|p| p.x.to_num::<i32>()).collect();
+        assert_eq!(s.stats.dropped_vacated, 1);
+        assert_eq!(xs.len(), 2);
+        assert!(xs.contains(&6) && xs.contains(&7), "the vacated point at x = 5 m went: {xs:?}");
+        // Next to unknown space a point stays: nothing says it has gone.
+        let c0 = g.cell_of(at(0).0, at(0).1);
+        s.insert(&g, at(0).0, at(0).1, r);
+        lidar.grid.set(c0.0 - 1, c0.1, Cell::Unknown);
+        s.filter(&g, &lidar, &vis, r, Meters::ZERO);
+        assert_eq!(s.points().len(), 3);
+        assert_eq!(s.stats.dropped_vacated, 1);
     }
 
     trait ToVecFixed {
