@@ -136,6 +136,12 @@ pub struct Config {
     /// dropped nearly all the rest (docs/architecture.md, "The near-wall rule"). 0.25 m on a
     /// robot whose localisation drifts.
     pub nonmap_wall_clearance_m: Meters,
+    /// Drop a non-map point once the LiDAR map holds its place as empty (its cell and 8
+    /// neighbours free: later beams passed through where it was). Whatever stood there, such as a
+    /// person walking by, has moved on; without the rule a walking person leaves a trail of
+    /// points that draws `lives` to where the person was. An addition to the paper's filters.
+    /// Default true (docs/architecture.md, "Vacated non-map points").
+    pub nonmap_drop_vacated: bool,
     /// Replan at least this often while exploring. Default 3.0 s.
     pub replan_interval_us: u64,
     /// A new best viewpoint replaces the current goal only if it beats the current goal's
@@ -201,6 +207,7 @@ impl Config {
         frontier_near_path_blocks: 1,
         nonmap_pool_radius_m: m(200),
         nonmap_wall_clearance_m: Meters::ZERO,
+        nonmap_drop_vacated: true,
         replan_interval_us: 3_000_000,
         switch_margin: w(6_000),
         goal_tolerance_m: m(300),

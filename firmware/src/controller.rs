@@ -393,6 +393,7 @@ impl Controller {
                         &self.visual,
                         self.cfg.nonmap_pool_radius_m,
                         self.cfg.nonmap_wall_clearance_m,
+                        self.cfg.nonmap_drop_vacated,
                     );
                     obs.end(Stage::NonMap);
                     self.status.cost.nonmap = w;

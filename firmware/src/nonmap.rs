@@ -238,7 +238,7 @@ impl NonMapStore {
     }
 
     /// Drops the points the camera has since looked at, whose place the LiDAR has since seen
-    /// empty, or that a wall point has since come near. Returns the work done.
+    /// empty (if `drop_vacated`), or that a wall point has since come near. Returns the work done.
     pub fn filter(
         &mut self,
         geom: &GridGeometry,
@@ -246,6 +246,7 @@ impl NonMapStore {
         visual: &VisualGrid,
         pool_radius: Meters,
         wall_clearance: Meters,
+        drop_vacated: bool,
     ) -> u32 {
         let mut i = 0;
         let mut work = 0;
@@ -254,7 +255,7 @@ impl NonMapStore {
             let (cx, cy) = geom.cell_of(p.x, p.y);
             work += 18;
             let seen = Self::inspected(visual, cx, cy);
-            let vacated = !seen && Self::vacated(lidar, cx, cy);
+            let vacated = !seen && drop_vacated && Self::vacated(lidar, cx, cy);
             let drop = seen
                 || vacated
                 || (wall_clearance > Meters::ZERO && {
@@ -341,7 +342,7 @@ mod tests {
         let (wx, wy) = g.cell_of(Config::mm(7_000), Config::mm(5_250));
         s.walls.put(wx, wy, true);
         let lidar = LidarGrid::new(g);
-        s.filter(&g, &lidar, &vis, r, Config::mm(250));
+        s.filter(&g, &lidar, &vis, r, Config::mm(250), true);
         assert_eq!(s.points().len(), 3);
         let xs: heapless::Vec<i32, 8> = s.points().iter().map(|p| p.x.to_num::<i32>()).collect();
         assert!(!xs.contains(&5) && !xs.contains(&7));
@@ -358,7 +359,7 @@ mod tests {
         assert!(s.near_wall(&g, px, py, Config::mm(250)));
         assert!(!s.near_wall(&g, px, py, Meters::ZERO));
         s.insert(&g, px, py, r);
-        s.filter(&g, &lidar, &vis, r, Meters::ZERO);
+        s.filter(&g, &lidar, &vis, r, Meters::ZERO, true);
         assert_eq!(s.points().len(), 4);
         assert_eq!(s.stats.dropped_near_wall, 1, "nothing more dropped near a wall");
     }
@@ -387,7 +388,7 @@ mod tests {
         lidar.grid.set(c1.0, c1.1, Cell::Occupied);
         let c2 = g.cell_of(at(2).0, at(2).1);
         lidar.grid.set(c2.0 + 1, c2.1 - 1, Cell::Occupied);
-        s.filter(&g, &lidar, &vis, r, Meters::ZERO);
+        s.filter(&g, &lidar, &vis, r, Meters::ZERO, true);
         let xs: heapless::Vec<i32, 8> = s.points().iter().map(|p| p.x.to_num::<i32>()).collect();
         assert_eq!(s.stats.dropped_vacated, 1);
         assert_eq!(xs.len(), 2);
@@ -396,7 +397,7 @@ mod tests {
         let c0 = g.cell_of(at(0).0, at(0).1);
         s.insert(&g, at(0).0, at(0).1, r);
         lidar.grid.set(c0.0 - 1, c0.1, Cell::Unknown);
-        s.filter(&g, &lidar, &vis, r, Meters::ZERO);
+        s.filter(&g, &lidar, &vis, r, Meters::ZERO, true);
         assert_eq!(s.points().len(), 3);
         assert_eq!(s.stats.dropped_vacated, 1);
     }

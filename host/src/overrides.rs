@@ -28,6 +28,7 @@ pub const NAMES: &[(&str, &str)] = &[
     ("nonmap_standoff_m", "distance of a non-map viewpoint from its cluster, metres"),
     ("nonmap_pool_radius_m", "pooling radius of non-map points, metres"),
     ("nonmap_wall_clearance_m", "non-map points nearer a wall point are dropped, metres (0: the rule is off)"),
+    ("nonmap_drop_vacated", "true/false: drop non-map points whose place the LiDAR has since seen empty"),
     ("viewpoint_snap_radius_m", "how far from a frontier's anchor its viewpoint may stand, metres"),
 ];
 
@@ -99,6 +100,7 @@ pub fn apply(cfg: &mut Config, assignment: &str) -> Result<(), String> {
         "nonmap_standoff_m" => cfg.nonmap_standoff_m = meters(name, v)?,
         "nonmap_pool_radius_m" => cfg.nonmap_pool_radius_m = meters(name, v)?,
         "nonmap_wall_clearance_m" => cfg.nonmap_wall_clearance_m = meters(name, v)?,
+        "nonmap_drop_vacated" => cfg.nonmap_drop_vacated = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
         "viewpoint_snap_radius_m" => cfg.viewpoint_snap_radius_m = meters(name, v)?,
         _ => {
             let known: Vec<&str> = NAMES.iter().map(|n| n.0).collect();
@@ -126,7 +128,7 @@ mod tests {
         }
         for (name, _) in NAMES {
             let value = match *name {
-                "nonmap_viewpoints" | "look_around_here" | "gaze" => "true",
+                "nonmap_viewpoints" | "look_around_here" | "gaze" | "nonmap_drop_vacated" => "true",
                 "min_frontier_cells" | "nonmap_block_cap" | "nonmap_view_cap" | "unseen_unknown_eighths" => "5",
                 "camera_fov_deg" => "90",
                 _ => "1",

@@ -31,7 +31,9 @@ use serde::{Deserialize, Serialize};
 /// * v1: the first release.
 /// * v2: `HostToCore::ScanSegment` (tag 8): a scan may cross in segments; the configuration
 ///   carries `gaze` and `gaze_min_gain`, the status the gaze heading and its stage cost.
-pub const PROTOCOL_VERSION: u16 = 3;
+/// * v3: the configuration carries `nonmap_view_cap`.
+/// * v4: the configuration carries `nonmap_drop_vacated`.
+pub const PROTOCOL_VERSION: u16 = 4;
 
 /// Most beams one scan carries, whole ([`ScanMsg`]) or in segments ([`ScanSegmentMsg`]): a 360°
 /// scan at 0.33° (1091 beams) fits. Larger scans are refused ([`WireError::TooManyBeams`]).
@@ -595,6 +597,8 @@ pub struct ConfigMsg {
     pub nonmap_pool_radius_m: i32,
     /// [`Config::nonmap_wall_clearance_m`].
     pub nonmap_wall_clearance_m: i32,
+    /// [`Config::nonmap_drop_vacated`] (v4).
+    pub nonmap_drop_vacated: bool,
     /// [`Config::replan_interval_us`].
     pub replan_interval_us: u64,
     /// [`Config::switch_margin`].
@@ -649,6 +653,7 @@ impl ConfigMsg {
             frontier_near_path_blocks: c.frontier_near_path_blocks,
             nonmap_pool_radius_m: c.nonmap_pool_radius_m.to_bits(),
             nonmap_wall_clearance_m: c.nonmap_wall_clearance_m.to_bits(),
+            nonmap_drop_vacated: c.nonmap_drop_vacated,
             replan_interval_us: c.replan_interval_us,
             switch_margin: c.switch_margin.to_bits(),
             goal_tolerance_m: c.goal_tolerance_m.to_bits(),
@@ -700,6 +705,7 @@ impl ConfigMsg {
             frontier_near_path_blocks: self.frontier_near_path_blocks,
             nonmap_pool_radius_m: m(self.nonmap_pool_radius_m),
             nonmap_wall_clearance_m: m(self.nonmap_wall_clearance_m),
+            nonmap_drop_vacated: self.nonmap_drop_vacated,
             replan_interval_us: self.replan_interval_us,
             switch_margin: w(self.switch_margin),
             goal_tolerance_m: m(self.goal_tolerance_m),
