@@ -133,7 +133,11 @@ fn a_recording_cut_short_is_read_up_to_its_last_flushed_chunk() {
     std::fs::remove_file(&cut).ok();
     assert_eq!(partial["messages"].as_u64(), Some(on_disk));
     assert_eq!(partial["truncated"], true, "no footer: the stream breaks off");
-    assert!(on_disk >= 300 && full["messages"].as_u64().unwrap() > on_disk, "several chunks on disk, and more after them: {on_disk} of {}", full["messages"]);
+    assert!(
+        on_disk >= 300 && full["messages"].as_u64().unwrap() > on_disk,
+        "several chunks on disk, and more after them: {on_disk} of {}",
+        full["messages"]
+    );
     assert!(not_partial.unwrap_err().contains("summary"), "an unfinished file is not taken for a complete one");
 }
 
