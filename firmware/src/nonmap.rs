@@ -253,9 +253,12 @@ impl NonMapStore {
         while i < self.points.len() {
             let p = self.points[i];
             let (cx, cy) = geom.cell_of(p.x, p.y);
-            work += 18;
+            work += 9;
             let seen = Self::inspected(visual, cx, cy);
-            let vacated = !seen && drop_vacated && Self::vacated(lidar, cx, cy);
+            let vacated = !seen && drop_vacated && {
+                work += 9;
+                Self::vacated(lidar, cx, cy)
+            };
             let drop = seen
                 || vacated
                 || (wall_clearance > Meters::ZERO && {
@@ -388,6 +391,9 @@ mod tests {
         lidar.grid.set(c1.0, c1.1, Cell::Occupied);
         let c2 = g.cell_of(at(2).0, at(2).1);
         lidar.grid.set(c2.0 + 1, c2.1 - 1, Cell::Occupied);
+        // With the rule off (`nonmap_drop_vacated = false`) all three stay.
+        s.filter(&g, &lidar, &vis, r, Meters::ZERO, false);
+        assert_eq!((s.points().len(), s.stats.dropped_vacated), (3, 0));
         s.filter(&g, &lidar, &vis, r, Meters::ZERO, true);
         let xs: heapless::Vec<i32, 8> = s.points().iter().map(|p| p.x.to_num::<i32>()).collect();
         assert_eq!(s.stats.dropped_vacated, 1);
