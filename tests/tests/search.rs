@@ -32,6 +32,23 @@ fn lives_gt_finds_the_target_in_apartment_easy_seed_1() {
 }
 
 #[test]
+fn a_walking_persons_trail_no_longer_draws_lives_away_from_the_suitcase_behind_it() {
+    // The paper's showcase (examples/worlds/apartment-suitcase-behind.toml): the LiDAR sees the
+    // suitcase at once, 6 m behind the start. With the non-map points a person left where they
+    // no longer stand, `lives-gt` walked to that trail and never came back; with them dropped
+    // (`nonmap_drop_vacated`, the default) seed 2 finds the suitcase.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/worlds/apartment-suitcase-behind.toml");
+    let world = World::load(&path).expect("the example world loads");
+    let mut s = SearchSpec::new("apartment-suitcase-behind", world, Scenario::Easy, PlannerChoice::LivesGt, 2);
+    let with_rule = search::run(&s, |_| {}).result;
+    s.controller.nonmap_drop_vacated = false;
+    let without = search::run(&s, |_| {}).result;
+    assert_eq!(with_rule.lidar_saw_target_s, Some(0.0), "{with_rule:?}");
+    assert!(with_rule.found, "{with_rule:?}");
+    assert!(!without.found && without.outcome == "time-limit", "{without:?}");
+}
+
+#[test]
 fn a_classifier_run_scores_its_labels_against_the_simulators_truth() {
     // apartment easy seed 9: the suitcase is just inside the door beside the start, a short run.
     let mut s = spec("apartment", Scenario::Easy, PlannerChoice::Lives, 9);
