@@ -138,7 +138,7 @@ impl NonMapStore {
     /// space is kept too (nothing says it has gone).
     #[inline]
     pub fn vacated(lidar: &LidarGrid, cx: i32, cy: i32) -> bool {
-        (-1..=1).all(|dy| (-1..=1).all(|dx| lidar.grid.get(cx + dx, cy + dy) == Cell::Free))
+        (-1..=1).all(|dy| (-1..=1).all(|dx| lidar.get(cx + dx, cy + dy) == Cell::Free))
     }
 
     /// Adds the labelled points of one scan taken at `pose`: map points go into the wall mask
