@@ -2,8 +2,9 @@
 //!
 //! Each planning step:
 //! 1. **Traversable cells**: LiDAR-free cells farther than `robot_radius_m` from every occupied
-//!    cell (unknown cells are never traversable). Cells within that radius of the robot itself
-//!    stay traversable if free, so a robot that drifted close to a wall can still leave.
+//!    cell (unknown cells are never traversable). A robot within that radius of something may
+//!    still leave, but only away from it: the free cells near it that are farther from every
+//!    occupied cell than its own cell stay traversable (see [`Planner::inflate`]).
 //! 2. **Path distance** from the robot to every traversable cell: Dijkstra on the 8-connected grid
 //!    with integer step costs 5 (straight) and 7 (diagonal) — one unit is 0.02 m, 7/5 ≈ √2 — and
 //!    no corner cutting. The open list is a fixed-capacity binary heap ([`DIJKSTRA_HEAP`]); an
@@ -248,12 +249,17 @@ impl Planner {
     }
 
     /// Step 1: which cells the robot may stand on.
-    fn inflate(&mut self, lidar: &LidarGrid, radius_cells: i32, robot: (i32, i32)) -> u32 {
+    fn inflate(&mut self, lidar: &LidarGrid, radius: Meters, robot: (i32, i32)) -> u32 {
         let mut offsets: heapless::Vec<(i8, i8), MAX_INFLATION_OFFSETS> = heapless::Vec::new();
-        let r = radius_cells.clamp(0, 10);
+        // Cells whose centre lies within `radius` of an occupied cell's centre: the squared
+        // distance in cells, exact (0.35 m → ≤ 12.25 cells², not a radius rounded to 4 cells,
+        // which would leave a 1 m doorway only two cells wide).
+        let r_q16 = radius.to_bits().max(0) as i64 * crate::capacity::CELLS_PER_METER;
+        let r2 = ((r_q16 * r_q16) >> 32) as i32;
+        let r = (((r_q16 + 0xFFFF) >> 16) as i32).clamp(0, 10);
         for dy in -r..=r {
             for dx in -r..=r {
-                if dx * dx + dy * dy <= r * r {
+                if dx * dx + dy * dy <= r2 {
                     let _ = offsets.push((dx as i8, dy as i8));
                 }
             }
@@ -276,10 +282,43 @@ impl Planner {
                 }
             }
         }
-        for &(dx, dy) in offsets.iter() {
-            let (x, y) = (robot.0 + dx as i32, robot.1 + dy as i32);
-            if lidar.get(x, y) == Cell::Free {
-                self.blocked.put(x, y, false);
+        // A robot inside the inflation (it drifted close to something, or came upon furniture
+        // the LiDAR had not seen) may leave it, but only by moving away: the free cells around
+        // it that are farther from every occupied cell than the robot's own cell. Clearing the
+        // whole disc instead lets the path run along the obstacle, and a base that is already
+        // touching it is then blocked on every goal. Where no neighbour is farther (the robot
+        // stands on the middle line of a passage narrower than the inflation), cells as far as
+        // its own are allowed too, so it can walk along that line.
+        let mut clearance = |x: i32, y: i32| {
+            work += offsets.len() as u32;
+            offsets
+                .iter()
+                .filter(|&&(dx, dy)| lidar.get(x + dx as i32, y + dy as i32) == Cell::Occupied)
+                .map(|&(dx, dy)| dx as i32 * dx as i32 + dy as i32 * dy as i32)
+                .min()
+                .unwrap_or(i32::MAX)
+        };
+        let own = clearance(robot.0, robot.1);
+        let mut escape = false;
+        for pass in 0..2 {
+            for &(dx, dy) in offsets.iter() {
+                let (x, y) = (robot.0 + dx as i32, robot.1 + dy as i32);
+                let neighbour = (dx, dy) != (0, 0) && dx.abs() <= 1 && dy.abs() <= 1;
+                if lidar.get(x, y) != Cell::Free {
+                    continue;
+                }
+                if !self.blocked.get(x, y) {
+                    escape |= neighbour;
+                    continue;
+                }
+                let c = clearance(x, y);
+                if (dx, dy) == (0, 0) || c > own || (pass == 1 && c == own) {
+                    self.blocked.put(x, y, false);
+                    escape |= neighbour;
+                }
+            }
+            if escape || own == i32::MAX {
+                break;
             }
         }
         work
@@ -517,7 +556,7 @@ impl Planner {
         self.candidates.clear();
         let robot = lidar.geom.cell_of(pose.x, pose.y);
         self.robot_cell = robot;
-        let mut work = self.inflate(lidar, GridGeometry::cells(cfg.robot_radius_m), robot);
+        let mut work = self.inflate(lidar, cfg.robot_radius_m, robot);
         work += self.distances(robot);
         let snap = GridGeometry::cells(cfg.viewpoint_snap_radius_m);
         let bl = GridGeometry::cells(cfg.blacklist_radius_m);
@@ -808,7 +847,7 @@ impl Planner {
     /// The goal for `vp`, with its path pulled taut: walking down the distance field from the
     /// goal, a waypoint is emitted where the straight line from the previous waypoint would leave
     /// reachable cells, or every [`MAX_SEGMENT_CELLS`], so the base can drive straight between
-    /// consecutive waypoints.
+    /// consecutive waypoints. The path starts at the first waypoint after the robot's cell.
     fn goal_for(&self, lidar: &LidarGrid, vp: Viewpoint) -> Goal {
         let mut rev: heapless::Vec<(i32, i32), MAX_PATH_WAYPOINTS> = heapless::Vec::new();
         let _ = rev.push(vp.cell);
@@ -831,9 +870,9 @@ impl Planner {
             prev = c;
             cur = self.descend(c.0, c.1);
         }
-        if prev != anchor {
-            let _ = rev.push(prev);
-        }
+        // `prev` is now the robot's own cell. Its centre is not a waypoint: the robot stands
+        // up to half a cell from it, and a base pressed against something would have to walk
+        // back into it (the line from there to the first waypoint is clear, as checked above).
         let mut path = heapless::Vec::new();
         for &(x, y) in rev.iter().rev() {
             let _ = path.push(lidar.geom.center_of(x, y));

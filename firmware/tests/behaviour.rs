@@ -596,3 +596,82 @@ fn the_gaze_keeps_its_heading_until_another_is_clearly_better_or_it_has_little_l
     assert!(gain(&mut planner, best + step).is_some() && gain(&mut planner, best - step).is_some());
     assert_eq!(gain(&mut planner, firmware::BinaryAngle::ZERO), None);
 }
+
+#[test]
+fn a_robot_inside_the_inflation_leaves_it_by_moving_away_not_along_the_obstacle() {
+    // The room with its east doorway, and a low bar (a bed's edge) across it. The robot stands
+    // 2 cells (0.2 m) south of the bar's east end, well inside the 0.35 m inflation: where a
+    // base that stopped against furniture finds itself. The doorway lies north-east, round the
+    // bar's end, so the shortest way out would graze the corner.
+    let mut lidar = room_grid(true);
+    for y in 70..=72 {
+        for x in 60..=80 {
+            lidar.grid.set(x, y, Cell::Occupied);
+        }
+    }
+    let occupied: Vec<(i32, i32)> =
+        (50..=100).flat_map(|y| (50..=100).map(move |x| (x, y))).filter(|&(x, y)| lidar.get(x, y) == Cell::Occupied).collect();
+    let clearance2 = |c: (i32, i32)| occupied.iter().map(|o| (o.0 - c.0).pow(2) + (o.1 - c.1).pow(2)).min().unwrap();
+    let vis = Box::new(VisualGrid::new());
+    let store = Box::new(NonMapStore::new());
+    let mut f = Box::new(FrontierSet::new());
+    let robot_cell = (79, 68);
+    let robot = pose(7.95, 6.85, 0.0);
+    assert_eq!(lidar.geom.cell_of(robot.x, robot.y), robot_cell);
+    let own = clearance2(robot_cell);
+    assert_eq!(own, 4, "the robot is 2 cells from the bar");
+    for kind in [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest] {
+        let cfg = Config { planner: kind, ..Config::DEFAULT };
+        let inflation = GridGeometry::cells(cfg.robot_radius_m);
+        assert!(own < inflation * inflation);
+        f.compute(&lidar, &vis, cfg.min_frontier_cells);
+        let mut planner = Box::new(Planner::new());
+        let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None);
+        let goal = goal.unwrap_or_else(|| panic!("{kind:?}: the robot can leave"));
+        assert!(goal.viewpoint.cell.0 >= 95, "{kind:?} goes to the doorway: {:?}", goal.viewpoint);
+        // Walk the path from the robot in 2 cm steps: until it is out of the inflation it never
+        // comes closer to anything than the robot already is.
+        let mut from = (robot.x.to_num::<f64>(), robot.y.to_num::<f64>());
+        let mut left = false;
+        for w in goal.path.iter() {
+            let to = (w.0.to_num::<f64>(), w.1.to_num::<f64>());
+            let n = ((to.0 - from.0).hypot(to.1 - from.1) / 0.02).ceil().max(1.0) as usize;
+            for i in 0..=n {
+                let t = i as f64 / n as f64;
+                let p = (from.0 + t * (to.0 - from.0), from.1 + t * (to.1 - from.1));
+                let c = ((p.0 / 0.1).floor() as i32, (p.1 / 0.1).floor() as i32);
+                let c2 = clearance2(c);
+                left |= c2 >= inflation * inflation;
+                assert!(left || c == robot_cell || c2 > own, "{kind:?}: the path passes {c:?} at clearance² {c2} < {own}: {:?}", goal.path);
+            }
+            from = to;
+        }
+        assert!(left, "{kind:?}: the path leaves the inflation");
+    }
+}
+
+#[test]
+fn the_inflation_is_the_robot_radius_exactly_so_a_one_metre_doorway_stays_four_cells_wide() {
+    // The room's east doorway (cells y = 70..=79, 1.0 m between the jambs' cell centres at
+    // y = 69 and y = 80, 1.1 m apart) opened onto free space. With 0.35 m the cells whose
+    // centres are ≥ 0.4 m from both jambs stay traversable: y = 73..=76. A radius rounded up to
+    // 4 cells (0.4 m) would leave two, and one noisy hit on a jamb would close the door.
+    let mut lidar = room_grid(true);
+    for y in 51..100 {
+        for x in 100..=110 {
+            let c = if x == 100 && !(70..80).contains(&y) { Cell::Occupied } else { Cell::Free };
+            lidar.grid.set(x, y, c);
+        }
+    }
+    let cfg = Config::DEFAULT;
+    assert_eq!(cfg.robot_radius_m, Config::mm(350));
+    let vis = Box::new(VisualGrid::new());
+    let store = Box::new(NonMapStore::new());
+    let mut f = Box::new(FrontierSet::new());
+    f.compute(&lidar, &vis, cfg.min_frontier_cells);
+    let mut planner = Box::new(Planner::new());
+    let _ = planner.plan(&cfg, &lidar, &vis, &f, &store, &pose(7.55, 7.55, 0.0), None);
+    let open: Vec<i32> = (60..90).filter(|&y| planner.traversable(100, y)).collect();
+    assert_eq!(open, vec![73, 74, 75, 76]);
+    assert!(planner.distance(105, 75) != firmware::planner::UNREACHABLE, "the robot can walk through");
+}

@@ -6,8 +6,9 @@
 //! same calls give bit-identical results.
 //!
 //! The base follows a list of waypoints with a simple turn-then-drive law; it checks every
-//! motion sub-step (≤ 2 cm) against the true world and refuses to move rather than touch
-//! anything, reporting [`BaseStatus::Blocked`]. People walk their loops at constant speed, wait
+//! motion sub-step (≤ 2 cm) against the true world. A sub-step that would touch something is
+//! turned by up to 60° to slide along it (Spot's own obstacle avoidance); if no such turn is
+//! free, the base refuses to move rather than touch anything, reporting [`BaseStatus::Blocked`]. People walk their loops at constant speed, wait
 //! while the robot stands in their way and turn round after [`PERSON_PATIENCE_S`] of waiting, so
 //! a robot and a person meeting head-on in a corridor do not block each other for ever.
 
@@ -107,6 +108,10 @@ pub const YAW_TOLERANCE_RAD: f64 = 1e-3;
 pub const DRIVE_WHILE_TURNING_RAD: f64 = PI / 6.0;
 /// Longest motion sub-step.
 pub const MAX_SUBSTEP_S: f64 = 0.02;
+/// Largest turn of a sub-step that would touch something (see [`Sim::avoid`]).
+pub const AVOID_MAX_RAD: f64 = PI / 3.0;
+/// Turn increment of that search.
+pub const AVOID_STEP_RAD: f64 = PI / 12.0;
 /// A person who has waited this long for the robot to get out of the way turns round.
 pub const PERSON_PATIENCE_S: f64 = 2.0;
 /// Outline sample points per target for the detector.
@@ -510,6 +515,25 @@ impl Sim {
             })
     }
 
+    /// The sub-step the base takes when it means to go from `p` to `to`: `to` itself if that
+    /// touches nothing, else the same step turned by up to [`AVOID_MAX_RAD`] (in
+    /// [`AVOID_STEP_RAD`] steps, left before right), as Spot's own obstacle avoidance slides
+    /// along what it grazes; `None` (blocked) when every one of them touches something.
+    fn avoid(&self, p: P2, to: P2) -> Option<P2> {
+        let v = sub(to, p);
+        if norm(v) == 0.0 || !self.motion_blocked(p, to) {
+            return Some(to);
+        }
+        let turns = (AVOID_MAX_RAD / AVOID_STEP_RAD).round() as i32;
+        (1..=turns)
+            .flat_map(|k| [k, -k])
+            .map(|k| {
+                let (s, c) = (k as f64 * AVOID_STEP_RAD).sin_cos();
+                [p[0] + c * v[0] - s * v[1], p[1] + s * v[0] + c * v[1]]
+            })
+            .find(|&q| !self.motion_blocked(p, q))
+    }
+
     fn drive(&mut self, h: f64) {
         let c = &self.config;
         let (speed, turn) = (c.speed_mps.max(0.0), c.turn_rate_rps.max(0.0));
@@ -531,11 +555,12 @@ impl Sim {
             let yaw = wrap_angle(self.pose[2] + e.clamp(-turn * h, turn * h));
             let step = (speed * h).min(d);
             let to = if d > 0.0 { [p[0] + step * v[0] / d, p[1] + step * v[1] / d] } else { p };
-            if step > 0.0 && self.motion_blocked(p, to) {
+            let Some(to) = self.avoid(p, to) else {
                 self.pose[2] = yaw;
                 self.status = BaseStatus::Blocked;
                 return;
-            }
+            };
+            let step = dist(p, to);
             self.pose = [to[0], to[1], yaw];
             self.driven_m += step;
             self.status = BaseStatus::Moving;
@@ -548,10 +573,11 @@ impl Sim {
             let e_after = e - dyaw;
             let step = if e_after.abs() < DRIVE_WHILE_TURNING_RAD { (speed * e_after.cos() * h).min(d) } else { 0.0 };
             let to = [p[0] + step * yaw.cos(), p[1] + step * yaw.sin()];
-            if step > 0.0 && self.motion_blocked(p, to) {
+            let Some(to) = self.avoid(p, to) else {
                 self.status = BaseStatus::Blocked;
                 return;
-            }
+            };
+            let step = dist(p, to);
             self.pose = [to[0], to[1], yaw];
             self.driven_m += step;
             self.status = BaseStatus::Moving;
@@ -807,5 +833,54 @@ rect = {{ center = [{target_x}, 2.0], size = [0.5, 0.35] }}
                 }
             }
         }
+    }
+
+    /// The robot (r = 0.3) at (2, 2), 1 cm below a 1.0 × 0.38 m box (bottom edge y = 2.31).
+    fn box_above_start() -> Sim {
+        let text = r#"name = "escape test"
+time_limit_s = 60
+[start]
+position = [2.0, 2.0]
+[[walls]]
+points = [[0, 0], [10, 0], [10, 4], [0, 4]]
+closed = true
+[[obstacles]]
+kind = "furniture"
+rect = { center = [2.0, 2.5], size = [1.0, 0.38] }
+[[targets]]
+rect = { center = [8.0, 3.0], size = [0.5, 0.35] }
+"#;
+        let sim = Sim::new(World::from_toml_str(text, "escape.toml").unwrap(), SimConfig::default(), 1);
+        assert!(!sim.collides([2.0, 2.0]));
+        sim
+    }
+
+    #[test]
+    fn base_slides_along_what_it_grazes_and_never_touches_it() {
+        // Straight to (3.0, 2.1) the disc would touch the box's bottom edge within 2 cm; the base
+        // turns its sub-steps away (as Spot's obstacle avoidance does) and arrives.
+        let mut sim = box_above_start();
+        sim.set_path(&[[3.0, 2.1]], None);
+        let mut status = BaseStatus::Moving;
+        for _ in 0..100 {
+            status = sim.step(0.1);
+            let p = sim.pose();
+            assert!(!sim.collides([p[0], p[1]]), "touches at {p:?}");
+            assert_ne!(status, BaseStatus::Blocked, "at {p:?}");
+            if status == BaseStatus::Arrived {
+                break;
+            }
+        }
+        assert_eq!(status, BaseStatus::Arrived);
+        // Into the box itself it is still blocked: no turn of up to 60° gets anywhere.
+        let mut sim = box_above_start();
+        sim.set_path(&[[2.0, 3.0]], None);
+        let mut blocked = false;
+        for _ in 0..40 {
+            blocked |= sim.step(0.1) == BaseStatus::Blocked;
+            let p = sim.pose();
+            assert!(!sim.collides([p[0], p[1]]) && p[1] < 2.02, "at {p:?}");
+        }
+        assert!(blocked);
     }
 }
