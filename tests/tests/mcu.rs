@@ -43,7 +43,7 @@ const STAGES: [&str; 6] = ["classify", "lidar", "visual", "nonmap", "plan", "gaz
 /// Stages every tick of the golden trace must have run at least once (the issue's five).
 const REQUIRED_STAGES: [&str; 5] = ["classify", "lidar", "visual", "nonmap", "plan"];
 const RERECORD: &str =
-    "re-record the fixture: lives trace record --world apartment --scenario easy --seed 1 --ticks 150 --out tests/fixtures/golden.trace";
+    "re-record the fixture: lives trace record --world apartment --scenario easy --seed 2 --ticks 150 --out tests/fixtures/golden.trace";
 
 fn image_dir() -> PathBuf {
     if let Some(d) = std::env::var_os("LIVES_MCU_DIR") {
