@@ -609,23 +609,31 @@ mod tests {
     use super::*;
     use crate::sim::Scenario;
 
-    /// A 10 × 4 m room split by a wall at x = 5 (no door), a suitcase behind the wall.
-    fn walled_world(target_x: f64) -> World {
+    /// A closed 10 × 4 m room, the robot starting at (2, 2), plus `extra` (TOML tables).
+    fn room_world(name: &str, extra: &str) -> World {
         let text = format!(
-            r#"name = "wall test"
+            r#"name = "{name}"
 time_limit_s = 60
 [start]
 position = [2.0, 2.0]
 [[walls]]
 points = [[0, 0], [10, 0], [10, 4], [0, 4]]
 closed = true
-[[walls]]
+{extra}"#
+        );
+        World::from_toml_str(&text, &format!("{name}.toml")).unwrap()
+    }
+
+    /// The room split by a wall at x = 5 (no door), a suitcase behind the wall.
+    fn walled_world(target_x: f64) -> World {
+        let extra = format!(
+            r#"[[walls]]
 points = [[5, 0], [5, 4]]
 [[targets]]
 rect = {{ center = [{target_x}, 2.0], size = [0.5, 0.35] }}
 "#
         );
-        World::from_toml_str(&text, "wall.toml").unwrap()
+        room_world("wall test", &extra)
     }
 
     #[test]
@@ -837,20 +845,13 @@ rect = {{ center = [{target_x}, 2.0], size = [0.5, 0.35] }}
 
     /// The robot (r = 0.3) at (2, 2), 1 cm below a 1.0 × 0.38 m box (bottom edge y = 2.31).
     fn box_above_start() -> Sim {
-        let text = r#"name = "escape test"
-time_limit_s = 60
-[start]
-position = [2.0, 2.0]
-[[walls]]
-points = [[0, 0], [10, 0], [10, 4], [0, 4]]
-closed = true
-[[obstacles]]
+        let extra = r#"[[obstacles]]
 kind = "furniture"
 rect = { center = [2.0, 2.5], size = [1.0, 0.38] }
 [[targets]]
 rect = { center = [8.0, 3.0], size = [0.5, 0.35] }
 "#;
-        let sim = Sim::new(World::from_toml_str(text, "escape.toml").unwrap(), SimConfig::default(), 1);
+        let sim = Sim::new(room_world("escape test", extra), SimConfig::default(), 1);
         assert!(!sim.collides([2.0, 2.0]));
         sim
     }
