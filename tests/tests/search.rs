@@ -48,22 +48,46 @@ fn a_walking_persons_trail_no_longer_draws_lives_away_from_the_suitcase_behind_i
     assert!(!without.found && without.outcome == "time-limit", "{without:?}");
 }
 
-#[test]
-fn the_suitcase_behind_example_is_the_builtin_apartment_easy_with_the_target_fixed() {
-    // The example is an exported copy of the built-in world: if the floor plan, the furniture,
-    // the person or the start change there, the figures measured on the example no longer
-    // describe `apartment easy`. Re-export it (`lives worlds --export apartment --scenario easy`)
-    // and drop the target's other candidate positions.
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/worlds/apartment-suitcase-behind.toml");
+/// `examples/worlds/NAME.toml`, checked to be the built-in `apartment easy` with only the target's
+/// places changed: if the floor plan, the furniture, the person or the start change there, the
+/// figures measured on the example no longer describe `apartment easy`. Re-export it
+/// (`lives worlds --export apartment --scenario easy`) and set the target's places again.
+fn apartment_easy_example(name: &str) -> World {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../examples/worlds/{name}.toml"));
     let example = World::load(&path).expect("the example world loads");
     let mut builtin = World::builtin("apartment", Scenario::Easy).expect("built-in");
     builtin.name = example.name.clone();
-    for t in &mut builtin.targets {
-        t.candidates.clear();
-    }
     builtin.bounds = example.bounds;
+    assert_eq!(builtin.targets.len(), 1);
+    assert_eq!(example.targets.len(), 1);
+    builtin.targets[0].shape = example.targets[0].shape.clone();
+    builtin.targets[0].candidates = example.targets[0].candidates.clone();
+    assert_eq!(example, builtin, "examples/worlds/{name}.toml has drifted from the built-in apartment easy");
+    example
+}
+
+#[test]
+fn the_suitcase_behind_example_is_the_builtin_apartment_easy_with_the_target_fixed() {
+    let example = apartment_easy_example("apartment-suitcase-behind");
     assert_eq!(example.targets[0].shape.center(), [9.35, 7.0], "the hallway place, 6 m behind the start");
-    assert_eq!(example, builtin, "examples/worlds/apartment-suitcase-behind.toml has drifted from the built-in apartment easy");
+    assert!(example.targets[0].candidates.is_empty());
+}
+
+#[test]
+fn the_beside_start_example_is_the_builtin_apartment_easy_with_closer_places() {
+    let example = apartment_easy_example("apartment-easy-beside-start");
+    let builtin = World::builtin("apartment", Scenario::Easy).expect("built-in");
+    // The hallway place and the study's door place are the built-in's; the other two are nearer.
+    assert_eq!(example.targets[0].shape, builtin.targets[0].shape);
+    assert_eq!(example.targets[0].candidates[1], builtin.targets[0].candidates[1]);
+    let start = example.start.pose;
+    let far = |p: [f64; 2]| ((p[0] - start[0]).powi(2) + (p[1] - start[1]).powi(2)).sqrt();
+    for p in example.targets[0].positions() {
+        assert!(far(p) <= 6.1, "{p:?} is {} m from the start", far(p));
+    }
+    // The built-in's bedroom 2 and dining room places, north of the start behind doors, are left out.
+    let north = |w: &World| w.targets[0].positions().iter().filter(|p| p[1] > start[1] + 1.0).count();
+    assert_eq!((north(&builtin), north(&example)), (2, 0));
 }
 
 #[test]
