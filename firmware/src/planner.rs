@@ -64,6 +64,10 @@ pub const GAZE_HEADINGS: usize = 16;
 /// heading (the viewpoint's own view).
 pub const GAZE_HANDOVER_M: Meters = Meters::from_bits(1 << 16);
 
+/// One entry of a step's site list: where, what kind, a fixed heading if the site has one, and a
+/// baseline's own score of it.
+type SiteEntry = ((i32, i32), Site, Option<BinaryAngle>, i64);
+
 /// Capacity of one step's site list: frontier pieces of both maps, non-map clusters, the
 /// current goal, and the `rrt` baseline's points.
 const SITES: usize = 2 * MAX_FRONTIERS_PER_GRID + MAX_NONMAP_SITES + 1 + rrt::RRT_POINTS;
@@ -576,7 +580,7 @@ impl Planner {
         // Sites: frontier anchors; for `lives`, viewpoints aimed at non-map clusters; last, the
         // current goal (re-scored for hysteresis, never a candidate itself).
         // The fourth field is a baseline's own score of the site (`explore-lite`, `rrt`).
-        let mut sites: heapless::Vec<((i32, i32), Site, Option<BinaryAngle>, i64), { SITES }> = heapless::Vec::new();
+        let mut sites: heapless::Vec<SiteEntry, { SITES }> = heapless::Vec::new();
         let euclid_bits = |c: (i32, i32)| {
             let d2 = ((c.0 - robot.0) as i64).pow(2) + ((c.1 - robot.1) as i64).pow(2);
             // Q16.16 metres: sqrt(d2 · 2³²) is the distance in cells · 2¹⁶.

@@ -74,7 +74,7 @@ fn lives_search_record_is_read_back_by_the_python_mcap_reader_with_exact_counts(
     let goals = r["goals"].as_u64().unwrap();
     assert!(r["found"].as_bool().unwrap() && ticks > 100, "{r}");
     // Grids every 1 s of run time (every 5th tick from t = 0) and at the detection.
-    let grids = (ticks - 1) / 5 + 1 + u64::from((ticks - 1) % 5 != 0);
+    let grids = (ticks - 1) / 5 + 1 + u64::from(!(ticks - 1).is_multiple_of(5));
     let mut expect: Vec<String> = ["/tf", "/lives/pose", "/lives/scan", "/lives/status"].iter().map(|t| format!("{t}={ticks}")).collect();
     expect.extend(["/lives/lidar_grid", "/lives/visual_grid", "/lives/nonmap_points"].iter().map(|t| format!("{t}={grids}")));
     expect.extend([format!("/lives/goal={goals}"), format!("/lives/path={goals}"), "/lives/detection=1".into(), "/lives/labels=0".into()]);

@@ -214,10 +214,8 @@ fn mutate(rng: &mut Rng, b: &mut Vec<u8>, other: &[u8], payload: bool) {
                 let i = rng.below(len);
                 b[i] = 0;
             }
-            8 if !payload && len > 0 => {
-                if b[len - 1] == 0 {
-                    b.pop();
-                }
+            8 if !payload && len > 0 && b[len - 1] == 0 => {
+                b.pop();
             }
             // Payload: a varint made longer (continuation bit on a byte).
             7 if payload && len > 0 => {

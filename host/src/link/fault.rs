@@ -232,14 +232,13 @@ impl<L: Link> FaultyLink<L> {
             let p = self.cfg.corrupt_byte_prob.clamp(0.0, 1.0);
             // Line noise reaches the delimiter too.
             let reach = if noise { frame.len() } else { body };
-            for i in 0..reach {
+            for (i, byte) in frame.iter_mut().enumerate().take(reach) {
                 if self.rng.gen_bool(p) {
-                    let b = frame[i];
-                    frame[i] = if noise { self.any_other_byte(b) } else { self.other_byte(b) };
+                    *byte = if noise { self.any_other_byte(*byte) } else { self.other_byte(*byte) };
                     corrupted += 1;
                     if i == body {
                         st.delimiters_corrupted += 1;
-                    } else if frame[i] == 0 {
+                    } else if *byte == 0 {
                         st.zeros_made += 1;
                     }
                 }

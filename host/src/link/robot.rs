@@ -668,36 +668,6 @@ fn config_msg(spec: &RobotSpec, origin: [f64; 2]) -> ConfigMsg {
     ConfigMsg::from_config(&cfg)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn scans_follow_ros_conventions_and_long_scans_are_decimated() {
-        let s = LaserScan {
-            angle_min: -1.0,
-            angle_increment: 0.5,
-            range_min: 0.2,
-            range_max: 10.0,
-            ranges: vec![1.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.1, 12.0, 10.0],
-        };
-        let w = encode_laser_scan(&s).unwrap();
-        use firmware::scan::{RANGE_INVALID, RANGE_NO_RETURN};
-        assert_eq!(w.ranges_mm, vec![1000, RANGE_INVALID, RANGE_NO_RETURN, RANGE_INVALID, RANGE_INVALID, RANGE_NO_RETURN, 10_000]);
-        assert_eq!(w.angle_increment, BinaryAngle::from_radians(0.5).unwrap());
-        let long = LaserScan { ranges: vec![2.0; 2 * MAX_WIRE_BEAMS + 1], angle_increment: 0.001, ..s };
-        let w = encode_laser_scan(&long).unwrap();
-        assert_eq!(w.ranges_mm.len(), MAX_WIRE_BEAMS - 366);
-        assert_eq!(w.angle_increment, BinaryAngle::from_radians(0.003).unwrap());
-    }
-
-    #[test]
-    fn the_grid_is_centred_on_the_first_pose() {
-        assert_eq!(origin_for(0.0, 0.0), [-25.6, -25.6]);
-        assert_eq!(origin_for(3.04, -1.0), [-22.6, -26.6]);
-    }
-}
-
 /// `lives bridge --source robot`'s options (parsed by `main.rs`).
 pub struct CliOptions {
     /// The serial device of the node.
@@ -813,4 +783,34 @@ pub fn run_cli(o: CliOptions) -> Result<ExitCode, String> {
         }
     }
     Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scans_follow_ros_conventions_and_long_scans_are_decimated() {
+        let s = LaserScan {
+            angle_min: -1.0,
+            angle_increment: 0.5,
+            range_min: 0.2,
+            range_max: 10.0,
+            ranges: vec![1.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.1, 12.0, 10.0],
+        };
+        let w = encode_laser_scan(&s).unwrap();
+        use firmware::scan::{RANGE_INVALID, RANGE_NO_RETURN};
+        assert_eq!(w.ranges_mm, vec![1000, RANGE_INVALID, RANGE_NO_RETURN, RANGE_INVALID, RANGE_INVALID, RANGE_NO_RETURN, 10_000]);
+        assert_eq!(w.angle_increment, BinaryAngle::from_radians(0.5).unwrap());
+        let long = LaserScan { ranges: vec![2.0; 2 * MAX_WIRE_BEAMS + 1], angle_increment: 0.001, ..s };
+        let w = encode_laser_scan(&long).unwrap();
+        assert_eq!(w.ranges_mm.len(), MAX_WIRE_BEAMS - 366);
+        assert_eq!(w.angle_increment, BinaryAngle::from_radians(0.003).unwrap());
+    }
+
+    #[test]
+    fn the_grid_is_centred_on_the_first_pose() {
+        assert_eq!(origin_for(0.0, 0.0), [-25.6, -25.6]);
+        assert_eq!(origin_for(3.04, -1.0), [-22.6, -26.6]);
+    }
 }

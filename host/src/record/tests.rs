@@ -13,9 +13,13 @@ fn spec() -> SearchSpec {
     SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, 1)
 }
 
-/// Every message the streaming reader gets before the file ends or breaks: (topic, schema name,
-/// schema encoding, message encoding, log time, JSON), and whether it ended in an error.
-fn read_stream(bytes: &[u8]) -> (Vec<(String, String, String, String, u64, Value)>, bool) {
+/// One message as the streaming reader returns it: topic, schema name, schema encoding, message
+/// encoding, log time, JSON.
+type StreamMessage = (String, String, String, String, u64, Value);
+
+/// Every message the streaming reader gets before the file ends or breaks, and whether it ended in
+/// an error.
+fn read_stream(bytes: &[u8]) -> (Vec<StreamMessage>, bool) {
     let mut out = Vec::new();
     let stream = match mcap::MessageStream::new(bytes) {
         Ok(s) => s,
@@ -65,7 +69,7 @@ fn a_recorded_search_reads_back_with_every_topic_schema_and_count() {
         assert_eq!(count(&msgs, topic), ticks, "{topic}: one per tick");
     }
     // Grids at t = 0, 1, 2 … s and at the detection.
-    let grids = (ticks - 1) / 5 + 1 + usize::from((ticks - 1) % 5 != 0);
+    let grids = (ticks - 1) / 5 + 1 + usize::from(!(ticks - 1).is_multiple_of(5));
     for topic in [topics::LIDAR_GRID, topics::VISUAL_GRID, topics::NONMAP] {
         assert_eq!(count(&msgs, topic), grids, "{topic}");
     }
