@@ -77,11 +77,12 @@ fn the_suitcase_behind_example_is_the_builtin_apartment_easy_with_the_target_fix
 fn the_beside_start_example_is_the_builtin_apartment_easy_with_closer_places() {
     let example = apartment_easy_example("apartment-easy-beside-start");
     let builtin = World::builtin("apartment", Scenario::Easy).expect("built-in");
-    // The hallway place and the study's door place are the built-in's; the other two are nearer.
+    // The hallway place and the study's door place are the built-in's; the other two are in the
+    // rooms beside the start.
     assert_eq!(example.targets[0].shape, builtin.targets[0].shape);
     assert_eq!(example.targets[0].candidates[1], builtin.targets[0].candidates[1]);
     let start = example.start.pose;
-    let far = |p: [f64; 2]| ((p[0] - start[0]).powi(2) + (p[1] - start[1]).powi(2)).sqrt();
+    let far = |p: [f64; 2]| (p[0] - start[0]).hypot(p[1] - start[1]);
     for p in example.targets[0].positions() {
         assert!(far(p) <= 6.1, "{p:?} is {} m from the start", far(p));
     }
