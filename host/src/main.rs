@@ -48,6 +48,10 @@ enum Cmd {
         /// Print every goal the controller chooses, with its utility terms, to stderr.
         #[arg(long)]
         trace: bool,
+        /// With each goal `--trace` prints, also print the N best candidate viewpoints of that
+        /// planning step (the chosen one marked `*`); implies `--trace`.
+        #[arg(long, value_name = "N")]
+        trace_candidates: Option<usize>,
         /// The int8 classifier blob for `lives` (docs/model-format.md: a `LabelPoseNet` blob such
         /// as `firmware/model/lives-int8.bin`, or a geometric one); without it `lives` runs the
         /// committed geometric classifier (`firmware/model/lives-geo-int8.bin`).
@@ -646,10 +650,11 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<ExitCode, String> {
     match cli.command {
-        Cmd::Search { run: RunArgs { world, scenario, planner, seed }, png, json, trace, model, set, record } => {
+        Cmd::Search { run: RunArgs { world, scenario, planner, seed }, png, json, trace, trace_candidates, model, set, record } => {
             let (name, w) = load_world(&world, scenario, seed)?;
             let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
-            spec.trace = trace;
+            spec.trace = trace || trace_candidates.is_some();
+            spec.trace_candidates = trace_candidates.unwrap_or(0);
             for a in &set {
                 host::overrides::apply(&mut spec.controller, a)?;
             }

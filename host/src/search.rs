@@ -6,6 +6,7 @@
 //! world, planner and seed give the same run bit for bit.
 
 use crate::sim::{BaseStatus, HitKind, Scan, Scenario, Sim, SimConfig, World};
+use firmware::planner::Viewpoint;
 use firmware::scan::{BeamLabel, BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
 use firmware::{BinaryAngle, Command, Config, Controller, Detection, Inputs, Mode, PlannerKind, Pose2, ScanInput};
 use serde::Serialize;
@@ -110,6 +111,9 @@ pub struct SearchSpec {
     pub controller: Config,
     /// Print every new goal with its utility terms to stderr.
     pub trace: bool,
+    /// With [`SearchSpec::trace`], also print this many of the best candidate viewpoints of each
+    /// planning step that chose a new goal ([`candidate_lines`]); 0 prints none.
+    pub trace_candidates: usize,
     /// The int8 classifier blob for `lives` (validated when the search starts). Without one,
     /// `lives` runs on the simulator's ground-truth labels.
     pub model: Option<&'static [u8]>,
@@ -128,6 +132,7 @@ impl SearchSpec {
             sim,
             controller: Config::DEFAULT,
             trace: false,
+            trace_candidates: 0,
             model: None,
         }
     }
@@ -452,6 +457,42 @@ pub fn controller_config(base: &Config, world: &World, planner: PlannerChoice) -
     }
 }
 
+/// The `n` best candidate viewpoints of the controller's last planning step, best first (ties in
+/// the planner's own order), one line each: rank, where the robot would stand (world metres) and
+/// look, the site kind, the utility and its terms. The goal the step chose is marked `*` (the
+/// best candidate, unless the current goal was kept by hysteresis). This is what `lives search
+/// --trace-candidates N` prints under each new goal: it answers "why did it go there and not
+/// here".
+pub fn candidate_lines(ctrl: &Controller, n: usize) -> Vec<String> {
+    let mut cands: Vec<&Viewpoint> = ctrl.planner.candidates.iter().collect();
+    // A stable sort: equal utilities keep the planner's order, whose first wins the argmax.
+    cands.sort_by_key(|v| std::cmp::Reverse(v.utility));
+    let chosen = ctrl.goal().map(|g| (g.viewpoint.cell, g.viewpoint.heading));
+    cands
+        .iter()
+        .take(n)
+        .enumerate()
+        .map(|(i, v)| {
+            let (x, y) = ctrl.lidar.geom.center_of(v.cell.0, v.cell.1);
+            format!(
+                "    {}{:>2} ({:5.1},{:5.1}) {:>4.0}° {:<14} U={:7.2} path={:5.1}m unseen={:4} surface={:2} frontier={:4} nonmap={:3}",
+                if chosen == Some((v.cell, v.heading)) { '*' } else { ' ' },
+                i + 1,
+                x.to_num::<f64>(),
+                y.to_num::<f64>(),
+                v.heading.to_radians().to_degrees(),
+                format!("{:?}", v.source),
+                v.utility as f64 / 65536.0,
+                v.path_units as f64 * (firmware::capacity::CELL_MM as f64 / 1000.0) / firmware::planner::STEP_STRAIGHT as f64,
+                v.unseen,
+                v.surface,
+                v.frontier_near_path,
+                v.nonmap,
+            )
+        })
+        .collect()
+}
+
 /// What an observer of [`try_run_observed`] sees right after each controller tick (for
 /// recordings, `host::record`). It reads; it cannot change the run.
 pub struct TickView<'a> {
@@ -577,6 +618,9 @@ fn run_with(
                     ctrl.planner.stats.candidates,
                     ctrl.planner.stats
                 );
+                for line in candidate_lines(&ctrl, spec.trace_candidates) {
+                    eprintln!("{line}");
+                }
             }
             let path: Vec<[f64; 2]> = g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect();
             sim.set_path(&path, Some(g.pose.theta.to_radians()));
@@ -626,6 +670,47 @@ fn round3(v: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The utility a candidate line prints, parsed back.
+    fn printed_utility(line: &str) -> f64 {
+        let u = line.split("U=").nth(1).unwrap_or_else(|| panic!("no utility in {line:?}"));
+        u.split_whitespace().next().unwrap().parse().unwrap()
+    }
+
+    #[test]
+    fn candidate_lines_rank_the_step_best_first_and_mark_the_chosen_goal() {
+        let w = World::builtin("apartment", Scenario::Easy).unwrap();
+        let spec =
+            SearchSpec { planner: PlannerChoice::LivesGt, ..SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, 3) };
+        let (mut steps, mut marked) = (0, 0);
+        let mut observe = |v: &TickView<'_>| {
+            if !v.outputs.new_goal || steps >= 4 {
+                return;
+            }
+            steps += 1;
+            let ctrl = v.controller;
+            let n = ctrl.planner.candidates.len();
+            assert!(n > 5, "a planning step of the apartment has many candidates, got {n}");
+            let lines = candidate_lines(ctrl, 5);
+            assert_eq!(lines.len(), 5);
+            assert_eq!(candidate_lines(ctrl, n + 10).len(), n, "never more lines than candidates");
+            assert!(candidate_lines(ctrl, 0).is_empty());
+            let us: Vec<f64> = lines.iter().map(|l| printed_utility(l)).collect();
+            assert!(us.windows(2).all(|p| p[0] >= p[1]), "best first: {us:?}");
+            let best = ctrl.planner.candidates.iter().map(|c| c.utility).max().unwrap() as f64 / 65536.0;
+            assert!((us[0] - best).abs() < 0.006, "the first line is the step's best: {} vs {best}", us[0]);
+            // A new goal is the step's argmax (hysteresis keeps the old one, never picks another).
+            let g = ctrl.goal().unwrap();
+            if g.viewpoint.source != firmware::planner::Site::Current {
+                assert!(lines[0].trim_start().starts_with("* 1 "), "the chosen goal is marked: {}", lines[0]);
+                marked += 1;
+            }
+            assert!(lines.iter().filter(|l| l.trim_start().starts_with('*')).count() <= 1);
+        };
+        try_run_observed(&spec, |_| {}, &mut observe).unwrap();
+        assert_eq!(steps, 4, "the search chose at least four goals");
+        assert!(marked > 0);
+    }
 
     #[test]
     fn the_label_score_counts_every_beam_both_labelled() {
