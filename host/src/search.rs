@@ -475,22 +475,33 @@ pub fn candidate_lines(ctrl: &Controller, n: usize) -> Vec<String> {
         .map(|(i, v)| {
             let (x, y) = ctrl.lidar.geom.center_of(v.cell.0, v.cell.1);
             format!(
-                "    {}{:>2} ({:5.1},{:5.1}) {:>4.0}° {:<14} U={:7.2} path={:5.1}m unseen={:4} surface={:2} frontier={:4} nonmap={:3}",
+                "    {}{:>2} ({:5.1},{:5.1}) {:>4.0}° {:<14} {}",
                 if chosen == Some((v.cell, v.heading)) { '*' } else { ' ' },
                 i + 1,
                 x.to_num::<f64>(),
                 y.to_num::<f64>(),
                 v.heading.to_radians().to_degrees(),
                 format!("{:?}", v.source),
-                v.utility as f64 / 65536.0,
-                v.path_units as f64 * (firmware::capacity::CELL_MM as f64 / 1000.0) / firmware::planner::STEP_STRAIGHT as f64,
-                v.unseen,
-                v.surface,
-                v.frontier_near_path,
-                v.nonmap,
+                utility_terms(
+                    v,
+                    v.path_units as f64 * (firmware::capacity::CELL_MM as f64 / 1000.0) / firmware::planner::STEP_STRAIGHT as f64
+                ),
             )
         })
         .collect()
+}
+
+/// A viewpoint's utility and its terms as `--trace` prints them, for a goal and a candidate alike.
+fn utility_terms(v: &Viewpoint, path_m: f64) -> String {
+    format!(
+        "U={:7.2} path={:5.1}m unseen={:4} surface={:2} frontier={:4} nonmap={:3}",
+        v.utility as f64 / 65536.0,
+        path_m,
+        v.unseen,
+        v.surface,
+        v.frontier_near_path,
+        v.nonmap
+    )
 }
 
 /// What an observer of [`try_run_observed`] sees right after each controller tick (for
@@ -600,7 +611,7 @@ fn run_with(
             if spec.trace {
                 let v = &g.viewpoint;
                 eprintln!(
-                    "t={:6.1}s robot ({:5.1},{:5.1}) goal #{:<3} ({:5.1},{:5.1}) {:>4.0}° {:?} U={:7.2} path={:5.1}m unseen={:4} surface={:2} frontier={:4} nonmap={:3} cands={} {:?}",
+                    "t={:6.1}s robot ({:5.1},{:5.1}) goal #{:<3} ({:5.1},{:5.1}) {:>4.0}° {:?} {} cands={} {:?}",
                     sim.time_s(),
                     p[0],
                     p[1],
@@ -609,12 +620,7 @@ fn run_with(
                     g.pose.y.to_num::<f64>(),
                     g.pose.theta.to_radians().to_degrees(),
                     v.source,
-                    v.utility as f64 / 65536.0,
-                    g.path_length_m.to_num::<f64>(),
-                    v.unseen,
-                    v.surface,
-                    v.frontier_near_path,
-                    v.nonmap,
+                    utility_terms(v, g.path_length_m.to_num::<f64>()),
                     ctrl.planner.stats.candidates,
                     ctrl.planner.stats
                 );
@@ -680,8 +686,7 @@ mod tests {
     #[test]
     fn candidate_lines_rank_the_step_best_first_and_mark_the_chosen_goal() {
         let w = World::builtin("apartment", Scenario::Easy).unwrap();
-        let spec =
-            SearchSpec { planner: PlannerChoice::LivesGt, ..SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, 3) };
+        let spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, 3);
         let (mut steps, mut marked) = (0, 0);
         let mut observe = |v: &TickView<'_>| {
             if !v.outputs.new_goal || steps >= 4 {
