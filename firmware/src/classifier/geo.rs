@@ -97,6 +97,7 @@ fn u16_at(b: &[u8], off: usize) -> u16 {
     u16::from_le_bytes([b[off], b[off + 1]])
 }
 
+#[inline]
 fn i32_at(b: &[u8], off: usize) -> i32 {
     i32::from_le_bytes([b[off], b[off + 1], b[off + 2], b[off + 3]])
 }
@@ -187,6 +188,7 @@ impl<'a> GeoView<'a> {
         i32_at(self.bytes, 16) as u32
     }
 
+    #[inline]
     fn record(&self, off: usize) -> GeoChannel {
         GeoChannel {
             bias: i32_at(self.bytes, off),
@@ -195,6 +197,7 @@ impl<'a> GeoView<'a> {
     }
 
     /// Hidden unit `j`'s bias and multiplier.
+    #[inline]
     pub fn hidden(&self, j: usize) -> GeoChannel {
         self.record(GEO_HEADER_LEN + j * RECORD)
     }
@@ -210,6 +213,7 @@ impl<'a> GeoView<'a> {
     }
 
     /// Hidden unit `j`'s weights.
+    #[inline]
     pub fn hidden_weights(&self, j: usize) -> &'a [u8] {
         &self.bytes[W1 + j * GEO_FEATURES..W1 + (j + 1) * GEO_FEATURES]
     }
@@ -393,25 +397,57 @@ fn break_kind(ra: u16, rb: u16) -> u8 {
 /// rows; each earlier row is read at the beam that pointed the same way then (the robot's turn
 /// since, rounded to a beam; its travel, ≤ 0.1 m a step, is ignored). Unfilled rows count zero.
 pub fn history_features(h: &super::ScanHistory, b: usize) -> [i8; 2] {
-    let Some(now) = h.pose(super::HISTORY - 1) else {
-        return [0, 0];
-    };
-    let mut last = 0i8;
-    let mut sum = 0i64;
-    for r in 0..super::LABEL_ROWS {
-        let Some(p) = h.pose(r) else { continue };
-        // Beams turned since row r: (θ_now − θ_r) · 897 / 2³², rounded half away from zero.
-        let d = (now.theta - p.theta).0 as i64 * BEAMS as i64;
-        let shift = if d >= 0 { (d + (1 << 31)) >> 32 } else { -((-d + (1 << 31)) >> 32) };
-        let v = h.label_row(r)[(b as i64 + shift).rem_euclid(BEAMS as i64) as usize];
-        sum += (r as i64 + 1) * v as i64;
-        if r == super::LABEL_ROWS - 1 {
-            last = v;
+    HistoryReader::new(h).features(b)
+}
+
+/// [`history_features`] for every beam of one scan: the turn of each earlier row, read once per
+/// scan instead of once per beam (the same values, bit for bit).
+pub struct HistoryReader<'h> {
+    history: &'h super::ScanHistory,
+    /// Per label row: `Some(beams turned since)`, or `None` for an unfilled row.
+    shifts: [Option<usize>; super::LABEL_ROWS],
+    filled: bool,
+}
+
+impl<'h> HistoryReader<'h> {
+    /// Reads the poses of `h`'s rows.
+    pub fn new(h: &'h super::ScanHistory) -> Self {
+        let mut shifts = [None; super::LABEL_ROWS];
+        let now = h.pose(super::HISTORY - 1);
+        if let Some(now) = now {
+            for (r, s) in shifts.iter_mut().enumerate() {
+                let Some(p) = h.pose(r) else { continue };
+                // Beams turned since row r: (θ_now − θ_r) · 897 / 2³², rounded half away from zero.
+                let d = (now.theta - p.theta).0 as i64 * BEAMS as i64;
+                let shift = if d >= 0 { (d + (1 << 31)) >> 32 } else { -((-d + (1 << 31)) >> 32) };
+                *s = Some(shift.rem_euclid(BEAMS as i64) as usize);
+            }
         }
+        HistoryReader { history: h, shifts, filled: now.is_some() }
     }
-    let w = super::LABEL_WEIGHT_SUM as i64;
-    let avg = if sum >= 0 { (2 * sum + w) / (2 * w) } else { -((-2 * sum + w) / (2 * w)) };
-    [last, avg.clamp(-127, 127) as i8]
+
+    /// Beam `b`'s two label-history features (`b < BEAMS`).
+    #[inline]
+    pub fn features(&self, b: usize) -> [i8; 2] {
+        if !self.filled {
+            return [0, 0];
+        }
+        let mut last = 0i8;
+        let mut sum = 0i32;
+        for (r, s) in self.shifts.iter().enumerate() {
+            let Some(s) = *s else { continue };
+            let at = if b + s >= BEAMS { b + s - BEAMS } else { b + s };
+            let v = self.history.label_row(r)[at];
+            // |Σ| ≤ 36 · 128: no overflow.
+            sum += (r as i32 + 1) * v as i32;
+            if r == super::LABEL_ROWS - 1 {
+                last = v;
+            }
+        }
+        let w = super::LABEL_WEIGHT_SUM;
+        let avg = if sum >= 0 { (2 * sum + w) / (2 * w) } else { -((-2 * sum + w) / (2 * w)) };
+        [last, avg.clamp(-127, 127) as i8]
+    }
 }
 
 /// The network on one beam's features: `(score, output)`, the int32 score (≥ 0 map) and its
@@ -423,16 +459,15 @@ pub fn geo_forward(m: &GeoView<'_>, x: &[i8; GEO_FEATURES]) -> (i32, i8) {
     let mut acc2: i32 = 0;
     for (j, v2) in w2.chunks_exact(2).enumerate() {
         let v2 = i16::from_le_bytes([v2[0], v2[1]]) as i32;
-        let w = m.hidden_weights(j);
-        let mut acc: i32 = 0;
-        for (&wi, &xi) in w.iter().zip(x.iter()) {
-            acc += wi as i8 as i32 * xi as i32;
-        }
+        let w: &[u8; GEO_FEATURES] = m.hidden_weights(j).try_into().unwrap_or(&[0; GEO_FEATURES]);
+        // |Σ| ≤ 23 · 128 · 127 < 2³¹, so wrapping adds give the checked sum, and let the
+        // compiler vectorise the dot product (the checked one cannot be).
+        let acc = w.iter().zip(x.iter()).fold(0i32, |a, (&wi, &xi)| a.wrapping_add(wi as i8 as i32 * xi as i32));
         let c = m.hidden(j);
         let pre = requantize_i8(acc.saturating_add(c.bias), c.multiplier);
         let h = table[(pre as i32 + 128) as usize] as i8;
-        // |Σ| ≤ 48 · 32 767 · 127 < 2³¹.
-        acc2 += v2 * h as i32;
+        // |Σ| ≤ 48 · 32 768 · 128 < 2³¹.
+        acc2 = acc2.wrapping_add(v2 * h as i32);
     }
     let o = m.output();
     let score = acc2.saturating_add(o.bias);

@@ -299,9 +299,10 @@ impl<'m> Classifier<'m> {
     fn geo_step(&mut self, g: &geo::GeoView<'m>, pose: &Pose2, ranges_mm: &[u16; BEAMS]) -> u32 {
         self.history.push_scan(pose, ranges_mm, &Normalisation::DEFAULT);
         self.geo_scratch.prepare(ranges_mm);
+        let history = geo::HistoryReader::new(&self.history);
         for b in 0..BEAMS {
             let mut x = self.geo_scratch.features(ranges_mm, b);
-            let [last, avg] = geo::history_features(&self.history, b);
+            let [last, avg] = history.features(b);
             x[geo::SCAN_FEATURES] = last;
             x[geo::SCAN_FEATURES + 1] = avg;
             let (score, o) = geo::geo_forward(g, &x);
