@@ -14,7 +14,7 @@ pub mod render;
 pub mod replay;
 pub mod search;
 pub mod sensors;
-pub mod sim;
+pub use lives_sim as sim;
 pub mod trace;
 #[cfg(feature = "train")]
 pub mod train;

@@ -607,7 +607,7 @@ fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::Scenario;
+    use crate::Scenario;
 
     /// A closed 10 × 4 m room, the robot starting at (2, 2), plus `extra` (TOML tables).
     fn room_world(name: &str, extra: &str) -> World {
@@ -662,7 +662,7 @@ rect = {{ center = [{target_x}, 2.0], size = [0.5, 0.35] }}
     #[test]
     fn detector_is_blocked_by_obstacles_and_people() {
         let mut w = walled_world(4.5);
-        w.obstacles.push(crate::sim::Obstacle {
+        w.obstacles.push(crate::Obstacle {
             shape: Shape::Rect { center: [3.0, 2.0], size: [0.3, 1.5], yaw: 0.0 },
             kind: HitKind::Furniture,
             label: "shelf".into(),
@@ -670,7 +670,7 @@ rect = {{ center = [{target_x}, 2.0], size = [0.5, 0.35] }}
         let sim = Sim::new(w, SimConfig::default(), 1);
         assert_eq!(sim.detect(), None);
         let mut w = walled_world(4.5);
-        w.people.push(crate::sim::Person { path: vec![[3.0, 2.0]], speed_mps: 0.0, radius_m: 0.5 });
+        w.people.push(crate::Person { path: vec![[3.0, 2.0]], speed_mps: 0.0, radius_m: 0.5 });
         let sim = Sim::new(w, SimConfig::default(), 1);
         assert_eq!(sim.detect(), None);
     }
@@ -792,7 +792,7 @@ rect = {{ center = [{target_x}, 2.0], size = [0.5, 0.35] }}
     #[test]
     fn people_walk_and_are_seen() {
         let mut w = walled_world(8.0);
-        w.people.push(crate::sim::Person { path: vec![[1.0, 0.7], [4.0, 0.7]], speed_mps: 1.0, radius_m: 0.25 });
+        w.people.push(crate::Person { path: vec![[1.0, 0.7], [4.0, 0.7]], speed_mps: 1.0, radius_m: 0.25 });
         let mut sim = Sim::new(w, SimConfig::default(), 9);
         let before = sim.people()[0].0;
         sim.step(1.0);

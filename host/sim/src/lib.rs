@@ -1,4 +1,5 @@
-//! The 2D indoor simulator: the "true world" the LIVES controller searches.
+//! `lives-sim`: the 2D indoor simulator, the "true world" the LIVES controller searches (re-exported
+//! by `host` as `host::sim`).
 //!
 //! This module owns the ground truth and nothing else: floor plans ([`World`]), the robot's
 //! sensors (a 360° 2D LiDAR, [`Sim::scan`], and a narrow camera with an oracle detector,
@@ -12,7 +13,7 @@
 //!
 //! * [`world`]: the [`World`] type, its TOML format (see `docs/world-format.md`) and validation.
 //! * [`builtin`]: the paper's worlds, `apartment`, `office`, `hallway`, each in an easy and a hard
-//!   [`Scenario`], authored as TOML in `sim/worlds/`.
+//!   [`Scenario`], authored as TOML in `host/sim/src/worlds/`.
 //! * [`generate`]: procedural buildings, [`World::random`].
 //! * [`geometry`]: shapes, ray casting and collision queries with a uniform-grid broad phase.
 //! * [`simulator`]: [`Sim`], [`SimConfig`], [`Scan`], [`BaseStatus`].

@@ -69,8 +69,8 @@ pub fn load(name: &str, scenario: Scenario) -> Option<World> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::geometry::dist;
-    use crate::sim::{HitKind, SimConfig};
+    use crate::geometry::dist;
+    use crate::{HitKind, SimConfig};
 
     fn all() -> Vec<(String, Scenario, World)> {
         let mut v = Vec::new();

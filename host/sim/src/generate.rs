@@ -604,7 +604,7 @@ fn easy_variant(world: &World, seed: u64) -> Option<World> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::SimConfig;
+    use crate::SimConfig;
 
     #[test]
     fn random_worlds_are_valid_and_connected() {

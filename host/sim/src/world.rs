@@ -605,7 +605,7 @@ impl World {
 
     /// If a disc at `p` touches a wall, an obstacle or (optionally) a target at any of its
     /// positions, say which.
-    pub(crate) fn disc_clash(&self, p: P2, r: f64, with_targets: bool) -> Option<String> {
+    pub fn disc_clash(&self, p: P2, r: f64, with_targets: bool) -> Option<String> {
         let disc = Shape::Circle { center: p, radius: r };
         for (i, w) in self.walls.iter().enumerate() {
             if disc.segment_distance(w[0], w[1]) <= 0.0 {
