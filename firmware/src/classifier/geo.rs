@@ -214,8 +214,9 @@ impl<'a> GeoView<'a> {
 
     /// Hidden unit `j`'s weights.
     #[inline]
-    pub fn hidden_weights(&self, j: usize) -> &'a [u8] {
-        &self.bytes[W1 + j * GEO_FEATURES..W1 + (j + 1) * GEO_FEATURES]
+    pub fn hidden_weights(&self, j: usize) -> &'a [u8; GEO_FEATURES] {
+        // A fixed-size row: the dot product over it unrolls and vectorises.
+        &self.bytes[W1..W2].as_chunks::<GEO_FEATURES>().0[j]
     }
 
     /// The output weights, `i16` little-endian.
@@ -459,7 +460,7 @@ pub fn geo_forward(m: &GeoView<'_>, x: &[i8; GEO_FEATURES]) -> (i32, i8) {
     let mut acc2: i32 = 0;
     for (j, v2) in w2.chunks_exact(2).enumerate() {
         let v2 = i16::from_le_bytes([v2[0], v2[1]]) as i32;
-        let w: &[u8; GEO_FEATURES] = m.hidden_weights(j).try_into().unwrap_or(&[0; GEO_FEATURES]);
+        let w = m.hidden_weights(j);
         // |Σ| ≤ 23 · 128 · 127 < 2³¹, so wrapping adds give the checked sum, and let the
         // compiler vectorise the dot product (the checked one cannot be).
         let acc = w.iter().zip(x.iter()).fold(0i32, |a, (&wi, &xi)| a.wrapping_add(wi as i8 as i32 * xi as i32));
