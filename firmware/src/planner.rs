@@ -129,6 +129,14 @@ pub struct Viewpoint {
     pub nonmap: u32,
 }
 
+impl Viewpoint {
+    /// The path distance in metres (Q16.16, truncated).
+    pub fn path_length_m(&self) -> Meters {
+        let path_mm = self.path_units as i64 * (crate::capacity::CELL_MM / STEP_STRAIGHT as i64);
+        Meters::from_bits(((path_mm << 16) / 1000) as i32)
+    }
+}
+
 /// A goal for the base: a viewpoint pose and how to get there.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Goal {
@@ -882,13 +890,7 @@ impl Planner {
             let _ = path.push(lidar.geom.center_of(x, y));
         }
         let (gx, gy) = lidar.geom.center_of(vp.cell.0, vp.cell.1);
-        let path_mm = vp.path_units as i64 * (crate::capacity::CELL_MM / STEP_STRAIGHT as i64);
-        Goal {
-            pose: Pose2::new(gx, gy, vp.heading),
-            viewpoint: vp,
-            path,
-            path_length_m: Meters::from_bits(((path_mm << 16) / 1000) as i32),
-        }
+        Goal { pose: Pose2::new(gx, gy, vp.heading), viewpoint: vp, path, path_length_m: vp.path_length_m() }
     }
 }
 

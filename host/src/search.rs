@@ -482,21 +482,18 @@ pub fn candidate_lines(ctrl: &Controller, n: usize) -> Vec<String> {
                 y.to_num::<f64>(),
                 v.heading.to_radians().to_degrees(),
                 format!("{:?}", v.source),
-                utility_terms(
-                    v,
-                    v.path_units as f64 * (firmware::capacity::CELL_MM as f64 / 1000.0) / firmware::planner::STEP_STRAIGHT as f64
-                ),
+                utility_terms(v),
             )
         })
         .collect()
 }
 
 /// A viewpoint's utility and its terms as `--trace` prints them, for a goal and a candidate alike.
-fn utility_terms(v: &Viewpoint, path_m: f64) -> String {
+fn utility_terms(v: &Viewpoint) -> String {
     format!(
         "U={:7.2} path={:5.1}m unseen={:4} surface={:2} frontier={:4} nonmap={:3}",
         v.utility as f64 / 65536.0,
-        path_m,
+        v.path_length_m().to_num::<f64>(),
         v.unseen,
         v.surface,
         v.frontier_near_path,
@@ -620,7 +617,7 @@ fn run_with(
                     g.pose.y.to_num::<f64>(),
                     g.pose.theta.to_radians().to_degrees(),
                     v.source,
-                    utility_terms(v, g.path_length_m.to_num::<f64>()),
+                    utility_terms(v),
                     ctrl.planner.stats.candidates,
                     ctrl.planner.stats
                 );

@@ -12,7 +12,7 @@
 use crate::train::{Confusion, Episode, Result, TrainError};
 use firmware::capacity::BEAMS;
 use firmware::classifier::geo::{
-    history_features, write_geo_blob, GeoChannel, GeoScratch, GeoView, GEO_BLOB_LEN, GEO_FEATURES, GEO_HIDDEN, SCAN_FEATURES,
+    write_geo_blob, GeoChannel, GeoScratch, GeoView, HistoryReader, GEO_BLOB_LEN, GEO_FEATURES, GEO_HIDDEN, SCAN_FEATURES,
 };
 use firmware::classifier::{Classifier, ClassifierConfig, Normalisation, ScanHistory};
 use firmware::scan::BeamLabel;
@@ -247,10 +247,10 @@ fn run_firmware(
             mirror.push_scan(&st.pose, ranges, &Normalisation::DEFAULT);
             scratch.prepare(ranges);
             cls.classify_ranges(&st.pose, ranges, &mut out);
-            let (s, h) = (&*scratch, &*mirror);
+            let (s, h) = (&*scratch, HistoryReader::new(&mirror));
             let features = |b: usize| {
                 let mut x = s.features(ranges, b);
-                let [last, avg] = history_features(h, b);
+                let [last, avg] = h.features(b);
                 x[SCAN_FEATURES] = last;
                 x[SCAN_FEATURES + 1] = avg;
                 x

@@ -405,17 +405,16 @@ pub fn history_features(h: &super::ScanHistory, b: usize) -> [i8; 2] {
 /// scan instead of once per beam (the same values, bit for bit).
 pub struct HistoryReader<'h> {
     history: &'h super::ScanHistory,
-    /// Per label row: `Some(beams turned since)`, or `None` for an unfilled row.
+    /// Per label row: `Some(beams turned since)`, or `None` for an unfilled row (all `None`
+    /// before the first scan, which gives zero features).
     shifts: [Option<usize>; super::LABEL_ROWS],
-    filled: bool,
 }
 
 impl<'h> HistoryReader<'h> {
     /// Reads the poses of `h`'s rows.
     pub fn new(h: &'h super::ScanHistory) -> Self {
         let mut shifts = [None; super::LABEL_ROWS];
-        let now = h.pose(super::HISTORY - 1);
-        if let Some(now) = now {
+        if let Some(now) = h.pose(super::HISTORY - 1) {
             for (r, s) in shifts.iter_mut().enumerate() {
                 let Some(p) = h.pose(r) else { continue };
                 // Beams turned since row r: (θ_now − θ_r) · 897 / 2³², rounded half away from zero.
@@ -424,15 +423,12 @@ impl<'h> HistoryReader<'h> {
                 *s = Some(shift.rem_euclid(BEAMS as i64) as usize);
             }
         }
-        HistoryReader { history: h, shifts, filled: now.is_some() }
+        HistoryReader { history: h, shifts }
     }
 
     /// Beam `b`'s two label-history features (`b < BEAMS`).
     #[inline]
     pub fn features(&self, b: usize) -> [i8; 2] {
-        if !self.filled {
-            return [0, 0];
-        }
         let mut last = 0i8;
         let mut sum = 0i32;
         for (r, s) in self.shifts.iter().enumerate() {

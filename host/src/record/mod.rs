@@ -601,7 +601,7 @@ impl Recorder {
                     metadata: vec![
                         KeyValue::new("utility", format!("{u:.3}")),
                         KeyValue::new("source", site_name(v.source).to_string()),
-                        KeyValue::new("path_m", format!("{:.2}", v.path_units as f64 * 0.02)),
+                        KeyValue::new("path_m", format!("{:.2}", v.path_length_m().to_num::<f64>())),
                         KeyValue::new("unseen", v.unseen.to_string()),
                         KeyValue::new("surface", v.surface.to_string()),
                         KeyValue::new("frontier_near_path", v.frontier_near_path.to_string()),
