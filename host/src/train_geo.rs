@@ -32,7 +32,7 @@ pub fn samples(episodes: &[Episode], step_stride: usize, beam_stride: usize) -> 
     for ep in episodes {
         for st in &ep.steps {
             k += 1;
-            if k % step_stride.max(1) != 0 {
+            if !k.is_multiple_of(step_stride.max(1)) {
                 continue;
             }
             let Ok(ranges) = <&[u16; BEAMS]>::try_from(&st.ranges_mm[..]) else { continue };
@@ -102,11 +102,11 @@ impl GeoMlp {
         let y = if map { 1.0 } else { 0.0 };
         let p = 1.0 / (1.0 + (-o).exp());
         let g = p - y;
-        for j in 0..GEO_HIDDEN {
-            let gh = g * self.w2[j] * (1.0 - h[j] * h[j]);
-            self.w2[j] -= lr * g * h[j];
-            self.b1[j] -= lr * gh;
-            for (w, &xi) in self.w1[j].iter_mut().zip(x) {
+        for (((w1, b1), w2), &hj) in self.w1.iter_mut().zip(self.b1.iter_mut()).zip(self.w2.iter_mut()).zip(h.iter()) {
+            let gh = g * *w2 * (1.0 - hj * hj);
+            *w2 -= lr * g * hj;
+            *b1 -= lr * gh;
+            for (w, &xi) in w1.iter_mut().zip(x) {
                 *w -= lr * gh * (xi as f32 / 127.0);
             }
         }

@@ -108,7 +108,8 @@ pub const YAW_TOLERANCE_RAD: f64 = 1e-3;
 pub const DRIVE_WHILE_TURNING_RAD: f64 = PI / 6.0;
 /// Longest motion sub-step.
 pub const MAX_SUBSTEP_S: f64 = 0.02;
-/// Largest turn of a sub-step that would touch something (see [`Sim::avoid`]).
+/// Largest turn of a sub-step that would touch something: the base slides along what it grazes
+/// by turning the step up to this far, left before right.
 pub const AVOID_MAX_RAD: f64 = PI / 3.0;
 /// Turn increment of that search.
 pub const AVOID_STEP_RAD: f64 = PI / 12.0;
