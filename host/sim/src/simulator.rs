@@ -516,6 +516,13 @@ impl Sim {
             })
     }
 
+    /// Take a sub-step the base found clear: stand at `to` facing `yaw`, count the distance.
+    fn move_to(&mut self, to: P2, yaw: f64) {
+        self.driven_m += dist([self.pose[0], self.pose[1]], to);
+        self.pose = [to[0], to[1], yaw];
+        self.status = BaseStatus::Moving;
+    }
+
     /// The sub-step the base takes when it means to go from `p` to `to`: `to` itself if that
     /// touches nothing, else the same step turned by up to [`AVOID_MAX_RAD`] (in
     /// [`AVOID_STEP_RAD`] steps, left before right), as Spot's own obstacle avoidance slides
@@ -561,10 +568,7 @@ impl Sim {
                 self.status = BaseStatus::Blocked;
                 return;
             };
-            let step = dist(p, to);
-            self.pose = [to[0], to[1], yaw];
-            self.driven_m += step;
-            self.status = BaseStatus::Moving;
+            self.move_to(to, yaw);
         } else if let Some(&w) = self.path.front() {
             let v = sub(w, p);
             let d = norm(v);
@@ -578,10 +582,7 @@ impl Sim {
                 self.status = BaseStatus::Blocked;
                 return;
             };
-            let step = dist(p, to);
-            self.pose = [to[0], to[1], yaw];
-            self.driven_m += step;
-            self.status = BaseStatus::Moving;
+            self.move_to(to, yaw);
         } else if let Some(fy) = self.final_yaw {
             let e = wrap_angle(fy - self.pose[2]);
             if e.abs() <= YAW_TOLERANCE_RAD {
