@@ -489,6 +489,7 @@ mod tests {
             lidar_saw_target_s: None,
             target_in_camera_reach_s: None,
             classifier: None,
+            sim: None,
         }
     }
 

@@ -60,6 +60,11 @@ enum Cmd {
         /// Override a controller parameter, e.g. `--set w_dist_per_m=2` (repeatable; `lives params` lists them).
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
+        /// Change the simulated robot, e.g. `--sim speed_mps=0.3` or `--sim camera_range_m=8`
+        /// (repeatable; `lives params` lists them). The camera, the LiDAR's range and the body's
+        /// size also set the controller's model of them; a `--set` then changes the model alone.
+        #[arg(long = "sim", value_name = "NAME=VALUE")]
+        sim: Vec<String>,
         /// Record the run (scans, pose, both grids, frontiers, candidates, goals, detection) to an
         /// MCAP file that Foxglove opens (docs/recording.md).
         #[arg(long, value_name = "FILE.mcap")]
@@ -143,6 +148,11 @@ enum Cmd {
         /// Override a controller parameter sent to the node, e.g. `--set w_dist_per_m=2`.
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
+        /// Change the simulated robot (`--source sim`), e.g. `--sim speed_mps=0.3` or `--sim camera_range_m=8`
+        /// (repeatable; `lives params` lists them). The camera, the LiDAR's range and the body's
+        /// size also set the controller's model of them; a `--set` then changes the model alone.
+        #[arg(long = "sim", value_name = "NAME=VALUE")]
+        sim: Vec<String>,
         /// The simulator waits for the node each tick (the node must run with --lockstep too).
         #[arg(long)]
         lockstep: bool,
@@ -372,6 +382,11 @@ enum Cmd {
         /// Override a controller parameter for every planner (repeatable).
         #[arg(long = "set", value_name = "NAME=VALUE")]
         set: Vec<String>,
+        /// Change the simulated robot, e.g. `--sim speed_mps=0.3` or `--sim camera_range_m=8`
+        /// (repeatable; `lives params` lists them). The camera, the LiDAR's range and the body's
+        /// size also set the controller's model of them; a `--set` then changes the model alone.
+        #[arg(long = "sim", value_name = "NAME=VALUE")]
+        sim: Vec<String>,
     },
     /// Tune planner parameters on procedurally generated worlds only (never the built-in ones):
     /// scores every combination of the `--grid` values by mean time to find / time limit.
@@ -486,16 +501,21 @@ fn load_world(name: &str, scenario: Scenario, seed: u64) -> Result<(String, Worl
 
 /// The human-readable summary of a search: `FOUND apartment easy lives seed 1: found in …`.
 fn result_line(r: &search::SearchResult) -> String {
+    // A search that runs out of places to look ends early; like the paper, it counts as the
+    // limit (`time_s`), but the line says when it stopped.
+    let when = if r.outcome == "exhausted" {
+        let stopped = r.ticks as f64 * search::TICK_US as f64 / 1e6;
+        format!("exhausted (nothing left to explore) at {stopped:.1} s, counted as the limit ({:.0} s)", r.time_limit_s)
+    } else {
+        format!("{} in {:.1} s (limit {:.0} s)", r.outcome, r.time_s, r.time_limit_s)
+    };
     format!(
-        "{} {} {} {} seed {}: {} in {:.1} s (limit {:.0} s), path {:.1} m, {} ticks, {} goals",
+        "{} {} {} {} seed {}: {when}, path {:.1} m, {} ticks, {} goals",
         if r.found { "FOUND" } else { "NOT FOUND" },
         r.world,
         r.scenario,
         r.planner,
         r.seed,
-        r.outcome,
-        r.time_s,
-        r.time_limit_s,
         r.path_m,
         r.ticks,
         r.goals
@@ -538,6 +558,18 @@ fn write_file(path: &std::path::Path, text: &str) -> Result<(), String> {
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// Applies `--sim` (the simulated robot, and the controller's model of its sensors), then `--set`
+/// (the controller alone, so it may still change that model).
+fn configure_spec(spec: &mut SearchSpec, set: &[String], sim: &[String]) -> Result<(), String> {
+    for a in sim {
+        host::overrides::apply_sim(&mut spec.sim, &mut spec.controller, a)?;
+    }
+    for a in set {
+        host::overrides::apply(&mut spec.controller, a)?;
+    }
+    Ok(())
+}
+
 #[allow(clippy::too_many_arguments)]
 fn eval_cmd(
     trials: u64,
@@ -548,17 +580,13 @@ fn eval_cmd(
     out: &std::path::Path,
     no_pictures: bool,
     set: &[String],
+    sim: &[String],
 ) -> Result<ExitCode, String> {
     use host::eval;
     if trials == 0 {
         return Err("--trials must be at least 1".into());
     }
-    let configure = |spec: &mut SearchSpec| -> Result<(), String> {
-        for a in set {
-            host::overrides::apply(&mut spec.controller, a)?;
-        }
-        Ok(())
-    };
+    let configure = |spec: &mut SearchSpec| configure_spec(spec, set, sim);
     let specs = eval::eval_specs(worlds, scenarios, planners, trials, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?;
     let pb = count_bar();
     pb.set_length(specs.len() as u64);
@@ -650,14 +678,12 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<ExitCode, String> {
     match cli.command {
-        Cmd::Search { run: RunArgs { world, scenario, planner, seed }, png, json, trace, trace_candidates, model, set, record } => {
+        Cmd::Search { run: RunArgs { world, scenario, planner, seed }, png, json, trace, trace_candidates, model, set, sim, record } => {
             let (name, w) = load_world(&world, scenario, seed)?;
             let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
             spec.trace = trace || trace_candidates.is_some();
             spec.trace_candidates = trace_candidates.unwrap_or(0);
-            for a in &set {
-                host::overrides::apply(&mut spec.controller, a)?;
-            }
+            configure_spec(&mut spec, &set, &sim)?;
             let pb = progress_bar(spec.world.time_limit_s as u64);
             let t0 = Instant::now();
             if let Some(path) = &model {
@@ -712,6 +738,20 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                         m.moving_s,
                         m.turning_s,
                         m.still_s
+                    );
+                }
+                if let Some(x) = &r.sim {
+                    say!(
+                        "robot (--sim): {} m/s, {} rad/s; LiDAR {} m, noise {} m, dropouts {}; camera {} m, {}°, detects at {} of the outline; body {} m",
+                        x.speed_mps,
+                        x.turn_rate_rps,
+                        x.lidar_max_range_m,
+                        x.range_noise_std_m,
+                        x.dropout_prob,
+                        x.camera_range_m,
+                        x.camera_fov_deg,
+                        x.detect_min_visible_fraction,
+                        x.robot_radius_m
                     );
                 }
                 if let Some(c) = r.classifier {
@@ -863,6 +903,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             source,
             run: RunArgs { world, scenario, planner, seed },
             set,
+            sim,
             lockstep,
             scan_segment_beams,
             json,
@@ -872,6 +913,9 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             origin,
         } => {
             use host::link::{run_bridge, BridgeOptions, SerialLink, Source, TimeMode};
+            if source == "robot" && !sim.is_empty() {
+                return Err("--sim changes the simulated robot; it has no meaning with `--source robot`".into());
+            }
             if source == "robot" {
                 let opts = host::link::robot::CliOptions { port, baud, planner, set, lockstep, json, record, base_listen, lidar, origin };
                 return host::link::robot::run_cli(opts);
@@ -881,9 +925,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             }
             let (name, w) = load_world(&world, scenario, seed)?;
             let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
-            for a in &set {
-                host::overrides::apply(&mut spec.controller, a)?;
-            }
+            configure_spec(&mut spec, &set, &sim)?;
             let mode = if lockstep { TimeMode::Lockstep } else { TimeMode::RealTime };
             let mut link = SerialLink::open(&port, baud).unwrap_or_else(|e| {
                 eprintln!("waiting for {} ({e})", port.display());
@@ -1142,8 +1184,8 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             }
             Ok(ExitCode::SUCCESS)
         }
-        Cmd::Eval { trials, worlds, scenarios, planners, threads, out, no_pictures, set } => {
-            eval_cmd(trials, &worlds, &scenarios, &planners, threads, &out, no_pictures, &set)
+        Cmd::Eval { trials, worlds, scenarios, planners, threads, out, no_pictures, set, sim } => {
+            eval_cmd(trials, &worlds, &scenarios, &planners, threads, &out, no_pictures, &set, &sim)
         }
         Cmd::Tune { worlds, first_world, planners, scenarios, grid, threads, out } => {
             let grid: Vec<(String, Vec<String>)> = grid.iter().map(|g| host::eval::parse_grid_axis(g)).collect::<Result<_, _>>()?;
@@ -1211,6 +1253,13 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             say!();
             for (name, what) in host::overrides::NAMES {
                 say!("  --set {name}=VALUE   {what}");
+            }
+            say!();
+            say!("The simulated robot (`lives search`, `lives eval`, `lives bridge --source sim`):");
+            say!("{:#?}", host::search::default_sim());
+            say!();
+            for (name, what) in host::overrides::SIM_NAMES {
+                say!("  --sim {name}=VALUE   {what}");
             }
             Ok(ExitCode::SUCCESS)
         }

@@ -1,6 +1,8 @@
 //! `--set name=value`: override controller parameters from the command line, in user units
-//! (metres, degrees, seconds, utility weights as decimals).
+//! (metres, degrees, seconds, utility weights as decimals). `--sim name=value`: the simulated
+//! robot and its sensors ([`apply_sim`]).
 
+use crate::sim::SimConfig;
 use firmware::config::Weight;
 use firmware::{BinaryAngle, Config};
 
@@ -31,6 +33,76 @@ pub const NAMES: &[(&str, &str)] = &[
     ("nonmap_drop_vacated", "true/false: drop non-map points whose place the LiDAR has since seen empty"),
     ("viewpoint_snap_radius_m", "how far from a frontier's anchor its viewpoint may stand, metres"),
 ];
+
+/// Settings `--sim` accepts: the simulated base, LiDAR and camera, with their units. The
+/// defaults are [`crate::search::SearchSpec::new`]'s (`lives params` prints them).
+pub const SIM_NAMES: &[(&str, &str)] = &[
+    ("speed_mps", "the base's top speed, m/s, in (0, 5]"),
+    ("turn_rate_rps", "the base's top turn rate, rad/s, in (0, 10]"),
+    ("range_noise_std_m", "standard deviation of the LiDAR's Gaussian range noise, metres, in [0, 1]"),
+    ("dropout_prob", "probability that a LiDAR beam returns nothing, in [0, 1]"),
+    ("lidar_max_range_m", "LiDAR range, metres, in [1, 100]; the controller's LiDAR model follows"),
+    ("camera_range_m", "how far the detector sees, metres, in (0, 30]; the controller's camera model follows"),
+    ("camera_fov_deg", "the camera's field of view, degrees, in [1, 359]; the controller's camera model follows"),
+    ("detect_min_visible_fraction", "share of a target's outline that must be in view and unoccluded to detect it, in (0, 1]"),
+    (
+        "robot_radius_m",
+        "the simulated body's radius for collisions, metres, in [0.05, 1]; the controller's clearance follows (0.10 m more)",
+    ),
+];
+
+/// `v` as a number in `lo..=hi` (or `lo` excluded when `open_lo`).
+fn in_range(name: &str, v: &str, lo: f64, hi: f64, open_lo: bool) -> Result<f64, String> {
+    let x = num(name, v)?;
+    let above = if open_lo { x > lo } else { x >= lo };
+    if !(above && x <= hi) {
+        let open = if open_lo { '(' } else { '[' };
+        return Err(format!("`{name}`: expected a value in {open}{lo}, {hi}], got {x}"));
+    }
+    Ok(x)
+}
+
+/// Applies one `name=value` to the simulated robot `sim`. The LiDAR's range, the camera's range
+/// and field of view and the body's size describe the robot the controller drives, so they also
+/// set the controller's model of them in `cfg` (its clearance keeps the default 0.10 m margin
+/// around the body); a later `--set` may still change the model alone.
+pub fn apply_sim(sim: &mut SimConfig, cfg: &mut Config, assignment: &str) -> Result<(), String> {
+    let (name, v) = assignment.split_once('=').ok_or_else(|| format!("`--sim {assignment}`: expected name=value"))?;
+    let (name, v) = (name.trim(), v.trim());
+    match name {
+        "speed_mps" => sim.speed_mps = in_range(name, v, 0.0, 5.0, true)?,
+        "turn_rate_rps" => sim.turn_rate_rps = in_range(name, v, 0.0, 10.0, true)?,
+        "range_noise_std_m" => sim.range_noise_std_m = in_range(name, v, 0.0, 1.0, false)?,
+        "dropout_prob" => sim.dropout_prob = in_range(name, v, 0.0, 1.0, false)?,
+        "lidar_max_range_m" => {
+            let (x, m) = (in_range(name, v, 1.0, 100.0, false)?, meters(name, v)?);
+            (sim.lidar_max_range_m, cfg.lidar_max_range_m) = (x, m);
+        }
+        "camera_range_m" => {
+            let (x, m) = (in_range(name, v, 0.0, 30.0, true)?, meters(name, v)?);
+            (sim.camera_range_m, cfg.camera_range_m) = (x, m);
+        }
+        "camera_fov_deg" => {
+            let d = in_range(name, v, 1.0, 359.0, false)?;
+            let a = BinaryAngle::from_radians(d.to_radians()).ok_or_else(|| format!("`{name}`: {d}° is not an angle"))?;
+            (sim.camera_fov_rad, cfg.camera_fov) = (d.to_radians(), a);
+        }
+        "detect_min_visible_fraction" => sim.detect_min_visible_fraction = in_range(name, v, 0.0, 1.0, true)?,
+        "robot_radius_m" => {
+            // The controller keeps the same margin around the body as with the defaults
+            // (0.35 m of clearance around a 0.25 m body).
+            let x = in_range(name, v, 0.05, 1.0, false)?;
+            let margin = Config::DEFAULT.robot_radius_m.to_num::<f64>() - crate::search::default_sim().robot_radius_m;
+            let m = fixed_point::meters_from_f64(x + margin).ok_or_else(|| format!("`{name}`: {x} m is out of range"))?;
+            (sim.robot_radius_m, cfg.robot_radius_m) = (x, m);
+        }
+        _ => {
+            let known: Vec<&str> = SIM_NAMES.iter().map(|n| n.0).collect();
+            return Err(format!("unknown simulator setting `{name}`; known: {}", known.join(", ")));
+        }
+    }
+    Ok(())
+}
 
 fn num(name: &str, v: &str) -> Result<f64, String> {
     let x: f64 = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a number"))?;
@@ -134,6 +206,50 @@ mod tests {
                 _ => "1",
             };
             apply(&mut c, &format!("{name}={value}")).unwrap_or_else(|e| panic!("{name}: {e}"));
+        }
+    }
+
+    #[test]
+    fn sim_settings_apply_to_the_robot_and_its_model_and_reject_bad() {
+        let (mut sim, mut c) = (SimConfig::default(), Config::DEFAULT);
+        apply_sim(&mut sim, &mut c, "speed_mps=0.25").unwrap();
+        assert_eq!(sim.speed_mps, 0.25);
+        apply_sim(&mut sim, &mut c, " camera_range_m = 8 ").unwrap();
+        assert_eq!(sim.camera_range_m, 8.0);
+        assert_eq!(c.camera_range_m, fixed_point::Meters::from_num(8), "the controller's camera model follows");
+        apply_sim(&mut sim, &mut c, "camera_fov_deg=60").unwrap();
+        assert!((sim.camera_fov_rad - 60f64.to_radians()).abs() < 1e-12);
+        assert!((c.camera_fov.to_radians() - 60f64.to_radians()).abs() < 1e-6);
+        apply_sim(&mut sim, &mut c, "lidar_max_range_m=12").unwrap();
+        assert_eq!((sim.lidar_max_range_m, c.lidar_max_range_m), (12.0, fixed_point::Meters::from_num(12)));
+        apply_sim(&mut sim, &mut c, "dropout_prob=0").unwrap();
+        apply_sim(&mut sim, &mut c, "robot_radius_m=0.4").unwrap();
+        assert_eq!(sim.robot_radius_m, 0.4);
+        assert!((c.robot_radius_m.to_num::<f64>() - 0.5).abs() < 1e-4, "clearance 0.10 m more than the body");
+        assert_eq!(sim.dropout_prob, 0.0);
+        let before = (sim.clone(), c);
+        for bad in [
+            "speed_mps",
+            "speed_mps=0",
+            "speed_mps=-1",
+            "speed_mps=inf",
+            "speed_mps=NaN",
+            "dropout_prob=1.5",
+            "range_noise_std_m=-0.1",
+            "camera_fov_deg=360",
+            "camera_range_m=0",
+            "detect_min_visible_fraction=0",
+            "robot_radius_m=2",
+            "beams=16",
+        ] {
+            let e = apply_sim(&mut sim, &mut c, bad).unwrap_err();
+            assert!(e.contains(bad.split('=').next().unwrap()) || e.contains("name=value"), "{bad}: {e}");
+        }
+        assert_eq!((sim, c), before, "a rejected setting changes nothing");
+        let (mut sim, mut c) = (SimConfig::default(), Config::DEFAULT);
+        for (name, _) in SIM_NAMES {
+            let value = if *name == "camera_fov_deg" || *name == "lidar_max_range_m" { "45" } else { "0.5" };
+            apply_sim(&mut sim, &mut c, &format!("{name}={value}")).unwrap_or_else(|e| panic!("{name}: {e}"));
         }
     }
 }

@@ -122,7 +122,7 @@ pub struct SearchSpec {
 impl SearchSpec {
     /// Defaults for `world` / `scenario` / `planner` / `seed`.
     pub fn new(world_name: &str, world: World, scenario: Scenario, planner: PlannerChoice, seed: u64) -> Self {
-        let sim = SimConfig { robot_radius_m: 0.25, ..SimConfig::default() };
+        let sim = default_sim();
         SearchSpec {
             world_name: world_name.to_string(),
             world,
@@ -135,6 +135,53 @@ impl SearchSpec {
             trace_candidates: 0,
             model: None,
         }
+    }
+}
+
+/// The simulated robot a search uses unless `--sim` changes it: [`SimConfig::default`] with a
+/// 0.25 m body (the controller keeps `robot_radius_m` 0.35 m of clearance around it).
+pub fn default_sim() -> SimConfig {
+    SimConfig { robot_radius_m: 0.25, ..SimConfig::default() }
+}
+
+/// The simulated robot's settings, in a result only when `--sim` changed them from
+/// [`default_sim`] (so that a result says what robot it was measured on).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SimSettings {
+    /// The base's top speed.
+    pub speed_mps: f64,
+    /// The base's top turn rate.
+    pub turn_rate_rps: f64,
+    /// LiDAR range noise (standard deviation).
+    pub range_noise_std_m: f64,
+    /// Probability that a beam returns nothing.
+    pub dropout_prob: f64,
+    /// LiDAR range.
+    pub lidar_max_range_m: f64,
+    /// How far the detector sees.
+    pub camera_range_m: f64,
+    /// The camera's field of view.
+    pub camera_fov_deg: f64,
+    /// Share of a target's outline that must be in view for a detection.
+    pub detect_min_visible_fraction: f64,
+    /// The body's radius for collisions.
+    pub robot_radius_m: f64,
+}
+
+impl SimSettings {
+    /// `Some` when `sim` differs from [`default_sim`].
+    pub fn changed(sim: &SimConfig) -> Option<Self> {
+        (*sim != default_sim()).then(|| SimSettings {
+            speed_mps: sim.speed_mps,
+            turn_rate_rps: sim.turn_rate_rps,
+            range_noise_std_m: sim.range_noise_std_m,
+            dropout_prob: sim.dropout_prob,
+            lidar_max_range_m: sim.lidar_max_range_m,
+            camera_range_m: sim.camera_range_m,
+            camera_fov_deg: round3(sim.camera_fov_rad.to_degrees()),
+            detect_min_visible_fraction: sim.detect_min_visible_fraction,
+            robot_radius_m: sim.robot_radius_m,
+        })
     }
 }
 
@@ -190,6 +237,9 @@ pub struct SearchResult {
     /// (`lives` on a classifier only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub classifier: Option<LabelScore>,
+    /// The simulated robot, when `--sim` changed it (absent on the defaults and the real robot).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sim: Option<SimSettings>,
 }
 
 /// The classifier's labels against the simulator's truth, every beam of every scan of a run
@@ -662,6 +712,7 @@ fn run_with(
         lidar_saw_target_s: tally.lidar_saw_target_s(),
         target_in_camera_reach_s: tally.target_in_camera_reach_s(),
         classifier: classifier.then(|| LabelScore::from_confusion(confusion)),
+        sim: SimSettings::changed(&spec.sim),
     };
     SearchRun { result, controller: ctrl, sim, trajectory, start, found_at, goals }
 }

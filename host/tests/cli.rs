@@ -197,3 +197,40 @@ fn tune_rejects_unknown_parameters_before_running_and_ranks_a_grid() {
     assert_eq!(out.status.code(), Some(2), "a range past the last seed is refused");
     let _ = std::fs::remove_file(&path);
 }
+
+#[test]
+fn sim_settings_change_the_simulated_robot_and_bad_ones_are_refused() {
+    let search = |extra: &[&str]| {
+        let out = lives()
+            .args(["search", "--world", "apartment", "--scenario", "easy", "--planner", "nearest", "--seed", "1", "--json"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert_ne!(out.status.code(), Some(101), "panicked: {}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_str(String::from_utf8_lossy(&out.stdout).trim()).expect("one JSON object");
+        v
+    };
+    let default = search(&[]);
+    assert!(default.get("sim").is_none(), "the default robot is not echoed: {default}");
+    // `nearest` seed 1 walks for the whole limit (52.7 m at the default 0.5 m/s); at 0.2 m/s the
+    // base cannot cover more than 0.2 m/s × the time it ran.
+    let slow = search(&["--sim", "speed_mps=0.2", "--sim", "camera_range_m=6"]);
+    assert_eq!(slow["sim"]["speed_mps"], 0.2);
+    assert_eq!(slow["sim"]["camera_range_m"], 6.0);
+    assert_eq!(slow["sim"]["turn_rate_rps"], 1.0, "the rest stay at their defaults");
+    let (path, time) = (slow["path_m"].as_f64().unwrap(), slow["time_s"].as_f64().unwrap());
+    assert!(path > 1.0 && path <= 0.2 * time + 0.05, "path {path} m in {time} s at 0.2 m/s");
+    assert!(default["path_m"].as_f64().unwrap() > 0.2 * default["time_s"].as_f64().unwrap() + 1.0, "{default}");
+    for (bad, says) in [
+        ("speed_mps=0", "speed_mps"),
+        ("dropout_prob=1.5", "dropout_prob"),
+        ("camera_fov_deg=NaN", "camera_fov_deg"),
+        ("beams=16", "unknown simulator setting `beams`"),
+        ("speed_mps", "expected name=value"),
+    ] {
+        let out = lives().args(["search", "--sim", bad]).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{bad}: {err}");
+        assert!(err.contains(says), "{bad}: {err}");
+    }
+}

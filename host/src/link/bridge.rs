@@ -806,6 +806,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         target_in_camera_reach_s: tally.target_in_camera_reach_s(),
         // The core's labels stay in the node: the link carries no per-beam labels back.
         classifier: None,
+        sim: crate::search::SimSettings::changed(&spec.sim),
     };
     Ok(BridgeResult {
         result,
