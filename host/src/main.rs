@@ -118,6 +118,15 @@ enum Cmd {
         /// until killed).
         #[arg(long)]
         seconds: Option<f64>,
+        /// The int8 classifier the node runs on scans that arrive without labels (the robot's;
+        /// docs/model-format.md, either format). Default: the committed geometric classifier, as
+        /// `lives search --planner lives` and the Cortex-M images run.
+        #[arg(long, value_name = "BLOB")]
+        model: Option<PathBuf>,
+        /// Run no classifier: scans without labels then give `lives` no non-map points (it
+        /// behaves as `multisensor`).
+        #[arg(long, conflicts_with = "model")]
+        no_model: bool,
     },
     /// The host bridge: feeds a source's poses, scans and detections to `lives node` over a
     /// serial device, drives the base with the goals that come back, reports link health.
@@ -687,8 +696,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             let pb = progress_bar(spec.world.time_limit_s as u64);
             let t0 = Instant::now();
             if let Some(path) = &model {
-                let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-                spec.model = Some(Box::leak(bytes.into_boxed_slice()));
+                spec.model = Some(host::model::read_blob(path)?);
             } else if planner == PlannerChoice::Lives {
                 // The committed geometric classifier (docs/model-card-geo.md).
                 spec.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
@@ -852,8 +860,18 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             );
             Ok(ExitCode::SUCCESS)
         }
-        Cmd::Node { port, baud, lockstep, seconds } => {
+        Cmd::Node { port, baud, lockstep, seconds, model, no_model } => {
             use host::link::{run_node, NodeOptions, SerialLink, TimeMode};
+            let blob = match (&model, no_model) {
+                (_, true) => None,
+                (Some(path), false) => Some(host::model::read_blob(path)?),
+                (None, false) => Some(firmware::classifier::EMBEDDED_GEO_MODEL),
+            };
+            let classifier = match (&model, blob) {
+                (Some(p), _) => p.display().to_string(),
+                (None, Some(_)) => "geometric (embedded)".to_string(),
+                (None, None) => "none".to_string(),
+            };
             use std::sync::atomic::{AtomicBool, Ordering};
             let mode = if lockstep { TimeMode::Lockstep } else { TimeMode::RealTime };
             let mut link = SerialLink::open(&port, baud).unwrap_or_else(|e| {
@@ -869,7 +887,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                         stop.store(true, Ordering::Relaxed);
                     });
                 }
-                run_node(&mut link, firmware::Config::DEFAULT, NodeOptions::new(mode), &stop)
+                run_node(&mut link, firmware::Config::DEFAULT, NodeOptions { model: blob, ..NodeOptions::new(mode) }, &stop)
             })
             .map_err(|e| format!("the classifier model: {e:?}"))?;
             let c = &report.counters;
@@ -877,6 +895,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 "{}",
                 serde_json::json!({
                     "mode": format!("{:?}", report.mode),
+                    "classifier": classifier,
                     "ticks": c.ticks,
                     "frames_in": report.link.frames_ok,
                     "rejected": report.link.dropped(),
@@ -926,6 +945,12 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             let (name, w) = load_world(&world, scenario, seed)?;
             let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
             configure_spec(&mut spec, &set, &sim)?;
+            if planner == PlannerChoice::Lives {
+                // As `lives search`: the scans go without labels and the node's classifier (the
+                // committed geometric one unless `lives node --model` says otherwise) labels
+                // them; the bridge stops with a clear error if the node has none.
+                spec.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
+            }
             let mode = if lockstep { TimeMode::Lockstep } else { TimeMode::RealTime };
             let mut link = SerialLink::open(&port, baud).unwrap_or_else(|e| {
                 eprintln!("waiting for {} ({e})", port.display());

@@ -409,6 +409,26 @@ pub fn quantise_with(model: &FloatModel, calibration: &[FloatInputs], opts: &Qua
     (blob, QuantisationReport { max_abs_pre: max_abs, pre_scale })
 }
 
+/// Reads a classifier blob of either format (docs/model-format.md) for a `--model FILE` option
+/// and checks it as the firmware will (`firmware::Controller::set_model`), so a bad file is a
+/// clear error before anything runs. The bytes live for the rest of the process, as the models
+/// embedded in the firmware do.
+pub fn read_blob(path: &std::path::Path) -> Result<&'static [u8], String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    validate_blob(&bytes).map_err(|e| format!("{}: the model does not validate: {e:?}", path.display()))?;
+    Ok(Box::leak(bytes.into_boxed_slice()))
+}
+
+/// `Ok` if `blob` is a classifier the firmware accepts, geometric or `LabelPoseNet`.
+pub fn validate_blob(blob: &[u8]) -> Result<(), firmware::classifier::ModelError> {
+    use firmware::classifier::{geo::GeoView, ModelView};
+    if GeoView::is_geo(blob) {
+        GeoView::parse(blob).map(|_| ())
+    } else {
+        ModelView::parse(blob).map(|_| ())
+    }
+}
+
 #[cfg(test)]
 #[allow(clippy::needless_range_loop)] // index loops compare beam by beam
 mod tests {

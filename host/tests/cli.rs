@@ -234,3 +234,20 @@ fn sim_settings_change_the_simulated_robot_and_bad_ones_are_refused() {
         assert!(err.contains(says), "{bad}: {err}");
     }
 }
+
+#[test]
+fn node_and_replay_refuse_a_bad_model_before_starting() {
+    let readme = concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md");
+    for args in [
+        vec!["node", "--port", "/nonexistent/tty", "--model", readme],
+        vec!["replay", "/nonexistent/log.gz", "--model", readme],
+        vec!["search", "--model", readme],
+    ] {
+        let out = lives().args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("the model does not validate: BadMagic"), "{args:?}: {err}");
+    }
+    let out = lives().args(["node", "--port", "/nonexistent/tty", "--model", readme, "--no-model"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "--model and --no-model conflict");
+}

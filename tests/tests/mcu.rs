@@ -469,7 +469,10 @@ fn the_real_time_image_ticks_every_200_ms_on_systick() {
 fn the_emulated_mcu_finds_the_target_over_its_uart() {
     let (_q, pty) = start_on_pty("mcu-lockstep");
     let world = World::builtin("apartment", Scenario::Easy).expect("apartment");
-    let spec = SearchSpec::new("apartment", world, Scenario::Easy, PlannerChoice::Lives, 1);
+    // `lives` as deployed: the scans go without labels and the image's embedded geometric
+    // classifier labels them (seed 2: found in 55.6 s, 279 ticks, as `lives search --seed 2`).
+    let mut spec = SearchSpec::new("apartment", world, Scenario::Easy, PlannerChoice::Lives, 2);
+    spec.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
     let mut link = SerialLink::open(Path::new(&pty), 921_600).unwrap_or_else(|e| panic!("{pty}: {e}"));
     // As `lives bridge --lockstep`, with more patience for a loaded CI machine.
     let opts = BridgeOptions {
@@ -493,7 +496,8 @@ fn the_emulated_mcu_finds_the_target_over_its_uart() {
     let local = std::thread::scope(|s| {
         let node = s.spawn(|| {
             let mut node_end = node_end;
-            let mut p = NodeProcess::new(Config::DEFAULT, NodeOptions::new(TimeMode::Lockstep)).expect("no model to validate");
+            let opts = NodeOptions { model: spec.model, ..NodeOptions::new(TimeMode::Lockstep) };
+            let mut p = NodeProcess::new(Config::DEFAULT, opts).expect("the committed model validates");
             p.run(&mut node_end, &stop_node);
         });
         let r =
@@ -505,6 +509,7 @@ fn the_emulated_mcu_finds_the_target_over_its_uart() {
     assert_eq!(run.goals, local.goals, "the MCU chose other goals than the host node");
     assert_eq!(r.ticks, local.result.ticks);
     assert_eq!(r.outcome, local.result.outcome);
+    assert_eq!(r.labels, "int8-classifier", "the MCU labelled the scans with its embedded classifier");
 }
 
 #[test]

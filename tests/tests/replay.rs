@@ -20,7 +20,7 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 fn no_classifier() -> ReplayOptions {
-    ReplayOptions { classifier: false, ..ReplayOptions::default() }
+    ReplayOptions { model: None, ..ReplayOptions::default() }
 }
 
 fn gunzip(path: &Path) -> String {

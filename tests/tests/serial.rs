@@ -153,6 +153,52 @@ fn node_and_bridge_on_a_pty_pair_find_the_target_and_change_nothing() {
     assert_eq!(n.counters.lockstep_incomplete, 0);
 }
 
+#[test]
+fn lives_over_the_link_runs_the_nodes_classifier_and_decides_as_the_in_process_search() {
+    // What `lives node` + `lives bridge --source sim --planner lives` run: unlabelled scans, the
+    // node's (default) geometric classifier labels them, as `lives search --planner lives` does
+    // in process.
+    let mut sp = spec("apartment", Scenario::Easy, PlannerChoice::Lives, 2);
+    sp.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
+    let inproc = search::try_run(&sp, |_| {}).expect("the committed model validates");
+    assert!(inproc.result.found && inproc.result.labels == "int8-classifier", "{:?}", inproc.result);
+    let nopts = NodeOptions { model: sp.model, ..node_opts(TimeMode::Lockstep) };
+    let (r, n, _, _) = mem_run(&sp, FaultConfig::default(), 0, nopts, Duration::from_secs(120));
+    figures("classifier in the node", &r, &n);
+    assert_eq!(r.goals, inproc.goals, "the node's classifier decided otherwise than the in-process one");
+    assert_eq!(r.trajectory, inproc.trajectory);
+    // The node keeps its labels (the link carries none back), so only the in-process run scores
+    // them against the simulator's truth.
+    assert!(inproc.result.classifier.is_some() && r.result.classifier.is_none());
+    assert_eq!(r.result, search::SearchResult { classifier: None, ..inproc.result.clone() });
+    assert_goals_came_from_the_node(&r, &n);
+}
+
+#[test]
+fn lives_refuses_a_node_without_a_classifier_instead_of_searching_as_multisensor() {
+    let mut sp = spec("apartment", Scenario::Easy, PlannerChoice::Lives, 2);
+    sp.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
+    let (mut a, mut b) = mem_pair();
+    let (stop_node, stop_bridge) = (AtomicBool::new(false), AtomicBool::new(false));
+    let bopts = BridgeOptions { max_wall: Some(Duration::from_secs(60)), ..BridgeOptions::new(TimeMode::Lockstep) };
+    let (res, scans) = std::thread::scope(|s| {
+        let node = s.spawn(|| {
+            let mut p = NodeProcess::new(Config::DEFAULT, node_opts(TimeMode::Lockstep)).expect("no model");
+            p.run(&mut a, &stop_node);
+            p.report()
+        });
+        let res = run_bridge(&mut b, Source::Sim(sp.clone()), &bopts, &stop_bridge);
+        stop_node.store(true, Ordering::Relaxed);
+        (res, node.join().expect("node thread").counters.ticks)
+    });
+    match res {
+        Err(e @ host::link::BridgeError::NoClassifier) => assert!(e.to_string().contains("--no-model"), "{e}"),
+        Err(e) => panic!("expected NoClassifier, got {e}"),
+        Ok(r) => panic!("a node without a model searched: {:?}", r.result),
+    }
+    assert!(scans <= 2 * host::link::bridge::CLASSIFIER_CHECK_SCANS, "stopped early: {scans} ticks");
+}
+
 /// Both directions damaged: `node_faults` on what the node reads, `bridge_faults` on what the
 /// bridge reads.
 fn faulty_run(

@@ -198,6 +198,9 @@ pub enum BridgeError {
     NoSession,
     /// The robot source could not start (e.g. the base adapter's address is taken).
     Source(String),
+    /// `lives` sent unlabelled scans, but the node classified none of them: it runs without a
+    /// model (`lives node --no-model`), so it would search as `multisensor`.
+    NoClassifier,
 }
 
 impl fmt::Display for BridgeError {
@@ -206,11 +209,38 @@ impl fmt::Display for BridgeError {
             BridgeError::Incompatible(e) => write!(f, "{e}"),
             BridgeError::NoSession => f.write_str("no answer from the node (no HelloAck)"),
             BridgeError::Source(e) => f.write_str(e),
+            BridgeError::NoClassifier => f.write_str(
+                "the node classified none of the scans: it runs without a classifier model (`lives node --no-model`?); \
+                 `--planner lives` needs one (start the node without `--no-model`), or run `--planner lives-gt` on the simulator's labels",
+            ),
         }
     }
 }
 
 impl std::error::Error for BridgeError {}
+
+/// Scans after which a node expected to classify (`lives` without labels) must have done so.
+pub const CLASSIFIER_CHECK_SCANS: u32 = 3;
+
+/// Whether a node that should label the scans itself does: its status reports the classify
+/// stage's work (`cost.classify`), which stays 0 while it has no model.
+#[derive(Clone, Copy, Debug)]
+struct ClassifierCheck {
+    expected: bool,
+    seen: bool,
+}
+
+impl ClassifierCheck {
+    fn observe(&mut self, s: &StatusMsg) -> Result<(), BridgeError> {
+        if self.expected && !self.seen {
+            self.seen = s.cost.classify > 0;
+            if !self.seen && s.scans >= CLASSIFIER_CHECK_SCANS {
+                return Err(BridgeError::NoClassifier);
+            }
+        }
+        Ok(())
+    }
+}
 
 /// A search run through the link.
 pub struct BridgeResult {
@@ -570,6 +600,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
     // (then the node must have been started with the same model, see `NodeOptions::model`).
     let classifier = spec.planner == PlannerChoice::Lives && spec.model.is_some();
     let use_labels = !classifier && matches!(spec.planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
+    let mut classifier_check = ClassifierCheck { expected: classifier, seen: false };
     let increment = BinaryAngle::from_fraction(1, spec.sim.beams.max(1) as i64);
     let mut trajectory = vec![[start[0], start[1]]];
     let mut goals = Vec::new();
@@ -599,6 +630,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
                     CoreToHost::Goal(g) if b.open && b.apply_goal(&g) => note_goal(&mut goals, &mut recorded_seq, &geom, &g),
                     CoreToHost::Stop(_) => b.sim.stop_base(),
                     CoreToHost::Status(s) => {
+                        classifier_check.observe(&s)?;
                         need_start = s.mode == WireMode::Idle;
                         b.sim.set_gaze(s.gaze.map(|h| BinaryAngle(h).to_radians()));
                         match s.mode {
@@ -748,6 +780,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         if let Some(pr) = &opts.progress {
             pr.store(ticks, Ordering::Relaxed);
         }
+        classifier_check.observe(&status)?;
         need_start = status.mode == WireMode::Idle;
         match status.mode {
             WireMode::TargetFound => {

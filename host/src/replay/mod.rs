@@ -456,8 +456,9 @@ pub fn read_log(path: &Path) -> Result<LogData, ReplayError> {
 pub struct ReplayOptions {
     /// Controller settings (the grid origin is set by [`replay`]).
     pub config: Config,
-    /// Run the embedded int8 classifier on the scans (the logs carry no labels).
-    pub classifier: bool,
+    /// The int8 classifier blob run on the scans (the logs carry no labels); `None` runs none.
+    /// Default: the committed geometric classifier, as `lives search` runs for `lives`.
+    pub model: Option<&'static [u8]>,
     /// Record every tick to this MCAP file ([`crate::record`], Foxglove's schemas).
     pub record: Option<PathBuf>,
     /// The controller's LiDAR range for this log, metres (`None`: [`CARMEN_MAX_RANGE_M`] for
@@ -467,7 +468,7 @@ pub struct ReplayOptions {
 
 impl Default for ReplayOptions {
     fn default() -> Self {
-        ReplayOptions { config: Config::DEFAULT, classifier: true, record: None, max_range_m: None }
+        ReplayOptions { config: Config::DEFAULT, model: Some(firmware::classifier::EMBEDDED_GEO_MODEL), record: None, max_range_m: None }
     }
 }
 
@@ -661,8 +662,8 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         ..opts.config
     };
     let mut ctrl = Box::new(Controller::new(cfg));
-    if opts.classifier {
-        ctrl.set_model(firmware::classifier::EMBEDDED_MODEL).map_err(ReplayError::Model)?;
+    if let Some(blob) = opts.model {
+        ctrl.set_model(blob).map_err(ReplayError::Model)?;
     }
     let mut recorder = match &opts.record {
         Some(p) => Some(
@@ -804,7 +805,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         wall_s: round3(wall_s),
         read_s: round3(read_s),
         ratio: if duration_s > 0.0 { (wall_s / duration_s * 1e4).round() / 1e4 } else { f64::NAN },
-        labels: if opts.classifier { "int8-classifier" } else { "none" }.to_string(),
+        labels: if opts.model.is_some() { "int8-classifier" } else { "none" }.to_string(),
         plans: status.plans,
         goals,
         blacklisted: status.blacklisted,
@@ -853,9 +854,13 @@ pub struct ReplayArgs {
     /// Print one JSON object instead of the summary line.
     #[arg(long)]
     pub json: bool,
-    /// Do not run the embedded int8 classifier (no map / non-map labels).
-    #[arg(long)]
+    /// Do not run a classifier (no map / non-map labels).
+    #[arg(long, conflicts_with = "model")]
     pub no_classifier: bool,
+    /// The int8 classifier blob to run (docs/model-format.md, either format); without it the
+    /// committed geometric classifier (`firmware/model/lives-geo-int8.bin`), as `lives search`.
+    #[arg(long, value_name = "BLOB")]
+    pub model: Option<PathBuf>,
     /// The controller's LiDAR range, metres: readings at or beyond it, and "no return" readings,
     /// clear cells up to it and mark nothing (default: 10 m for CARMEN logs, the usable range
     /// mappers give them; the core's 30 m for bags).
@@ -875,7 +880,12 @@ pub struct ReplayArgs {
 /// replayed and is reported), `Err` (status 2) when nothing could be replayed.
 pub fn run_command(args: &ReplayArgs) -> Result<std::process::ExitCode, String> {
     use std::io::Write as _;
-    let mut opts = ReplayOptions { classifier: !args.no_classifier, record: args.record.clone(), ..ReplayOptions::default() };
+    let model = match (&args.model, args.no_classifier) {
+        (_, true) => None,
+        (Some(path), false) => Some(crate::model::read_blob(path)?),
+        (None, false) => Some(firmware::classifier::EMBEDDED_GEO_MODEL),
+    };
+    let mut opts = ReplayOptions { model, record: args.record.clone(), ..ReplayOptions::default() };
     for a in &args.set {
         crate::overrides::apply(&mut opts.config, a)?;
     }

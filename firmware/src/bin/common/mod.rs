@@ -11,7 +11,7 @@ pub mod slot;
 pub mod uart;
 
 use cortex_m_semihosting::hprintln;
-use firmware::classifier::EMBEDDED_MODEL;
+use firmware::classifier::EMBEDDED_GEO_MODEL;
 use firmware::node::{Node, NodeConfig, TimeMode};
 use firmware::{Config, Controller};
 use slot::Slot;
@@ -22,12 +22,12 @@ pub static CONTROLLER: Slot<Controller> = Slot::with(Controller::new(Config::DEF
 /// The node (~8 KiB), in `.bss`, built at run time.
 pub static NODE: Slot<Node> = Slot::new();
 
-/// Builds the controller (default configuration, the embedded model installed) and a node in
+/// Builds the controller (default configuration, the embedded geometric classifier installed, the default of `lives search --planner lives`) and a node in
 /// `mode`, in their statics. Call once.
 pub fn init_core(mode: TimeMode) -> (&'static mut Controller, &'static mut Node) {
     let ctl = CONTROLLER.take();
     let node = NODE.init(|s| s.write(Node::new(NodeConfig::new(mode))));
-    if let Err(e) = ctl.set_model(EMBEDDED_MODEL) {
+    if let Err(e) = ctl.set_model(EMBEDDED_GEO_MODEL) {
         // Without a model the core still runs on labelled scans; say so rather than stop.
         hprintln!("warning: the embedded classifier model does not validate: {:?}", e);
     }
