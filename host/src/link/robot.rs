@@ -618,7 +618,9 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
         blacklisted: status.map_or(0, |s| s.blacklisted),
         blocked: blocked_ticks,
         collisions: 0,
-        labels: if spec.planner == PlannerChoice::Lives { "node-classifier-or-none" } else { "none" }.to_string(),
+        // The robot sends no labels: the node's classifier labelled the scans if its status ever
+        // reported classify work (a node started with `--no-model` reports none).
+        labels: if status.is_some_and(|s| s.cost.classify > 0) { "int8-classifier" } else { "none" }.to_string(),
         targets: Vec::new(),
         motion: None,
         lidar_saw_target_s: None,
