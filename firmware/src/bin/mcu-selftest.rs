@@ -134,7 +134,7 @@ static GEO_CLASSIFIER: common::slot::Slot<firmware::classifier::Classifier<'stat
 fn geo_check() {
     use common::{clock, fault};
     use cortex_m_semihosting::hprintln;
-    use firmware::classifier::geo::{synthetic_digest_timed, GeoView};
+    use firmware::classifier::geo::{geo_dot_selfcheck, synthetic_digest_timed, GeoView};
     let cls = GEO_CLASSIFIER.take();
     match GeoView::parse(firmware::classifier::EMBEDDED_GEO_MODEL) {
         Ok(m) => cls.set_geo_model(m),
@@ -146,7 +146,15 @@ fn geo_check() {
     // Only the classifier's calls are counted, not the synthesis of the scans or the digest.
     let (digest, nonmap, counts) = synthetic_digest_timed(cls, SCANS, clock::now_counts);
     let per_scan = counts * clock::INSTRUCTIONS_PER_COUNT / SCANS as u64;
-    hprintln!("GEO digest={:08x} nonmap={} instructions_per_scan={}", digest, nonmap, per_scan);
+    let (dots, dot_mismatches) = geo_dot_selfcheck(2000);
+    hprintln!(
+        "GEO digest={:08x} nonmap={} instructions_per_scan={} dots={} dot_mismatches={}",
+        digest,
+        nonmap,
+        per_scan,
+        dots,
+        dot_mismatches
+    );
 }
 
 #[cfg(not(target_os = "none"))]
