@@ -34,6 +34,19 @@ use crate::capacity::GRID_CELLS;
 use crate::frontier::FrontierSource;
 use crate::grid::{Cell, LidarGrid, Line, VisualGrid};
 
+/// Advances a xorshift32 generator (Marsaglia 2003) and returns its new state: the core's one
+/// deterministic source of pseudo-random numbers (the sampler here; the target's self-tests).
+/// A state of 0 stays 0.
+#[inline]
+pub fn xorshift32(state: &mut u32) -> u32 {
+    let mut x = *state;
+    x ^= x << 13;
+    x ^= x >> 17;
+    x ^= x << 5;
+    *state = x;
+    x
+}
+
 /// Capacity of the global tree.
 pub const RRT_GLOBAL_NODES: usize = 2048;
 /// Capacity of the local tree.
@@ -150,13 +163,7 @@ impl RrtExplorer {
     }
 
     fn next(&mut self) -> u32 {
-        // xorshift32 (Marsaglia 2003).
-        let mut x = self.rng;
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        self.rng = x;
-        x
+        xorshift32(&mut self.rng)
     }
 
     fn sample(&mut self) -> (i32, i32) {

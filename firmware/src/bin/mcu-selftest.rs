@@ -58,12 +58,7 @@ fn dot_check() {
     use cortex_m_semihosting::hprintln;
     use firmware::classifier::{dot, dot_reference, DotInput};
     let mut seed = 0x2545_F491u32;
-    let mut next = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 17;
-        seed ^= seed << 5;
-        seed
-    };
+    let mut next = move || firmware::rrt::xorshift32(&mut seed);
     let mut w = [0u8; 1001];
     let mut x = [0i8; 1001];
     let mut cases = 0u32;

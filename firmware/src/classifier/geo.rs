@@ -581,12 +581,7 @@ impl<'a> GeoInput<'a> {
 #[doc(hidden)]
 pub fn geo_dot_selfcheck(rounds: u32) -> (u32, u32) {
     let mut seed = 0x9E37_79B9u32;
-    let mut next = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 17;
-        seed ^= seed << 5;
-        seed
-    };
+    let mut next = move || crate::rrt::xorshift32(&mut seed);
     let (mut cases, mut bad) = (0, 0);
     for round in 0..rounds + 3 {
         let mut w = [0u8; GEO_FEATURES];
