@@ -546,9 +546,9 @@ pub fn episode_seed(world_seed: u64, episode: u32) -> u64 {
     mix(mix(world_seed) ^ (episode as u64).wrapping_mul(0xD6E8_FEB8_6659_FD93))
 }
 
-/// The simulator settings used for the dataset (the same as `lives search`).
+/// The simulator settings used for the dataset: `lives search`'s robot.
 pub fn sim_config() -> SimConfig {
-    SimConfig { robot_radius_m: 0.25, ..SimConfig::default() }
+    crate::search::default_sim()
 }
 
 /// A world with its reachable free cells (for starts and random waypoints).

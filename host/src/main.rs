@@ -695,12 +695,9 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             configure_spec(&mut spec, &set, &sim)?;
             let pb = progress_bar(spec.world.time_limit_s as u64);
             let t0 = Instant::now();
-            if let Some(path) = &model {
-                spec.model = Some(host::model::read_blob(path)?);
-            } else if planner == PlannerChoice::Lives {
-                // The committed geometric classifier (docs/model-card-geo.md).
-                spec.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
-            }
+            // The committed geometric classifier (docs/model-card-geo.md) unless `--model`; only
+            // `lives` runs it.
+            spec.model = host::model::model_option(model.as_deref(), false)?;
             let mut recorder =
                 record.as_ref().map(|p| host::record::Recorder::create(p, Default::default())).transpose().map_err(|e| e.to_string())?;
             let (run, recorded) = host::record::record_search(&spec, recorder.as_mut(), |t| pb.set_position(t as u64)).map_err(|e| {
@@ -862,11 +859,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         }
         Cmd::Node { port, baud, lockstep, seconds, model, no_model } => {
             use host::link::{run_node, NodeOptions, SerialLink, TimeMode};
-            let blob = match (&model, no_model) {
-                (_, true) => None,
-                (Some(path), false) => Some(host::model::read_blob(path)?),
-                (None, false) => Some(firmware::classifier::EMBEDDED_GEO_MODEL),
-            };
+            let blob = host::model::model_option(model.as_deref(), no_model)?;
             let classifier = match (&model, blob) {
                 (Some(p), _) => p.display().to_string(),
                 (None, Some(_)) => "geometric (embedded)".to_string(),

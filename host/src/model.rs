@@ -419,6 +419,17 @@ pub fn read_blob(path: &std::path::Path) -> Result<&'static [u8], String> {
     Ok(Box::leak(bytes.into_boxed_slice()))
 }
 
+/// The classifier a command runs for `--model FILE` and its "none" flag (`--no-model`,
+/// `--no-classifier`): `None` for none, the file's blob ([`read_blob`]) if given, else the
+/// committed geometric classifier, the default everywhere the controller labels scans itself.
+pub fn model_option(path: Option<&std::path::Path>, none: bool) -> Result<Option<&'static [u8]>, String> {
+    match (path, none) {
+        (_, true) => Ok(None),
+        (Some(path), false) => read_blob(path).map(Some),
+        (None, false) => Ok(Some(firmware::classifier::EMBEDDED_GEO_MODEL)),
+    }
+}
+
 /// `Ok` if `blob` is a classifier the firmware accepts, geometric or `LabelPoseNet`.
 pub fn validate_blob(blob: &[u8]) -> Result<(), firmware::classifier::ModelError> {
     use firmware::classifier::{geo::GeoView, ModelView};

@@ -880,11 +880,7 @@ pub struct ReplayArgs {
 /// replayed and is reported), `Err` (status 2) when nothing could be replayed.
 pub fn run_command(args: &ReplayArgs) -> Result<std::process::ExitCode, String> {
     use std::io::Write as _;
-    let model = match (&args.model, args.no_classifier) {
-        (_, true) => None,
-        (Some(path), false) => Some(crate::model::read_blob(path)?),
-        (None, false) => Some(firmware::classifier::EMBEDDED_GEO_MODEL),
-    };
+    let model = crate::model::model_option(args.model.as_deref(), args.no_classifier)?;
     let mut opts = ReplayOptions { model, record: args.record.clone(), ..ReplayOptions::default() };
     for a in &args.set {
         crate::overrides::apply(&mut opts.config, a)?;
