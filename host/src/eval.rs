@@ -30,7 +30,13 @@ pub fn run_batch(specs: &[SearchSpec], threads: usize, done: impl Fn(usize) + Sy
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 let Some(spec) = specs.get(i) else { break };
                 let r = search::try_run(spec, |_| {}).map(|run| run.result).map_err(|e| {
-                    format!("{} {} {} seed {}: the model does not validate: {e:?}", spec.world_name, spec.scenario, spec.planner, spec.seed)
+                    format!(
+                        "{} {} {} seed {}: the model does not validate: {e}",
+                        spec.world_name,
+                        spec.scenario_label(),
+                        spec.planner,
+                        spec.seed
+                    )
                 });
                 if let Ok(mut v) = slots.lock() {
                     v[i] = Some(r);

@@ -22,9 +22,10 @@ struct RunArgs {
     /// A built-in world (apartment, office, hallway), `random` (with --seed), or a world file (.toml).
     #[arg(long, default_value = "apartment")]
     world: String,
-    /// easy or hard (built-in worlds).
-    #[arg(long, default_value = "easy")]
-    scenario: Scenario,
+    /// easy or hard (built-in and random worlds; default easy). A world file holds its own
+    /// scenario, so it takes none.
+    #[arg(long)]
+    scenario: Option<Scenario>,
     /// lives, lives-gt, multisensor, nearest, explore-lite or rrt.
     #[arg(long, default_value = "lives")]
     planner: PlannerChoice,
@@ -502,10 +503,30 @@ fn load_world(name: &str, scenario: Scenario, seed: u64) -> Result<(String, Worl
     let path = std::path::Path::new(name);
     if path.extension().is_some_and(|e| e == "toml") || path.exists() {
         let w = World::load(path).map_err(|e| e.to_string())?;
-        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| name.to_string());
-        return Ok((stem, w));
+        // Reports name the world as the file does (`name = ...`), else by the file's name.
+        let label = match w.name.trim() {
+            "" => path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| name.to_string()),
+            n => n.to_string(),
+        };
+        return Ok((label, w));
     }
     Err(format!("unknown world `{name}`: expected one of {}, `random`, or a .toml world file", World::builtin_names().join(", ")))
+}
+
+/// The search `--world`, `--scenario`, `--planner` and `--seed` describe. A world file holds one
+/// scenario of its own: `--scenario` with one is refused rather than ignored, and reports say
+/// `file` where a built-in world says `easy` or `hard`.
+fn load_spec(run: &RunArgs) -> Result<SearchSpec, String> {
+    let builtin_or_random = run.world == "random" || World::builtin_names().contains(&run.world.as_str());
+    if !builtin_or_random && run.scenario.is_some() && std::path::Path::new(&run.world).exists() {
+        return Err(format!("--scenario applies to the built-in and random worlds; the world file {} holds its own scenario", run.world));
+    }
+    let (name, w) = load_world(&run.world, run.scenario.unwrap_or(Scenario::Easy), run.seed)?;
+    let mut spec = SearchSpec::new(&name, w, run.scenario.unwrap_or(Scenario::Easy), run.planner, run.seed);
+    if !builtin_or_random {
+        spec.scenario = None;
+    }
+    Ok(spec)
 }
 
 /// The human-readable summary of a search: `FOUND apartment easy lives seed 1: found in …`.
@@ -652,7 +673,7 @@ fn eval_cmd(
         let dir = out.join("trajectories");
         std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         for spec in specs.iter().filter(|s| s.seed == 1) {
-            let run = search::try_run(spec, |_| {}).map_err(|e| format!("{e:?}"))?;
+            let run = search::try_run(spec, |_| {}).map_err(|e| format!("{e}"))?;
             let r = &run.result;
             let title = format!(
                 "{} {} · {} · seed 1 · {}",
@@ -687,9 +708,8 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<ExitCode, String> {
     match cli.command {
-        Cmd::Search { run: RunArgs { world, scenario, planner, seed }, png, json, trace, trace_candidates, model, set, sim, record } => {
-            let (name, w) = load_world(&world, scenario, seed)?;
-            let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
+        Cmd::Search { run, png, json, trace, trace_candidates, model, set, sim, record } => {
+            let mut spec = load_spec(&run)?;
             spec.trace = trace || trace_candidates.is_some();
             spec.trace_candidates = trace_candidates.unwrap_or(0);
             configure_spec(&mut spec, &set, &sim)?;
@@ -697,11 +717,14 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             let t0 = Instant::now();
             // The committed geometric classifier (docs/model-card-geo.md) unless `--model`; only
             // `lives` runs it.
+            if model.is_some() && spec.planner != PlannerChoice::Lives {
+                return Err(format!("--model is the classifier `lives` runs; `{}` runs none", spec.planner));
+            }
             spec.model = host::model::model_option(model.as_deref(), false)?;
             let mut recorder =
                 record.as_ref().map(|p| host::record::Recorder::create(p, Default::default())).transpose().map_err(|e| e.to_string())?;
             let (run, recorded) = host::record::record_search(&spec, recorder.as_mut(), |t| pb.set_position(t as u64)).map_err(|e| {
-                format!("{}: the model does not validate: {e:?}", model.as_ref().map(|p| p.display().to_string()).unwrap_or_default())
+                format!("{}: the model does not validate: {e}", model.as_ref().map(|p| p.display().to_string()).unwrap_or_default())
             })?;
             let wall = t0.elapsed().as_secs_f64();
             pb.finish_and_clear();
@@ -882,7 +905,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 }
                 run_node(&mut link, firmware::Config::DEFAULT, NodeOptions { model: blob, ..NodeOptions::new(mode) }, &stop)
             })
-            .map_err(|e| format!("the classifier model: {e:?}"))?;
+            .map_err(|e| format!("the classifier model: {e}"))?;
             let c = &report.counters;
             say!(
                 "{}",
@@ -909,36 +932,32 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             );
             Ok(ExitCode::SUCCESS)
         }
-        Cmd::Bridge {
-            port,
-            baud,
-            source,
-            run: RunArgs { world, scenario, planner, seed },
-            set,
-            sim,
-            lockstep,
-            scan_segment_beams,
-            json,
-            record,
-            base_listen,
-            lidar,
-            origin,
-        } => {
+        Cmd::Bridge { port, baud, source, run, set, sim, lockstep, scan_segment_beams, json, record, base_listen, lidar, origin } => {
             use host::link::{run_bridge, BridgeOptions, SerialLink, Source, TimeMode};
             if source == "robot" && !sim.is_empty() {
                 return Err("--sim changes the simulated robot; it has no meaning with `--source robot`".into());
             }
             if source == "robot" {
-                let opts = host::link::robot::CliOptions { port, baud, planner, set, lockstep, json, record, base_listen, lidar, origin };
+                let opts = host::link::robot::CliOptions {
+                    port,
+                    baud,
+                    planner: run.planner,
+                    set,
+                    lockstep,
+                    json,
+                    record,
+                    base_listen,
+                    lidar,
+                    origin,
+                };
                 return host::link::robot::run_cli(opts);
             }
             if source != "sim" {
                 return Err(format!("unknown source `{source}` (`sim` or `robot`)"));
             }
-            let (name, w) = load_world(&world, scenario, seed)?;
-            let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
+            let mut spec = load_spec(&run)?;
             configure_spec(&mut spec, &set, &sim)?;
-            if planner == PlannerChoice::Lives {
+            if spec.planner == PlannerChoice::Lives {
                 // As `lives search`: the scans go without labels and the node's classifier (the
                 // committed geometric one unless `lives node --model` says otherwise) labels
                 // them; the bridge stops with a clear error if the node has none.
@@ -1178,9 +1197,8 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             );
             Ok(ExitCode::SUCCESS)
         }
-        Cmd::Trace(TraceCmd::Record { run: RunArgs { world, scenario, planner, seed }, out, ticks, labels }) => {
-            let (name, w) = load_world(&world, scenario, seed)?;
-            let mut spec = SearchSpec::new(&name, w, scenario, planner, seed);
+        Cmd::Trace(TraceCmd::Record { run, out, ticks, labels }) => {
+            let mut spec = load_spec(&run)?;
             if !labels {
                 spec.model = Some(firmware::classifier::EMBEDDED_MODEL);
             }

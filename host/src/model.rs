@@ -409,13 +409,25 @@ pub fn quantise_with(model: &FloatModel, calibration: &[FloatInputs], opts: &Qua
     (blob, QuantisationReport { max_abs_pre: max_abs, pre_scale })
 }
 
+/// The largest classifier blob `--model` reads: 4 MiB, more than twice `LabelPoseNet`'s
+/// (1 716 408 bytes; the geometric model is 2 076).
+pub const MAX_BLOB_BYTES: u64 = 4 << 20;
+
 /// Reads a classifier blob of either format (docs/model-format.md) for a `--model FILE` option
 /// and checks it as the firmware will (`firmware::Controller::set_model`), so a bad file is a
 /// clear error before anything runs. The bytes live for the rest of the process, as the models
 /// embedded in the firmware do.
 pub fn read_blob(path: &std::path::Path) -> Result<&'static [u8], String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    validate_blob(&bytes).map_err(|e| format!("{}: the model does not validate: {e:?}", path.display()))?;
+    // Read at most one byte more than the largest blob, so `/dev/zero` or a huge file is refused
+    // without being read whole.
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| std::io::Read::read_to_end(&mut std::io::Read::take(f, MAX_BLOB_BYTES + 1), &mut bytes))
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    if bytes.len() as u64 > MAX_BLOB_BYTES {
+        return Err(format!("{}: larger than any classifier blob ({MAX_BLOB_BYTES} bytes at most)", path.display()));
+    }
+    validate_blob(&bytes).map_err(|e| format!("{}: the model does not validate: {e}", path.display()))?;
     Ok(Box::leak(bytes.into_boxed_slice()))
 }
 

@@ -99,8 +99,8 @@ pub struct SearchSpec {
     pub world_name: String,
     /// The world.
     pub world: World,
-    /// Scenario for reports.
-    pub scenario: Scenario,
+    /// Scenario for reports: `None` for a world file, which holds one scenario of its own.
+    pub scenario: Option<Scenario>,
     /// Planner.
     pub planner: PlannerChoice,
     /// Seed of the simulator (start jitter, target placement, people, noise).
@@ -126,7 +126,7 @@ impl SearchSpec {
         SearchSpec {
             world_name: world_name.to_string(),
             world,
-            scenario,
+            scenario: Some(scenario),
             planner,
             seed,
             sim,
@@ -135,6 +135,11 @@ impl SearchSpec {
             trace_candidates: 0,
             model: None,
         }
+    }
+
+    /// `easy` or `hard`; `file` for a world file (its own scenario).
+    pub fn scenario_label(&self) -> &'static str {
+        self.scenario.map_or("file", Scenario::as_str)
     }
 }
 
@@ -693,7 +698,7 @@ fn run_with(
     let found = outcome == "found";
     let result = SearchResult {
         world: spec.world_name.clone(),
-        scenario: spec.scenario.to_string(),
+        scenario: spec.scenario_label().to_string(),
         planner: spec.planner.to_string(),
         seed: spec.seed,
         found,

@@ -271,6 +271,52 @@ pub enum ModelError {
     },
 }
 
+impl core::fmt::Display for ModelError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            ModelError::BadMagic => f.write_str("not a classifier blob (its first four bytes are not the model magic)"),
+            ModelError::Truncated { needed, got } => write!(f, "truncated: {got} bytes where the header needs {needed}"),
+            ModelError::UnsupportedVersion(v) => write!(f, "format version {v}, which this firmware does not read"),
+            ModelError::BadHeaderLength(n) => write!(f, "header length {n}, expected {HEADER_LEN}"),
+            ModelError::ShapeMismatch { field, expected, found } => {
+                write!(f, "{} is {found}, the firmware is built for {expected}", field.name())
+            }
+            ModelError::ReservedNotZero => f.write_str("reserved header bytes are not zero"),
+            ModelError::PayloadLength { expected, found } => {
+                write!(f, "the header states a payload of {found} bytes, the shapes imply {expected}")
+            }
+            ModelError::TrailingBytes { extra } => write!(f, "{extra} bytes after the payload"),
+            ModelError::ChecksumMismatch { stored, computed } => {
+                write!(f, "CRC-32 mismatch (stored {stored:#010x}, computed {computed:#010x}): the file is corrupt")
+            }
+            ModelError::BadNormalisation => f.write_str("a normalisation constant is zero or out of range"),
+            ModelError::BadMultiplier { layer, channel } => {
+                write!(f, "requantisation multiplier of layer {layer:?}, channel {channel} is not normalised")
+            }
+            ModelError::BadGeoMultiplier { channel } => {
+                write!(f, "requantisation multiplier of geometric hidden unit {channel} is not normalised")
+            }
+        }
+    }
+}
+
+impl ShapeField {
+    /// The field's name in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            ShapeField::History => "the history length",
+            ShapeField::Beams => "the beam count",
+            ShapeField::EncKernelTime => "the encoder kernel's height",
+            ShapeField::EncKernelBeams => "the encoder kernel's width",
+            ShapeField::PoseChannels => "the pose encoder's channel count",
+            ShapeField::PoseFeatures => "the pose feature count",
+            ShapeField::TanhTables => "the tanh table count",
+            ShapeField::GeoFeatures => "the geometric model's feature count",
+            ShapeField::GeoHidden => "the geometric model's hidden width",
+        }
+    }
+}
+
 /// How a range in millimetres becomes the network's scan input (header byte 17).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum RangeEncoding {

@@ -21,6 +21,14 @@ use super::{HitKind, Scenario, Shape, P2};
 /// occupancy grid is 51.2 m square, anchored at the origin).
 pub const WORLD_LIMIT_M: f64 = 51.0;
 
+/// The longest time limit a world may set: an hour (the paper's longest is 300 s). A search
+/// runs until it, so this bounds every run of a world file.
+pub const MAX_TIME_LIMIT_S: f64 = 3600.0;
+
+/// The largest world file [`World::load`] reads: 1 MiB, about 20 000 walls (a built-in world is
+/// about 10 kB). Parsing holds the whole document in memory at several times its size.
+pub const MAX_WORLD_FILE_BYTES: u64 = 1 << 20;
+
 /// The start must be this far from everything, plus `jitter_m · √2` (the default robot radius).
 pub const START_CLEARANCE_M: f64 = 0.3;
 
@@ -156,6 +164,28 @@ impl std::error::Error for WorldError {}
 // ---------------------------------------------------------------------------------------------
 // The file format as serde sees it.
 
+/// A point or a size, `[x, y]`: exactly two numbers (serde's `[f64; 2]` would ignore extra
+/// elements of a TOML array).
+#[derive(Clone, Copy)]
+struct Xy([f64; 2]);
+
+impl<'de> Deserialize<'de> for Xy {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Vec::<f64>::deserialize(d)?;
+        match v[..] {
+            [x, y] => Ok(Xy([x, y])),
+            _ => Err(serde::de::Error::custom(format!("expected two numbers [x, y], found {}", v.len()))),
+        }
+    }
+}
+
+impl std::ops::Deref for Xy {
+    type Target = [f64; 2];
+    fn deref(&self) -> &[f64; 2] {
+        &self.0
+    }
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawWorld {
@@ -175,7 +205,7 @@ struct RawWorld {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawStart {
-    position: [f64; 2],
+    position: Xy,
     yaw_rad: Option<f64>,
     yaw_deg: Option<f64>,
     jitter_m: Option<f64>,
@@ -186,7 +216,7 @@ struct RawStart {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawWall {
-    points: Vec<[f64; 2]>,
+    points: Vec<Xy>,
     #[serde(default)]
     closed: bool,
 }
@@ -201,8 +231,8 @@ enum RawKind {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawRect {
-    center: [f64; 2],
-    size: [f64; 2],
+    center: Xy,
+    size: Xy,
     yaw_rad: Option<f64>,
     yaw_deg: Option<f64>,
 }
@@ -210,7 +240,7 @@ struct RawRect {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawCircle {
-    center: [f64; 2],
+    center: Xy,
     radius: f64,
 }
 
@@ -221,7 +251,7 @@ struct RawObstacle {
     label: Option<String>,
     rect: Option<Spanned<RawRect>>,
     circle: Option<Spanned<RawCircle>>,
-    polygon: Option<Spanned<Vec<[f64; 2]>>>,
+    polygon: Option<Spanned<Vec<Xy>>>,
 }
 
 #[derive(Deserialize)]
@@ -230,14 +260,14 @@ struct RawTarget {
     name: Option<String>,
     rect: Option<Spanned<RawRect>>,
     circle: Option<Spanned<RawCircle>>,
-    polygon: Option<Spanned<Vec<[f64; 2]>>>,
-    candidates: Option<Spanned<Vec<[f64; 2]>>>,
+    polygon: Option<Spanned<Vec<Xy>>>,
+    candidates: Option<Spanned<Vec<Xy>>>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawPerson {
-    path: Vec<[f64; 2]>,
+    path: Vec<Xy>,
     speed_mps: f64,
     radius_m: Option<f64>,
 }
@@ -313,7 +343,7 @@ impl Ctx<'_> {
         owner_span: &Range<usize>,
         rect: Option<Spanned<RawRect>>,
         circle: Option<Spanned<RawCircle>>,
-        polygon: Option<Spanned<Vec<[f64; 2]>>>,
+        polygon: Option<Spanned<Vec<Xy>>>,
     ) -> Result<Shape, WorldError> {
         let count = rect.is_some() as u8 + circle.is_some() as u8 + polygon.is_some() as u8;
         if count != 1 {
@@ -322,17 +352,17 @@ impl Ctx<'_> {
         if let Some(r) = rect {
             let span = r.span();
             let r = r.into_inner();
-            let center = self.finite_point(&span, "rectangle center", r.center)?;
+            let center = self.finite_point(&span, "rectangle center", *r.center)?;
             if !(r.size[0] > 0.0 && r.size[1] > 0.0 && r.size[0].is_finite() && r.size[1].is_finite()) {
-                return Err(self.invalid(&span, format!("rectangle size must be positive, got {:?}", r.size)));
+                return Err(self.invalid(&span, format!("rectangle size must be positive, got {:?}", *r.size)));
             }
             let yaw = self.angle(&span, "yaw", r.yaw_rad, r.yaw_deg)?;
-            return Ok(Shape::Rect { center, size: r.size, yaw });
+            return Ok(Shape::Rect { center, size: *r.size, yaw });
         }
         if let Some(c) = circle {
             let span = c.span();
             let c = c.into_inner();
-            let center = self.finite_point(&span, "circle center", c.center)?;
+            let center = self.finite_point(&span, "circle center", *c.center)?;
             if !(c.radius > 0.0 && c.radius.is_finite()) {
                 return Err(self.invalid(&span, format!("circle radius must be positive, got {:?}", c.radius)));
             }
@@ -340,7 +370,7 @@ impl Ctx<'_> {
         }
         let p = polygon.expect("exactly one shape");
         let span = p.span();
-        let points = p.into_inner();
+        let points: Vec<P2> = p.into_inner().into_iter().map(|q| q.0).collect();
         if points.len() < 3 {
             return Err(self.invalid(&span, format!("a polygon needs at least 3 points, got {}", points.len())));
         }
@@ -386,13 +416,16 @@ impl World {
 
         let tl_span = raw.time_limit_s.span();
         let time_limit_s = *raw.time_limit_s.get_ref();
-        if !(time_limit_s > 0.0 && time_limit_s.is_finite()) {
-            return Err(ctx.invalid(&tl_span, format!("time limit must be a positive number of seconds, got {time_limit_s:?}")));
+        if !(time_limit_s > 0.0 && time_limit_s <= MAX_TIME_LIMIT_S) {
+            return Err(ctx.invalid(
+                &tl_span,
+                format!("time limit must be a positive number of seconds up to {MAX_TIME_LIMIT_S}, got {time_limit_s:?}"),
+            ));
         }
 
         let start_span = raw.start.span();
         let rs = raw.start.into_inner();
-        let position = ctx.finite_point(&start_span, "start position", rs.position)?;
+        let position = ctx.finite_point(&start_span, "start position", *rs.position)?;
         ctx.in_area(&start_span, "start position", position)?;
         let yaw = ctx.angle(&start_span, "yaw", rs.yaw_rad, rs.yaw_deg)?;
         let jitter_m = rs.jitter_m.unwrap_or(0.0);
@@ -409,20 +442,21 @@ impl World {
         for w in raw.walls {
             let span = w.span();
             let w = w.into_inner();
-            if w.points.len() < 2 {
-                return Err(ctx.invalid(&span, format!("a wall needs at least 2 points, got {}", w.points.len())));
+            let (points, closed): (Vec<P2>, bool) = (w.points.iter().map(|q| q.0).collect(), w.closed);
+            if points.len() < 2 {
+                return Err(ctx.invalid(&span, format!("a wall needs at least 2 points, got {}", points.len())));
             }
-            if w.closed && w.points.len() < 3 {
-                return Err(ctx.invalid(&span, format!("a closed wall needs at least 3 points, got {}", w.points.len())));
+            if closed && points.len() < 3 {
+                return Err(ctx.invalid(&span, format!("a closed wall needs at least 3 points, got {}", points.len())));
             }
-            for p in &w.points {
+            for p in &points {
                 ctx.finite_point(&span, "wall point", *p)?;
                 ctx.in_area(&span, "wall point", *p)?;
             }
-            let n = w.points.len();
-            let count = if w.closed { n } else { n - 1 };
+            let n = points.len();
+            let count = if closed { n } else { n - 1 };
             for i in 0..count {
-                let (a, b) = (w.points[i], w.points[(i + 1) % n]);
+                let (a, b) = (points[i], points[(i + 1) % n]);
                 if dist(a, b) < 1e-9 {
                     return Err(ctx.invalid(&span, format!("wall segment from {a:?} to {b:?} has zero length")));
                 }
@@ -455,7 +489,7 @@ impl World {
             if let Some(c) = t.candidates {
                 let cspan = c.span();
                 for p in c.into_inner() {
-                    candidates.push(ctx.finite_point(&cspan, "target candidate", p)?);
+                    candidates.push(ctx.finite_point(&cspan, "target candidate", p.0)?);
                 }
             }
             let target =
@@ -479,7 +513,7 @@ impl World {
                 return Err(ctx.invalid(&span, "a person's path needs at least 1 point".to_string()));
             }
             for q in &p.path {
-                ctx.finite_point(&span, "person path point", *q)?;
+                ctx.finite_point(&span, "person path point", q.0)?;
             }
             if !(p.speed_mps >= 0.0 && p.speed_mps.is_finite()) {
                 return Err(ctx.invalid(&span, format!("speed_mps must be a non-negative number, got {:?}", p.speed_mps)));
@@ -492,7 +526,7 @@ impl World {
                 ctx.in_area(&span, "person path point", [q[0] - radius_m, q[1] - radius_m])?;
                 ctx.in_area(&span, "person path point", [q[0] + radius_m, q[1] + radius_m])?;
             }
-            people.push(Person { path: p.path, speed_mps: p.speed_mps, radius_m });
+            people.push(Person { path: p.path.iter().map(|q| q.0).collect(), speed_mps: p.speed_mps, radius_m });
             people_spans.push(span);
         }
 
@@ -532,8 +566,19 @@ impl World {
     /// Read and parse a world file.
     pub fn load(path: &Path) -> Result<World, WorldError> {
         let file = path.display().to_string();
-        let text =
-            std::fs::read_to_string(path).map_err(|e| WorldError::Io { file: file.clone(), message: format!("cannot read: {e}") })?;
+        // At most one byte more than the largest world file, so `/dev/zero` or a huge file is
+        // refused without being read whole.
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| std::io::Read::read_to_end(&mut std::io::Read::take(f, MAX_WORLD_FILE_BYTES + 1), &mut bytes))
+            .map_err(|e| WorldError::Io { file: file.clone(), message: format!("cannot read: {e}") })?;
+        if bytes.len() as u64 > MAX_WORLD_FILE_BYTES {
+            return Err(WorldError::Io { file, message: format!("larger than a world file may be ({MAX_WORLD_FILE_BYTES} bytes)") });
+        }
+        let text = String::from_utf8(bytes).map_err(|e| WorldError::Io {
+            file: file.clone(),
+            message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
+        })?;
         World::from_toml_str(&text, &file)
     }
 
@@ -898,6 +943,11 @@ speed_mps = 0.5
         let cases: &[(&str, &str, &str)] = &[
             ("time_limit_s = 60", "time_limit_s = 0", "time limit must be a positive"),
             ("time_limit_s = 60", "time_limit_s = -inf", "time limit must be a positive"),
+            ("time_limit_s = 60", "time_limit_s = 1e308", "up to 3600"),
+            ("position = [1.0, 1.0]", "position = [1.0, 1.0, 7.0]", "expected two numbers [x, y], found 3"),
+            ("center = [2.5, 1.0]", "center = [2.5]", "expected two numbers [x, y], found 1"),
+            ("points = [[0, 0], [6, 0], [6, 4], [0, 4]]", "points = [[0, 0], [6, 0, 1], [6, 4]]", "found 3"),
+            ("path = [[1.0, 2.2], [5.0, 3.5]]", "path = [[1.0, 2.2], [5.0, 3.5, \"junk\"]]", "invalid type"),
             ("points = [[0, 0], [6, 0], [6, 4], [0, 4]]", "points = []", "at least 2 points, got 0"),
             ("points = [[0, 0], [6, 0], [6, 4], [0, 4]]", "points = [[0, 0], [0, 0], [6, 4]]", "zero length"),
             ("points = [[0, 0], [6, 0], [6, 4], [0, 4]]", "points = [[0, 0], [60, 0], [6, 4]]", "outside the world area"),
@@ -934,6 +984,25 @@ speed_mps = 0.5
         let p = TINY.find("[[people]]").unwrap();
         let text = format!("{}{}", &TINY[..t], &TINY[p..]);
         assert!(err(&text).to_string().contains("no [[targets]]"));
+    }
+
+    #[test]
+    fn an_oversized_file_is_refused_unread() {
+        let dir = std::env::temp_dir().join(format!("lives-world-size-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let big = dir.join("big.toml");
+        // A valid file padded with a comment past the limit.
+        let mut text = TINY.to_string();
+        text.push('#');
+        text.push_str(&"x".repeat(MAX_WORLD_FILE_BYTES as usize));
+        std::fs::write(&big, &text).unwrap();
+        let e = World::load(&big).unwrap_err();
+        assert!(e.to_string().contains("larger than a world file may be"), "{e}");
+        std::fs::write(&big, &text[..TINY.len()]).unwrap();
+        assert!(World::load(&big).is_ok());
+        std::fs::write(&big, b"name = \"\xff\"").unwrap();
+        assert!(World::load(&big).unwrap_err().to_string().contains("not UTF-8 text (byte 8)"));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

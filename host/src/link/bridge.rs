@@ -44,6 +44,14 @@ use std::time::{Duration, Instant};
 /// Heartbeat sequence numbers of the bridge start here (the node's own count from 1).
 const SEQ_BASE: u32 = 0x8000_0000;
 
+/// Lockstep: a batch the node echoes at least this many times in a row, for at least
+/// [`NOT_TICKING_FOR`], without ticking it, while it sends statuses of other times, is an error
+/// ([`BridgeError::NotLockstep`]), not a retry for ever.
+pub const NOT_TICKING_ECHOES: u32 = 20;
+
+/// See [`NOT_TICKING_ECHOES`]: long enough for a node in real time to show its own ticks.
+pub const NOT_TICKING_FOR: Duration = Duration::from_secs(2);
+
 /// Where the data comes from.
 #[derive(Clone, Debug)]
 pub enum Source {
@@ -75,6 +83,9 @@ pub struct BridgeOptions {
     pub reconnect_every: Duration,
     /// Give up after this much wall time (outcome `stopped`).
     pub max_wall: Option<Duration>,
+    /// No `HelloAck` this long after the start: no node is answering ([`BridgeError::NoSession`]).
+    /// Only the first session: a link lost later is reopened for as long as it takes.
+    pub first_hello_timeout: Option<Duration>,
     /// Ticks done, for a watcher (tests, progress bars).
     pub progress: Option<Arc<AtomicU32>>,
     /// Send each scan as segments of this many beams (`ScanSegment` frames, at most
@@ -118,6 +129,7 @@ impl BridgeOptions {
             setup_probes: 20,
             reconnect_every: Duration::from_millis(100),
             max_wall: None,
+            first_hello_timeout: Some(Duration::from_secs(15)),
             progress: None,
             scan_segment_beams: 0,
             observer: None,
@@ -194,8 +206,17 @@ pub struct BridgeEvent {
 pub enum BridgeError {
     /// The node speaks another protocol version (or refused ours).
     Incompatible(IncompatiblePeer),
-    /// Stopped (flag or `max_wall`) before a session was opened.
+    /// Stopped (flag, `max_wall` or `first_hello_timeout`) before a session was opened.
     NoSession,
+    /// Lockstep: the node echoed batch `t_us` this many times without ticking it, and sent
+    /// statuses of its own times meanwhile: it ticks on its own clock (`lives node` without
+    /// `--lockstep`).
+    NotLockstep {
+        /// The batch's time.
+        t_us: u64,
+        /// Attempts echoed without a tick.
+        echoed: u32,
+    },
     /// The robot source could not start (e.g. the base adapter's address is taken).
     Source(String),
     /// `lives` sent unlabelled scans, but the node classified none of them: it runs without a
@@ -207,7 +228,15 @@ impl fmt::Display for BridgeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             BridgeError::Incompatible(e) => write!(f, "{e}"),
-            BridgeError::NoSession => f.write_str("no answer from the node (no HelloAck)"),
+            BridgeError::NoSession => f.write_str(
+                "no answer from the node (no HelloAck): is `lives node` (or the MCU image) running on the other end of the port?",
+            ),
+            BridgeError::NotLockstep { t_us, echoed } => write!(
+                f,
+                "the node answered the batch at t = {:.1} s {echoed} times without ticking it, and ticks on its own clock: \
+                 start it with `lives node --lockstep`, or run the bridge without `--lockstep`",
+                *t_us as f64 / 1e6
+            ),
             BridgeError::Source(e) => f.write_str(e),
             BridgeError::NoClassifier => f.write_str(
                 "the node classified none of the scans: it runs without a classifier model (`lives node --no-model`?); \
@@ -489,7 +518,8 @@ impl<'l, B: Base> Bridge<'l, B> {
         got
     }
 
-    /// Until a session is open. `Err` on an incompatible node; `Ok(false)` if told to stop.
+    /// Until a session is open. `Err` on an incompatible node, or no node answering the first
+    /// `Hello`s for [`BridgeOptions::first_hello_timeout`]; `Ok(false)` if told to stop.
     fn await_session(&mut self) -> Result<bool, BridgeError> {
         while !self.open {
             if let Some(e) = self.incompatible {
@@ -497,6 +527,9 @@ impl<'l, B: Base> Bridge<'l, B> {
             }
             if self.should_stop() {
                 return Ok(false);
+            }
+            if !self.was_open && self.opts.first_hello_timeout.is_some_and(|t| self.started.elapsed() >= t) {
+                return Err(BridgeError::NoSession);
             }
             self.poll(Duration::from_millis(20));
         }
@@ -735,6 +768,13 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         let mut attempts = 0u32;
         let mut status_t: Option<StatusMsg> = None;
         let mut answers = 0u32;
+        // Attempts in a row the node echoed without ticking (a damaged batch is echoed without
+        // a tick too, but never this many times running: the node ticks a partial scan after
+        // a few beats).
+        let mut echoed_idle = 0u32;
+        let mut idle_since = Instant::now();
+        // Statuses of other times meanwhile (a late answer to the last batch is one or two).
+        let mut other_statuses = 0u32;
         let status = loop {
             if !b.await_session().unwrap_or(false) || b.should_stop() {
                 if let Some(e) = b.incompatible {
@@ -758,6 +798,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
                 for m in b.poll(Duration::from_millis(20)) {
                     match m {
                         CoreToHost::Status(s) if s.t_us == now_us => status_t = Some(s),
+                        CoreToHost::Status(_) => other_statuses += 1,
                         // The echo of any attempt at this batch closes its answer.
                         CoreToHost::Heartbeat(h) if h.t_us == now_us && h.seq & SEQ_BASE != 0 => echoed = h.seq <= seq,
                         _ => {}
@@ -765,6 +806,15 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
                 }
                 // The tick's status and the goal it counts are here: done, echo or not.
                 done = status_t.is_some_and(|s| b.goal_consistent(&s));
+            }
+            echoed_idle = if echoed && status_t.is_none() { echoed_idle + 1 } else { 0 };
+            if echoed_idle <= 1 {
+                idle_since = sent;
+            }
+            // (Echoes without ticks and no other statuses: a line too damaged for a whole batch to
+            // arrive, which retries heal, or a node that ran before, which says so itself.)
+            if other_statuses >= 5 && echoed_idle >= NOT_TICKING_ECHOES && idle_since.elapsed() >= NOT_TICKING_FOR {
+                return Err(BridgeError::NotLockstep { t_us: now_us, echoed: echoed_idle });
             }
             if let Some(s) = status_t {
                 answers += 1;
@@ -819,7 +869,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
     b.finish_stats();
     let result = SearchResult {
         world: spec.world_name.clone(),
-        scenario: spec.scenario.to_string(),
+        scenario: spec.scenario_label().to_string(),
         planner: spec.planner.to_string(),
         seed: spec.seed,
         found,
