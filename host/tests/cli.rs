@@ -97,6 +97,11 @@ fn worlds_lists_every_built_in_world_and_exports_a_loadable_file() {
     assert!(out.status.code() == Some(0) || out.status.code() == Some(1), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["world"], "office-hard");
+    assert_eq!(v["scenario"], "file", "a world file holds its own scenario");
+    // ... so `--scenario` with one is refused, not ignored.
+    let out = lives().args(["search", "--scenario", "easy", "--world"]).arg(&path).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("holds its own scenario"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -246,8 +251,17 @@ fn node_and_replay_refuse_a_bad_model_before_starting() {
         let out = lives().args(&args).output().unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
-        assert!(err.contains("the model does not validate: BadMagic"), "{args:?}: {err}");
+        assert!(err.contains("the model does not validate: not a classifier blob"), "{args:?}: {err}");
     }
+    // `/dev/zero` is refused by its size without being read whole; a planner that runs no
+    // classifier refuses `--model` rather than ignoring it.
+    let out = lives().args(["search", "--model", "/dev/zero"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("larger than any classifier blob"));
+    let geo = concat!(env!("CARGO_MANIFEST_DIR"), "/../firmware/model/lives-geo-int8.bin");
+    let out = lives().args(["search", "--planner", "nearest", "--model", geo]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("`nearest` runs none"));
     let out = lives().args(["node", "--port", "/nonexistent/tty", "--model", readme, "--no-model"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2), "--model and --no-model conflict");
 }
