@@ -37,8 +37,11 @@ pub const MAX_PATH_WAYPOINTS: usize = 64;
 pub const MAX_BLACKLIST: usize = 64;
 /// Camera rays cast for the visual-map update.
 pub const MAX_CAMERA_RAYS: usize = 512;
-/// Inflation disk offsets (robot radius up to 1.0 m at 0.10 m cells).
-pub const MAX_INFLATION_OFFSETS: usize = 21 * 21;
+/// The largest robot radius (clearance) the planner inflates obstacles by, in cells: 1.5 m
+/// ([`crate::config::MAX_ROBOT_RADIUS_M`]).
+pub const MAX_ROBOT_RADIUS_CELLS: usize = 15;
+/// Inflation disk offsets (robot radius up to [`MAX_ROBOT_RADIUS_CELLS`]).
+pub const MAX_INFLATION_OFFSETS: usize = (2 * MAX_ROBOT_RADIUS_CELLS + 1) * (2 * MAX_ROBOT_RADIUS_CELLS + 1);
 /// Side of a frontier-count block (cells) used for the "frontier cells near the path" term.
 pub const BLOCK_CELLS: usize = 8;
 /// Blocks per grid side.

@@ -14,7 +14,7 @@
 //! The controller never reads a clock or a random source: time is `now_us`.
 
 use crate::classifier::{Classifier, ClassifierConfig, LabelFeedback, ModelError, ModelView};
-use crate::config::Config;
+use crate::config::{Config, ConfigError};
 use crate::frontier::FrontierSet;
 use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
 use crate::nonmap::NonMapStore;
@@ -201,7 +201,9 @@ pub struct Controller {
 }
 
 impl Controller {
-    /// A controller with `cfg`, idle, all maps unknown.
+    /// A controller with `cfg`, idle, all maps unknown. `cfg` must pass [`Config::validate`]
+    /// (`new` is `const`, so that a `static` can hold a controller, and cannot check it): a
+    /// configuration from outside goes through [`Controller::set_config`], which does.
     pub const fn new(cfg: Config) -> Self {
         let geom = GridGeometry { origin_x: cfg.origin_x_m, origin_y: cfg.origin_y_m };
         Self {
@@ -281,16 +283,20 @@ impl Controller {
         Ok(())
     }
 
-    /// Applies a new configuration from the next tick on. If the grid origin changes, the maps,
-    /// points, blacklist and goal no longer line up with the world: they are forgotten as by
-    /// [`Controller::reset`] (idle). Otherwise everything learnt so far is kept.
-    pub fn set_config(&mut self, cfg: Config) {
+    /// Applies a new configuration from the next tick on, if it passes [`Config::validate`];
+    /// otherwise refuses it with the field out of range, and the configuration in use stays. If
+    /// the grid origin changes, the maps, points, blacklist and goal no longer line up with the
+    /// world: they are forgotten as by [`Controller::reset`] (idle). Otherwise everything learnt
+    /// so far is kept.
+    pub fn set_config(&mut self, cfg: Config) -> Result<(), ConfigError> {
+        cfg.validate()?;
         let moved = cfg.origin_x_m != self.cfg.origin_x_m || cfg.origin_y_m != self.cfg.origin_y_m;
         self.cfg = cfg;
         if moved {
             self.lidar.geom = GridGeometry { origin_x: cfg.origin_x_m, origin_y: cfg.origin_y_m };
             self.reset();
         }
+        Ok(())
     }
 
     /// Forgets everything but the configuration and the model; idle.

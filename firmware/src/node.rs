@@ -44,14 +44,17 @@
 //! `Stop` every tick the base must stop; `Status` every tick; `Labels` after every integrated scan
 //! if the host's `Hello` asked for them; its own `Heartbeat` when it sent none for
 //! [`NodeConfig::heartbeat_interval_us`]. A `Config` is applied when it arrives if the controller
-//! is idle, else refused with `Error { ConfigRefused }`. Messages before a compatible `Hello` are
-//! answered with one `Error` per host heartbeat at most.
+//! is idle, else refused with `Error { ConfigRefused }`; one with a field outside its range
+//! ([`crate::Config::validate`]) is refused with `Error { ConfigInvalid { field } }`, and the
+//! controller keeps its configuration. Messages before a compatible `Hello` are answered with one
+//! `Error` per host heartbeat at most.
 
+use crate::config::ConfigError;
 use crate::controller::{Controller, Mode, Outputs, Status};
 use crate::protocol::frame::CRC;
 use crate::protocol::{
-    encode, output_messages, Accepted, Admission, CoreDecoder, CoreToHost, ErrorCode, ErrorMsg, Heartbeat, HostToCore, Inbox, LabelsMsg,
-    LinkCounters, Session, StatusMsg, MAX_CORE_TO_HOST_FRAME,
+    encode, output_messages, Accepted, Admission, ConfigMsg, CoreDecoder, CoreToHost, ErrorCode, ErrorMsg, Heartbeat, HostToCore, Inbox,
+    LabelsMsg, LinkCounters, Session, StatusMsg, MAX_CORE_TO_HOST_FRAME,
 };
 
 /// Who says what time it is (see the module documentation).
@@ -111,6 +114,8 @@ pub struct NodeCounters {
     pub configs_applied: u32,
     /// Configurations refused (controller not idle).
     pub configs_refused: u32,
+    /// Configurations refused because a field was out of range ([`crate::Config::validate`]).
+    pub configs_invalid: u32,
     /// Lockstep: heartbeats for a new time whose pose or scan was missing, or whose scan was
     /// still missing beams (not ticked).
     pub lockstep_incomplete: u32,
@@ -146,6 +151,7 @@ pub struct Node {
     hb_seq: u32,
     hb_sent_us: Option<u64>,
     refused_since_beat: bool,
+    last_config_error: Option<ConfigError>,
     counters: NodeCounters,
 }
 
@@ -168,6 +174,7 @@ impl Node {
             hb_seq: 0,
             hb_sent_us: None,
             refused_since_beat: false,
+            last_config_error: None,
             counters: NodeCounters {
                 bytes_received: 0,
                 frames_sent: 0,
@@ -179,6 +186,7 @@ impl Node {
                 heartbeats_sent: 0,
                 configs_applied: 0,
                 configs_refused: 0,
+                configs_invalid: 0,
                 lockstep_incomplete: 0,
                 lockstep_partial: 0,
                 lockstep_repeats: 0,
@@ -206,6 +214,12 @@ impl Node {
     /// The node's own counters.
     pub const fn counters(&self) -> NodeCounters {
         self.counters
+    }
+
+    /// Why the last configuration refused as out of range was refused
+    /// ([`NodeCounters::configs_invalid`]).
+    pub const fn last_config_error(&self) -> Option<ConfigError> {
+        self.last_config_error
     }
 
     /// The inbox (superseded scans, dropped commands).
@@ -266,12 +280,17 @@ impl Node {
         };
         match self.inbox.accept(msg) {
             Accepted::Config(c) => {
-                if ctl.mode() == Mode::Idle {
-                    ctl.set_config(c.config());
-                    self.counters.configs_applied = self.counters.configs_applied.wrapping_add(1);
-                } else {
+                if ctl.mode() != Mode::Idle {
                     self.counters.configs_refused = self.counters.configs_refused.wrapping_add(1);
                     self.emit_error(ErrorCode::ConfigRefused, send);
+                } else if let Err(e) = ctl.set_config(c.config()) {
+                    // Out of range: the controller keeps the configuration it has.
+                    self.counters.configs_invalid = self.counters.configs_invalid.wrapping_add(1);
+                    self.last_config_error = Some(e);
+                    let field = ConfigMsg::field_index(e.field).unwrap_or(u8::MAX);
+                    self.emit_error(ErrorCode::ConfigInvalid { field }, send);
+                } else {
+                    self.counters.configs_applied = self.counters.configs_applied.wrapping_add(1);
                 }
             }
             Accepted::Stored => {
@@ -738,6 +757,31 @@ mod tests {
     }
 
     #[test]
+    fn a_configuration_out_of_range_is_refused_naming_the_field_and_the_controller_keeps_its_own() {
+        let mut r = Rig::new(TimeMode::Lockstep);
+        r.hello(false);
+        let mut cfg = Config::DEFAULT;
+        cfg.watchdog_us = 2_000_000;
+        r.rx(&frame(&HostToCore::Config(ConfigMsg::from_config(&cfg))));
+        assert_eq!(*r.ctl.config(), cfg);
+        // What once stopped the node (overflow at planner.rs:270 on the first plan): a 5 km robot.
+        let bad = Config { robot_radius_m: Config::mm(5_000_000), origin_x_m: Config::mm(2_000), ..cfg };
+        let (_, out) = r.rx(&frame(&HostToCore::Config(ConfigMsg::from_config(&bad))));
+        let field = ConfigMsg::field_index("robot_radius_m").unwrap();
+        assert_eq!(out, [CoreToHost::Error(ErrorMsg { code: ErrorCode::ConfigInvalid { field } })]);
+        assert_eq!(ConfigMsg::FIELDS[field as usize], "robot_radius_m");
+        assert_eq!(*r.ctl.config(), cfg, "the configuration in use stays, origin included");
+        assert_eq!(r.node.last_config_error().map(|e| e.field), Some("robot_radius_m"));
+        let c = r.node.counters();
+        assert_eq!((c.configs_applied, c.configs_invalid, c.configs_refused), (1, 1, 0));
+        // And the node searches on with it.
+        let (ticks, out) = r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)]));
+        assert_eq!(ticks, 1);
+        assert_eq!(r.ctl.mode(), Mode::Exploring);
+        assert_eq!(goals(&out).len(), 1);
+    }
+
+    #[test]
     fn set_config_keeps_the_maps_unless_the_origin_moves() {
         let mut ctl = Box::new(Controller::new(Config::DEFAULT));
         let mut node = Node::new(NodeConfig::new(TimeMode::Lockstep));
@@ -751,10 +795,10 @@ mod tests {
         assert!(before > 0);
         let mut cfg = Config::DEFAULT;
         cfg.switch_margin = Config::weight_milli(1_000);
-        ctl.set_config(cfg);
+        ctl.set_config(cfg).unwrap();
         assert_eq!(known(&ctl), before, "same origin: the map stays");
         cfg.origin_y_m = Config::mm(-500);
-        ctl.set_config(cfg);
+        ctl.set_config(cfg).unwrap();
         assert_eq!(known(&ctl), 0, "new origin: the map is forgotten");
         assert_eq!(*ctl.config(), cfg);
     }

@@ -40,7 +40,7 @@ use crate::capacity::{
     BLOCKS, BLOCK_CELLS, DIJKSTRA_HEAP, GRID_AREA, GRID_CELLS, MAX_BLACKLIST, MAX_FRONTIERS_PER_GRID, MAX_INFLATION_OFFSETS,
     MAX_NONMAP_POINTS, MAX_NONMAP_SITES, MAX_PATH_WAYPOINTS, MAX_VIEWPOINTS,
 };
-use crate::config::{Config, PlannerKind, Weight};
+use crate::config::{Config, PlannerKind, Weight, MAX_ROBOT_RADIUS_M};
 use crate::frontier::{FrontierSet, FrontierSource};
 use crate::grid::{BitGrid, Cell, GridGeometry, LidarGrid, Line, PackedGrid, VisualGrid};
 use crate::nonmap::NonMapStore;
@@ -265,10 +265,13 @@ impl Planner {
         let mut offsets: heapless::Vec<(i8, i8), MAX_INFLATION_OFFSETS> = heapless::Vec::new();
         // Cells whose centre lies within `radius` of an occupied cell's centre: the squared
         // distance in cells, exact (0.35 m → ≤ 12.25 cells², not a radius rounded to 4 cells,
-        // which would leave a 1 m doorway only two cells wide).
-        let r_q16 = radius.to_bits().max(0) as i64 * crate::capacity::CELLS_PER_METER;
+        // which would leave a 1 m doorway only two cells wide). A radius beyond the largest a
+        // valid configuration has ([`MAX_ROBOT_RADIUS_M`], the capacity of `offsets`) is taken
+        // as that one.
+        let radius = radius.clamp(Meters::ZERO, MAX_ROBOT_RADIUS_M);
+        let r_q16 = radius.to_bits() as i64 * crate::capacity::CELLS_PER_METER;
         let r2 = ((r_q16 * r_q16) >> 32) as i32;
-        let r = (((r_q16 + 0xFFFF) >> 16) as i32).clamp(0, 10);
+        let r = ((r_q16 + 0xFFFF) >> 16) as i32;
         for dy in -r..=r {
             for dx in -r..=r {
                 if dx * dx + dy * dy <= r2 {

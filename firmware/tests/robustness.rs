@@ -100,3 +100,119 @@ fn random_run(seed: u64, ticks: u32) {
     assert!(modes.len() >= 3, "the run visited several modes: {modes:?}");
     assert!(rejected > 0, "bad scans were refused and counted");
 }
+
+/// A length in `[min, max]` (Q16.16 bits): either end a third of the time each, else anywhere.
+fn length(rng: &mut Rng, min: fixed_point::Meters, max: fixed_point::Meters) -> fixed_point::Meters {
+    let (lo, hi) = (min.to_bits() as i64, max.to_bits() as i64);
+    let bits = match rng.below(3) {
+        0 => lo,
+        1 => hi,
+        _ => lo + rng.below((hi - lo + 1) as u64) as i64,
+    };
+    fixed_point::Meters::from_bits(bits as i32)
+}
+
+/// Any configuration [`Config::validate`] admits, its ends often: every range at random.
+fn random_config(rng: &mut Rng) -> Config {
+    use firmware::config::*;
+    use firmware::PlannerKind;
+    use fixed_point::Meters;
+    let tiny = Meters::from_bits(1);
+    let weight = |rng: &mut Rng| match rng.below(4) {
+        0 => Weight::ZERO,
+        1 => Weight::MAX,
+        _ => Weight::from_bits(rng.below(8 << 16) as i32),
+    };
+    let angle = |rng: &mut Rng| match rng.below(3) {
+        0 => BinaryAngle(1),
+        1 => BinaryAngle(-1),
+        _ => BinaryAngle(rng.next() as i32).add(BinaryAngle(1)),
+    };
+    // Mostly a grid holding the room, sometimes anywhere (the robot then is off the grid).
+    let origin = |rng: &mut Rng| if rng.below(4) == 0 { length(rng, Meters::MIN, MAX_ORIGIN_M) } else { Meters::ZERO };
+    let lidar_max_range_m = length(rng, tiny, MAX_LIDAR_RANGE_M);
+    let mut c = Config {
+        planner: [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest, PlannerKind::ExploreLite, PlannerKind::Rrt]
+            [rng.below(5) as usize],
+        origin_x_m: origin(rng),
+        origin_y_m: origin(rng),
+        lidar_max_range_m,
+        lidar_min_range_m: length(rng, Meters::ZERO, Meters::from_bits(lidar_max_range_m.to_bits() - 1)),
+        camera_fov: angle(rng),
+        camera_range_m: length(rng, tiny, GRID_SIDE_M),
+        robot_radius_m: length(rng, Meters::ZERO, MAX_ROBOT_RADIUS_M),
+        min_frontier_cells: rng.next() as u16 >> rng.below(16),
+        w_dist_per_m: weight(rng),
+        w_unknown_per_cell: weight(rng),
+        unseen_unknown_eighths: rng.below(9) as u8,
+        w_surface_per_ray: weight(rng),
+        w_frontier_per_cell: weight(rng),
+        w_nonmap_per_point: weight(rng),
+        nonmap_block_cap: rng.next() as u8,
+        nonmap_view_cap: rng.next() as u16,
+        look_around_here: rng.below(2) == 0,
+        gaze: rng.below(2) == 0,
+        gaze_min_gain: weight(rng),
+        nonmap_viewpoints: rng.below(2) == 0,
+        nonmap_standoff_m: length(rng, Meters::ZERO, GRID_SIDE_M),
+        frontier_near_path_blocks: rng.below(MAX_NEAR_PATH_BLOCKS as u64 + 1) as u8,
+        nonmap_pool_radius_m: length(rng, MIN_NONMAP_POOL_RADIUS_M, MAX_NONMAP_RADIUS_M),
+        nonmap_wall_clearance_m: length(rng, Meters::ZERO, MAX_NONMAP_RADIUS_M),
+        nonmap_drop_vacated: rng.below(2) == 0,
+        // Plan every tick half the time.
+        replan_interval_us: if rng.below(2) == 0 { 0 } else { rng.next() >> rng.below(64) },
+        switch_margin: weight(rng),
+        goal_tolerance_m: length(rng, tiny, GRID_SIDE_M),
+        goal_heading_tolerance: angle(rng),
+        goal_timeout_us: rng.next() >> rng.below(64),
+        blocked_timeout_us: rng.next() >> rng.below(64),
+        progress_m: length(rng, tiny, GRID_SIDE_M),
+        blacklist_radius_m: length(rng, Meters::ZERO, GRID_SIDE_M),
+        viewpoint_snap_radius_m: length(rng, Meters::ZERO, MAX_VIEWPOINT_SNAP_RADIUS_M),
+        watchdog_us: 1_000_000 + (rng.next() >> rng.below(64)).min(u64::MAX / 2),
+        budgets: Config::DEFAULT.budgets,
+    };
+    c.budgets.plan_ops = rng.next() as u32;
+    c
+}
+
+#[test]
+fn any_configuration_that_validates_runs_without_panicking() {
+    // Every length at its ends included: a 5 m viewpoint snap, a 1.5 m robot, a 2 m wall
+    // clearance, a 51.2 m camera (values above them once overflowed or hung the planner). A few
+    // ticks each in the room, planning on the first (and every tick half the time).
+    let world = room_world();
+    let mut rng = Rng(5);
+    let mut c = controller(Config::DEFAULT);
+    let mut planned = 0;
+    let runs = 48;
+    for run in 0..runs {
+        let cfg = random_config(&mut rng);
+        assert_eq!(cfg.validate(), Ok(()), "run {run}: {cfg:?}");
+        c.set_config(cfg).unwrap();
+        c.reset();
+        let mut plans = 0;
+        for tick in 0..5u64 {
+            let p = (4.0 + 0.3 * tick as f64, 5.0, 0.3 * tick as f64);
+            let (ranges, labels) = scan_of(&world, p, 360);
+            let inputs = Inputs {
+                pose: Some(pose(p.0, p.1, p.2)),
+                scan: Some(scan_input(&ranges, Some(&labels))),
+                command: (tick == 0).then_some(Command::Start),
+                ..Inputs::default()
+            };
+            let out = c.tick(tick * 200_000, &inputs);
+            assert_eq!(out.stop, out.status.mode != Some(Mode::Exploring), "run {run}, tick {tick}");
+            plans = out.status.plans;
+        }
+        planned += (plans > 0) as u32;
+    }
+    assert!(planned >= runs / 2, "only {planned} of {runs} runs planned");
+
+    // One bit outside a range: refused, and the configuration in use stays.
+    let before = *c.config();
+    let snap = firmware::config::MAX_VIEWPOINT_SNAP_RADIUS_M;
+    let outside = Config { viewpoint_snap_radius_m: fixed_point::Meters::from_bits(snap.to_bits() + 1), ..before };
+    assert_eq!(c.set_config(outside).map_err(|e| e.field), Err("viewpoint_snap_radius_m"));
+    assert_eq!(*c.config(), before);
+}

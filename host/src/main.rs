@@ -921,6 +921,8 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                     "bytes_received": c.bytes_received,
                     "goals_sent": c.goals_sent,
                     "configs_applied": c.configs_applied,
+                    "configs_invalid": c.configs_invalid,
+                    "config_error": report.config_error.map(|e| e.to_string()),
                     "lockstep_incomplete": c.lockstep_incomplete,
                     "lockstep_repeats": c.lockstep_repeats,
                     "tick_us": report.tick_us,

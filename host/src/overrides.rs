@@ -1,6 +1,9 @@
 //! `--set name=value`: override controller parameters from the command line, in user units
 //! (metres, degrees, seconds, utility weights as decimals). `--sim name=value`: the simulated
-//! robot and its sensors ([`apply_sim`]).
+//! robot and its sensors ([`apply_sim`]). Both check the controller's configuration afterwards
+//! with the core's own [`Config::validate`], so a value the core cannot work with (a 3 km
+//! viewpoint snap radius, a camera that sees nothing) is refused here, naming its range, instead of
+//! stopping the search.
 
 use crate::sim::SimConfig;
 use firmware::config::Weight;
@@ -62,13 +65,34 @@ fn in_range(name: &str, v: &str, lo: f64, hi: f64, open_lo: bool) -> Result<f64,
     Ok(x)
 }
 
+/// `cfg` after `name=v` was applied to `before`: kept if the core can work with it, else put
+/// back and refused naming the setting and the range the core allows.
+fn validated(cfg: &mut Config, before: Config, name: &str, v: &str) -> Result<(), String> {
+    cfg.validate().map_err(|e| {
+        *cfg = before;
+        if e.field == name {
+            format!("`{name}`: expected a value in {}, got {v}", e.allowed)
+        } else {
+            format!("`{name}={v}`: the controller's {e}")
+        }
+    })
+}
+
 /// Applies one `name=value` to the simulated robot `sim`. The LiDAR's range, the camera's range
 /// and field of view and the body's size describe the robot the controller drives, so they also
 /// set the controller's model of them in `cfg` (its clearance keeps the default 0.10 m margin
-/// around the body); a later `--set` may still change the model alone.
+/// around the body); a later `--set` may still change the model alone. A setting that leaves
+/// the controller's configuration out of its ranges ([`Config::validate`]) is refused and
+/// changes nothing.
 pub fn apply_sim(sim: &mut SimConfig, cfg: &mut Config, assignment: &str) -> Result<(), String> {
     let (name, v) = assignment.split_once('=').ok_or_else(|| format!("`--sim {assignment}`: expected name=value"))?;
     let (name, v) = (name.trim(), v.trim());
+    let (sim_before, cfg_before) = (sim.clone(), *cfg);
+    set_sim(sim, cfg, name, v)?;
+    validated(cfg, cfg_before, name, v).inspect_err(|_| *sim = sim_before)
+}
+
+fn set_sim(sim: &mut SimConfig, cfg: &mut Config, name: &str, v: &str) -> Result<(), String> {
     match name {
         "speed_mps" => sim.speed_mps = in_range(name, v, 0.0, 5.0, true)?,
         "turn_rate_rps" => sim.turn_rate_rps = in_range(name, v, 0.0, 10.0, true)?,
@@ -136,10 +160,17 @@ fn micros(name: &str, v: &str) -> Result<u64, String> {
     Ok((x * 1e6).round() as u64)
 }
 
-/// Applies one `name=value` to `cfg`.
+/// Applies one `name=value` to `cfg`. A value the core cannot work with ([`Config::validate`]) is
+/// refused with its range, and `cfg` stays as it was.
 pub fn apply(cfg: &mut Config, assignment: &str) -> Result<(), String> {
     let (name, v) = assignment.split_once('=').ok_or_else(|| format!("`--set {assignment}`: expected name=value"))?;
     let (name, v) = (name.trim(), v.trim());
+    let before = *cfg;
+    set(cfg, name, v)?;
+    validated(cfg, before, name, v)
+}
+
+fn set(cfg: &mut Config, name: &str, v: &str) -> Result<(), String> {
     match name {
         "w_dist_per_m" => cfg.w_dist_per_m = weight(name, v)?,
         "w_unknown_per_cell" => cfg.w_unknown_per_cell = weight(name, v)?,
@@ -207,6 +238,51 @@ mod tests {
             };
             apply(&mut c, &format!("{name}={value}")).unwrap_or_else(|e| panic!("{name}: {e}"));
         }
+    }
+
+    #[test]
+    fn values_the_core_cannot_work_with_are_refused_with_their_range() {
+        // The audit's values: each overflowed or hung the planner or the non-map store, or (a
+        // camera seeing nothing, a robot 6 m wide) searched for nothing.
+        let mut c = Config::DEFAULT;
+        for (bad, range) in [
+            ("viewpoint_snap_radius_m=3000", "[0, 5] m"),
+            ("viewpoint_snap_radius_m=500", "[0, 5] m"),
+            ("viewpoint_snap_radius_m=350", "[0, 5] m"),
+            ("robot_radius_m=5000", "[0, 1.5] m"),
+            ("robot_radius_m=3", "[0, 1.5] m"),
+            ("nonmap_wall_clearance_m=500", "[0, 2] m"),
+            ("nonmap_wall_clearance_m=32767", "[0, 2] m"),
+            ("nonmap_wall_clearance_m=300", "[0, 2] m"),
+            ("camera_range_m=0", "(0, 51.2] m"),
+            ("nonmap_pool_radius_m=0", "[0.01, 2] m"),
+            ("nonmap_standoff_m=52", "[0, 51.2] m"),
+        ] {
+            let e = apply(&mut c, bad).unwrap_err();
+            let (name, value) = bad.split_once('=').unwrap();
+            assert_eq!(e, format!("`{name}`: expected a value in {range}, got {value}"));
+        }
+        assert_eq!(c, Config::DEFAULT, "a refused value changes nothing");
+        // The ends of the ranges, and every value the docs use, are fine.
+        for good in [
+            "viewpoint_snap_radius_m=5",
+            "viewpoint_snap_radius_m=1.5",
+            "robot_radius_m=1.5",
+            "robot_radius_m=0",
+            "nonmap_wall_clearance_m=2",
+            "nonmap_wall_clearance_m=0.25",
+            "camera_range_m=51.2",
+            "camera_range_m=5",
+            "nonmap_pool_radius_m=0.01",
+            "nonmap_standoff_m=51.2",
+        ] {
+            apply(&mut c, good).unwrap_or_else(|e| panic!("{good}: {e}"));
+        }
+        // `--sim` leaves the controller's model in range too: its largest body (1 m) is a
+        // clearance of 1.1 m.
+        let (mut sim, mut c) = (SimConfig::default(), Config::DEFAULT);
+        apply_sim(&mut sim, &mut c, "robot_radius_m=1").unwrap();
+        assert_eq!(c.validate(), Ok(()));
     }
 
     #[test]

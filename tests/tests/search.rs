@@ -1,5 +1,6 @@
 //! End-to-end: the simulator and the controller core in lockstep (issue 3's acceptance tests).
 
+mod common;
 use host::search::{self, PlannerChoice, SearchSpec};
 use host::sim::{Scenario, World};
 
@@ -173,4 +174,21 @@ fn pictures_render_for_every_planner() {
         assert_eq!(&bytes[..4], b"\x89PNG");
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn lives_refuses_a_setting_the_controller_cannot_work_with_naming_its_range() {
+    // Each once stopped the search (an overflow in the planner, exit 101) or ran a robot whose
+    // camera sees nothing; now `lives` refuses them before it starts, as it does a bad `--sim`.
+    for (args, says) in [
+        (&["search", "--set", "viewpoint_snap_radius_m=3000"][..], "`viewpoint_snap_radius_m`: expected a value in [0, 5] m, got 3000"),
+        (&["search", "--set", "camera_range_m=0"][..], "`camera_range_m`: expected a value in (0, 51.2] m, got 0"),
+        (&["tune", "--grid", "robot_radius_m=0.35,5000"][..], "`robot_radius_m`: expected a value in [0, 1.5] m, got 5000"),
+    ] {
+        let out = std::process::Command::new(common::lives()).args(args).output().expect("lives runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
 }

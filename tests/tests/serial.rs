@@ -241,6 +241,45 @@ fn a_lockstep_bridge_refuses_a_node_on_its_own_clock_and_no_node_is_an_error_not
         Err(e @ host::link::BridgeError::NoSession) => assert!(e.to_string().contains("lives node"), "{e}"),
         Err(e) => panic!("expected NoSession, got {e}"),
         Ok(r) => panic!("a bridge without a node ran: {:?}", r.result),
+
+fn a_configuration_out_of_range_is_refused_by_the_node_and_the_bridge_stops_naming_the_field() {
+    // A 5 km robot: sent by a bridge before `--set` checked its values, it stopped the node (an
+    // overflow on its first plan), and the bridge then waited for the node for ever.
+    let mut sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    sp.controller.robot_radius_m = fixed_point::Meters::from_num(5000);
+    for mode in [TimeMode::Lockstep, TimeMode::RealTime] {
+        let (mut a, mut b) = mem_pair();
+        let (stop_node, stop_bridge) = (AtomicBool::new(false), AtomicBool::new(false));
+        let bopts = BridgeOptions { max_wall: Some(Duration::from_secs(60)), ..BridgeOptions::new(mode) };
+        let t0 = Instant::now();
+        let (res, report, config) = std::thread::scope(|s| {
+            let node = s.spawn(|| {
+                let mut p = NodeProcess::new(Config::DEFAULT, node_opts(mode)).expect("no model");
+                p.run(&mut a, &stop_node);
+                (p.report(), *p.ctl.config())
+            });
+            let res = run_bridge(&mut b, Source::Sim(sp.clone()), &bopts, &stop_bridge);
+            stop_node.store(true, Ordering::Relaxed);
+            let (report, config) = node.join().expect("node thread");
+            (res, report, config)
+        });
+        let wall = t0.elapsed();
+        match res {
+            Err(e @ host::link::BridgeError::ConfigInvalid { .. }) => {
+                assert_eq!(e.to_string(), "the node refused the configuration: `robot_radius_m` must be in [0, 1.5] m", "{mode:?}")
+            }
+            Err(e) => panic!("{mode:?}: expected ConfigInvalid, got {e}"),
+            Ok(r) => panic!("{mode:?}: the node searched with a 5 km robot: {:?}", r.result),
+        }
+        let c = report.counters;
+        assert!(c.configs_invalid >= 1 && c.configs_applied == 0, "{mode:?}: {c:?}");
+        // Lockstep: no batch was ever sent (real time ticks the idle node on its own clock).
+        assert!(mode == TimeMode::RealTime || c.ticks == 0, "{mode:?}: {c:?}");
+        assert_eq!(report.config_error.map(|e| e.field), Some("robot_radius_m"));
+        assert_eq!(config, Config::DEFAULT, "{mode:?}: the node kept its configuration");
+        assert_eq!(report.mode, firmware::Mode::Idle);
+        assert!(wall < Duration::from_secs(5), "{mode:?}: stopped after {wall:?}");
+        eprintln!("[config out of range, {mode:?}] refused in {:.3} s", wall.as_secs_f64());
     }
 }
 

@@ -123,6 +123,8 @@ fn host_corpus() -> Vec<HostToCore> {
         HostToCore::Command(WireCommand::Stop),
         HostToCore::Command(WireCommand::Reset),
         HostToCore::Config(ConfigMsg::from_config(&Config::DEFAULT)),
+        // Out of range: refused (it once overflowed the planner's arithmetic on the next plan).
+        HostToCore::Config(ConfigMsg::from_config(&Config { viewpoint_snap_radius_m: Config::mm(3_000_000), ..Config::DEFAULT })),
         HostToCore::BaseStatus(BaseStatus { blocked: true }),
     ];
     let big = scan(897, true, 2_400_000);
@@ -157,6 +159,7 @@ fn core_corpus() -> Vec<CoreToHost> {
         CoreToHost::Error(ErrorMsg { code: ErrorCode::HandshakeRequired }),
         CoreToHost::Error(ErrorMsg { code: ErrorCode::VersionMismatch { peer: 1 } }),
         CoreToHost::Error(ErrorMsg { code: ErrorCode::ConfigRefused }),
+        CoreToHost::Error(ErrorMsg { code: ErrorCode::ConfigInvalid { field: 34 } }),
     ]
 }
 

@@ -40,7 +40,7 @@ fn labels<const N: usize>(l: &[BeamLabel]) -> heapless::Vec<BeamLabel, N> {
 // ----- values ---------------------------------------------------------------------------------
 
 fn hello() -> HostToCore {
-    HostToCore::Hello(Hello { version: 4, role: Role::Simulator, want_labels: true })
+    HostToCore::Hello(Hello { version: 5, role: Role::Simulator, want_labels: true })
 }
 fn host_heartbeat() -> HostToCore {
     HostToCore::Heartbeat(Heartbeat { t_us: 1_000_000, seq: 7 })
@@ -155,10 +155,10 @@ fn base_status() -> HostToCore {
 }
 
 fn hello_ack() -> CoreToHost {
-    CoreToHost::HelloAck(HelloAck { version: 4, accepted: true, reason: AckReason::Compatible })
+    CoreToHost::HelloAck(HelloAck { version: 5, accepted: true, reason: AckReason::Compatible })
 }
 fn hello_refused() -> CoreToHost {
-    CoreToHost::HelloAck(HelloAck { version: 4, accepted: false, reason: AckReason::VersionMismatch })
+    CoreToHost::HelloAck(HelloAck { version: 5, accepted: false, reason: AckReason::VersionMismatch })
 }
 fn core_heartbeat() -> CoreToHost {
     CoreToHost::Heartbeat(Heartbeat { t_us: 3_000_000, seq: 42 })
@@ -213,6 +213,10 @@ fn error_version() -> CoreToHost {
 fn error_config() -> CoreToHost {
     CoreToHost::Error(ErrorMsg { code: ErrorCode::ConfigRefused })
 }
+fn error_config_invalid() -> CoreToHost {
+    // `robot_radius_m`, field 7.
+    CoreToHost::Error(ErrorMsg { code: ErrorCode::ConfigInvalid { field: 7 } })
+}
 
 fn host_cases() -> std::vec::Vec<(&'static str, HostToCore, &'static [u8])> {
     std::vec![
@@ -245,13 +249,14 @@ fn core_cases() -> std::vec::Vec<(&'static str, CoreToHost, &'static [u8])> {
         ("ERROR_HANDSHAKE", error_handshake(), &ERROR_HANDSHAKE),
         ("ERROR_VERSION", error_version(), &ERROR_VERSION),
         ("ERROR_CONFIG", error_config(), &ERROR_CONFIG),
+        ("ERROR_CONFIG_INVALID", error_config_invalid(), &ERROR_CONFIG_INVALID),
     ]
 }
 
 // ----- golden frames (host → core) --------------------------------------------------------------
 
 #[rustfmt::skip]
-static HELLO: [u8; 10] = [0x01, 0x08, 0x04, 0x01, 0x01, 0x17, 0x76, 0x51, 0x48, 0x00];
+static HELLO: [u8; 10] = [0x01, 0x08, 0x05, 0x01, 0x01, 0x20, 0x1c, 0x93, 0x49, 0x00];
 #[rustfmt::skip]
 static HOST_HEARTBEAT: [u8; 11] = [0x0a, 0x01, 0xc0, 0x84, 0x3d, 0x07, 0xea, 0x5e, 0xbf, 0x9f, 0x00];
 #[rustfmt::skip]
@@ -282,9 +287,9 @@ static SCAN_SEGMENT_PLAIN: [u8; 21] = [0x05, 0x08, 0x80, 0x89, 0x7a, 0x08, 0xff,
 // ----- golden frames (core → host) --------------------------------------------------------------
 
 #[rustfmt::skip]
-static HELLO_ACK: [u8; 10] = [0x01, 0x03, 0x04, 0x01, 0x05, 0x81, 0x46, 0x56, 0x3f, 0x00];
+static HELLO_ACK: [u8; 10] = [0x01, 0x03, 0x05, 0x01, 0x05, 0xb6, 0x2c, 0x94, 0x3e, 0x00];
 #[rustfmt::skip]
-static HELLO_REFUSED: [u8; 10] = [0x01, 0x02, 0x04, 0x06, 0x01, 0x56, 0x47, 0x4a, 0x51, 0x00];
+static HELLO_REFUSED: [u8; 10] = [0x01, 0x02, 0x05, 0x06, 0x01, 0x61, 0x2d, 0x88, 0x50, 0x00];
 #[rustfmt::skip]
 static CORE_HEARTBEAT: [u8; 12] = [0x0b, 0x01, 0xc0, 0x8d, 0xb7, 0x01, 0x2a, 0x39, 0xe4, 0x09, 0x8e, 0x00];
 #[rustfmt::skip]
@@ -301,6 +306,8 @@ static ERROR_HANDSHAKE: [u8; 8] = [0x02, 0x06, 0x05, 0x79, 0xb5, 0x83, 0x17, 0x0
 static ERROR_VERSION: [u8; 9] = [0x08, 0x06, 0x01, 0x02, 0xcd, 0xf5, 0xd9, 0x0c, 0x00];
 #[rustfmt::skip]
 static ERROR_CONFIG: [u8; 8] = [0x07, 0x06, 0x02, 0x55, 0xd4, 0x8d, 0xf9, 0x00];
+#[rustfmt::skip]
+static ERROR_CONFIG_INVALID: [u8; 9] = [0x08, 0x06, 0x03, 0x07, 0xc0, 0x63, 0x85, 0x4e, 0x00];
 
 macro_rules! golden {
     ($test:ident, $n:expr, $value:expr, $bytes:expr) => {
@@ -344,6 +351,7 @@ golden!(labels, CTH, labels_msg(), LABELS);
 golden!(error_handshake, CTH, error_handshake(), ERROR_HANDSHAKE);
 golden!(error_version, CTH, error_version(), ERROR_VERSION);
 golden!(error_config, CTH, error_config(), ERROR_CONFIG);
+golden!(error_config_invalid, CTH, error_config_invalid(), ERROR_CONFIG_INVALID);
 
 /// Every variant of both enums has a golden frame (a new variant without one fails here), and
 /// every listed case matches its frame.
@@ -366,7 +374,7 @@ fn every_message_type_has_a_golden_frame() {
 /// The golden frames are for this version (the frozen `Hello`/`HelloAck` carry it).
 #[test]
 fn the_goldens_are_of_the_current_version() {
-    assert_eq!(PROTOCOL_VERSION, 4);
+    assert_eq!(PROTOCOL_VERSION, 5);
     assert!(matches!(hello(), HostToCore::Hello(h) if h.version == PROTOCOL_VERSION));
     assert!(matches!(hello_ack(), CoreToHost::HelloAck(a) if a.version == PROTOCOL_VERSION));
 }

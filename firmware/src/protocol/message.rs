@@ -33,7 +33,9 @@ use serde::{Deserialize, Serialize};
 ///   carries `gaze` and `gaze_min_gain`, the status the gaze heading and its stage cost.
 /// * v3: the configuration carries `nonmap_view_cap`.
 /// * v4: the configuration carries `nonmap_drop_vacated`.
-pub const PROTOCOL_VERSION: u16 = 4;
+/// * v5: `ErrorCode::ConfigInvalid`: a configuration outside the core's ranges is refused, naming
+///   the field.
+pub const PROTOCOL_VERSION: u16 = 5;
 
 /// Most beams one scan carries, whole ([`ScanMsg`]) or in segments ([`ScanSegmentMsg`]): a 360°
 /// scan at 0.33° (1091 beams) fits. Larger scans are refused ([`WireError::TooManyBeams`]).
@@ -624,6 +626,53 @@ pub struct ConfigMsg {
 }
 
 impl ConfigMsg {
+    /// The fields' names ([`Config`]'s), in wire order: [`ErrorCode::ConfigInvalid`] names a
+    /// field by its index here.
+    pub const FIELDS: [&'static str; 37] = [
+        "planner",
+        "origin_x_m",
+        "origin_y_m",
+        "lidar_max_range_m",
+        "lidar_min_range_m",
+        "camera_fov",
+        "camera_range_m",
+        "robot_radius_m",
+        "min_frontier_cells",
+        "w_dist_per_m",
+        "w_unknown_per_cell",
+        "unseen_unknown_eighths",
+        "w_surface_per_ray",
+        "w_frontier_per_cell",
+        "w_nonmap_per_point",
+        "nonmap_block_cap",
+        "nonmap_view_cap",
+        "look_around_here",
+        "gaze",
+        "gaze_min_gain",
+        "nonmap_viewpoints",
+        "nonmap_standoff_m",
+        "frontier_near_path_blocks",
+        "nonmap_pool_radius_m",
+        "nonmap_wall_clearance_m",
+        "nonmap_drop_vacated",
+        "replan_interval_us",
+        "switch_margin",
+        "goal_tolerance_m",
+        "goal_heading_tolerance",
+        "goal_timeout_us",
+        "blocked_timeout_us",
+        "progress_m",
+        "blacklist_radius_m",
+        "viewpoint_snap_radius_m",
+        "watchdog_us",
+        "budgets",
+    ];
+
+    /// The index of the field called `name` in [`ConfigMsg::FIELDS`].
+    pub fn field_index(name: &str) -> Option<u8> {
+        Self::FIELDS.iter().position(|&f| f == name).map(|i| i as u8)
+    }
+
     /// The wire form of `c` (lossless).
     pub fn from_config(c: &Config) -> Self {
         let b = &c.budgets;
@@ -965,6 +1014,12 @@ pub enum ErrorCode {
     },
     /// A configuration arrived while the controller was not idle (stop it first).
     ConfigRefused,
+    /// A configuration was refused because a field is outside the range the core works in
+    /// ([`Config::validate`]); the controller keeps its configuration (v5).
+    ConfigInvalid {
+        /// The field: its index in [`ConfigMsg::FIELDS`] (wire order).
+        field: u8,
+    },
 }
 
 /// The core refused a message.

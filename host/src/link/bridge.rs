@@ -30,8 +30,8 @@ use super::{Link, Summary, TimeMode};
 use crate::search::{controller_config, encode_ranges, gt_label, step_base, PlannerChoice, RunTally, SearchResult, SearchSpec, TICK_US};
 use crate::sim::Sim;
 use firmware::protocol::{
-    encode, BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, GoalMsg, Heartbeat, Hello, HostDecoder, HostToCore, IncompatiblePeer,
-    LinkCounters, PoseMsg, Role, ScanMsg, StatusMsg, WireCommand, WireMode, MAX_FRAME_LEN,
+    encode, BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, ErrorCode, GoalMsg, Heartbeat, Hello, HostDecoder, HostToCore,
+    IncompatiblePeer, LinkCounters, PoseMsg, Role, ScanMsg, StatusMsg, WireCommand, WireMode, MAX_FRAME_LEN,
 };
 use firmware::scan::BeamLabel;
 use firmware::{BinaryAngle, GridGeometry, Meters, Pose2, ScanInput};
@@ -222,6 +222,25 @@ pub enum BridgeError {
     /// `lives` sent unlabelled scans, but the node classified none of them: it runs without a
     /// model (`lives node --no-model`), so it would search as `multisensor`.
     NoClassifier,
+    /// The node refused the configuration: a field is outside the range its core works in
+    /// (`Error { ConfigInvalid }`), so it would not search with it.
+    ConfigInvalid {
+        /// The field, as [`firmware::Config`] names it (`#N` for a field number this build does
+        /// not know).
+        field: String,
+        /// Its range as this build's core gives it, if this build refuses the value too.
+        allowed: Option<&'static str>,
+    },
+}
+
+impl BridgeError {
+    /// The node's refusal of field number `field` of `config` ([`ConfigMsg::FIELDS`]), with the
+    /// range this build's core allows.
+    pub(super) fn config_invalid(config: &ConfigMsg, field: u8) -> Self {
+        let name = ConfigMsg::FIELDS.get(field as usize).copied();
+        let allowed = config.config().validate().err().filter(|e| Some(e.field) == name).map(|e| e.allowed);
+        BridgeError::ConfigInvalid { field: name.map_or_else(|| format!("#{field}"), str::to_string), allowed }
+    }
 }
 
 impl fmt::Display for BridgeError {
@@ -242,6 +261,12 @@ impl fmt::Display for BridgeError {
                 "the node classified none of the scans: it runs without a classifier model (`lives node --no-model`?); \
                  `--planner lives` needs one (start the node without `--no-model`), or run `--planner lives-gt` on the simulator's labels",
             ),
+            BridgeError::ConfigInvalid { field, allowed: Some(allowed) } => {
+                write!(f, "the node refused the configuration: `{field}` must be in {allowed}")
+            }
+            BridgeError::ConfigInvalid { field, allowed: None } => {
+                write!(f, "the node refused the configuration: `{field}` is outside the range its core allows")
+            }
         }
     }
 }
@@ -313,6 +338,8 @@ pub(super) struct Bridge<'l, B: Base = Sim> {
     last_hello: Option<Instant>,
     last_reopen: Instant,
     pub(super) incompatible: Option<IncompatiblePeer>,
+    /// The field of the configuration the node refused as out of range (`Error { ConfigInvalid }`).
+    pub(super) config_invalid: Option<u8>,
     pub(super) sim: B,
     goal: Option<GoalMsg>,
     status: Option<StatusMsg>,
@@ -355,6 +382,7 @@ impl<'l, B: Base> Bridge<'l, B> {
             last_hello: None,
             last_reopen: Instant::now(),
             incompatible: None,
+            config_invalid: None,
             sim,
             goal: None,
             status: None,
@@ -456,7 +484,12 @@ impl<'l, B: Base> Bridge<'l, B> {
                 self.status = Some(*s);
                 self.st.node_status = Some(*s);
             }
-            CoreToHost::Error(_) => self.st.errors_from_node += 1,
+            CoreToHost::Error(e) => {
+                self.st.errors_from_node += 1;
+                if let ErrorCode::ConfigInvalid { field } = e.code {
+                    self.config_invalid = Some(field);
+                }
+            }
             CoreToHost::Stop(_) | CoreToHost::Labels(_) => {}
         }
     }
@@ -536,7 +569,8 @@ impl<'l, B: Base> Bridge<'l, B> {
         Ok(true)
     }
 
-    /// Opens the session, sends the configuration, measures the link.
+    /// Opens the session, sends the configuration, measures the link. `Err` if the node refuses
+    /// the configuration as out of range.
     fn setup(&mut self, config: &ConfigMsg) -> Result<(), BridgeError> {
         if !self.await_session()? {
             return Err(BridgeError::NoSession);
@@ -553,6 +587,9 @@ impl<'l, B: Base> Bridge<'l, B> {
                 if got.iter().any(|m| matches!(m, CoreToHost::Heartbeat(h) if h.seq == seq)) {
                     break;
                 }
+            }
+            if let Some(field) = self.config_invalid {
+                return Err(BridgeError::config_invalid(config, field));
             }
             if !self.await_session()? {
                 return Err(BridgeError::NoSession);
@@ -654,6 +691,9 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         }
         if let Some(e) = b.incompatible {
             return Err(BridgeError::Incompatible(e));
+        }
+        if let Some(field) = b.config_invalid {
+            return Err(BridgeError::config_invalid(&config_msg, field));
         }
         if realtime && Instant::now() < next_tick {
             // Between ticks: apply what the node says.

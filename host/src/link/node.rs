@@ -8,6 +8,7 @@
 
 use super::{Link, Summary};
 use firmware::classifier::ModelError;
+use firmware::config::ConfigError;
 use firmware::node::{Node, NodeConfig, NodeCounters, TimeMode};
 use firmware::protocol::{CoreToHost, GoalMsg, HostDecoder, LinkCounters};
 use firmware::{Config, Controller, Mode};
@@ -55,6 +56,9 @@ pub struct NodeReport {
     pub link: LinkCounters,
     /// The controller's mode at the end.
     pub mode: Mode,
+    /// Why the last configuration refused as out of range was refused
+    /// ([`NodeCounters::configs_invalid`]).
+    pub config_error: Option<ConfigError>,
     /// Every goal sent, in order (if recorded).
     pub goals_sent: Vec<GoalMsg>,
     /// Wall time spent in controller ticks, µs per tick.
@@ -189,6 +193,7 @@ impl NodeProcess {
             counters: self.node.counters(),
             link: self.node.link_counters(),
             mode: self.ctl.mode(),
+            config_error: self.node.last_config_error(),
             goals_sent: self.goals_sent.clone(),
             tick_us: Summary::of(&self.tick_us),
             overruns: self.overruns,

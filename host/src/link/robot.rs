@@ -366,6 +366,7 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
     let mut driven_m = 0.0;
     let mut outcome = "stopped";
     let mut incompatible = None;
+    let mut refused = None;
 
     'run: loop {
         if b.should_stop() {
@@ -375,6 +376,12 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
         if let Some(e) = b.incompatible {
             b.sim.stop(StopReason::Shutdown, &format!("the controller node is incompatible: {e}"));
             incompatible = Some(e);
+            break;
+        }
+        if let (Some(field), Some(c)) = (b.config_invalid, config) {
+            let e = BridgeError::config_invalid(&c, field);
+            b.sim.stop(StopReason::Shutdown, &e.to_string());
+            refused = Some(e);
             break;
         }
 
@@ -597,6 +604,9 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
     note(&mut log, &b, format!("run ended: {outcome}"));
     if let Some(e) = incompatible {
         return Err(BridgeError::Incompatible(e));
+    }
+    if let Some(e) = refused {
+        return Err(e);
     }
 
     let found = outcome == "found";
