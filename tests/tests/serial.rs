@@ -207,41 +207,6 @@ fn lives_refuses_a_node_without_a_classifier_instead_of_searching_as_multisensor
 }
 
 #[test]
-fn a_lockstep_bridge_refuses_a_node_on_its_own_clock_and_no_node_is_an_error_not_a_wait() {
-    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 2);
-    // A node in real time behind a lockstep bridge: it ticks on its own clock and never at the
-    // bridge's times.
-    let (mut a, mut b) = mem_pair();
-    let (stop_node, stop_bridge) = (AtomicBool::new(false), AtomicBool::new(false));
-    let bopts = BridgeOptions { max_wall: Some(Duration::from_secs(30)), ..BridgeOptions::new(TimeMode::Lockstep) };
-    let (res, ticks) = std::thread::scope(|s| {
-        let node = s.spawn(|| {
-            let mut p = NodeProcess::new(Config::DEFAULT, node_opts(TimeMode::RealTime)).expect("no model");
-            p.run(&mut a, &stop_node);
-            p.report()
-        });
-        let res = run_bridge(&mut b, Source::Sim(sp.clone()), &bopts, &stop_bridge);
-        stop_node.store(true, Ordering::Relaxed);
-        (res, node.join().expect("node thread").counters.ticks)
-    });
-    match res {
-        Err(e @ host::link::BridgeError::NotLockstep { t_us: 0, .. }) => {
-            assert!(e.to_string().contains("lives node --lockstep"), "{e}")
-        }
-        Err(e) => panic!("expected NotLockstep at t = 0, got {e}"),
-        Ok(r) => panic!("a lockstep bridge ran against a real-time node: {:?}", r.result),
-    }
-    assert!(ticks >= 5, "the node ticked on its own clock meanwhile ({ticks} ticks)");
-
-    // Nobody on the other end: a clear error once `first_hello_timeout` has passed.
-    let (_a, mut b) = mem_pair();
-    let bopts = BridgeOptions { first_hello_timeout: Some(Duration::from_millis(300)), ..BridgeOptions::new(TimeMode::Lockstep) };
-    // (No `max_wall`: only the timeout can end this run.)
-    match run_bridge(&mut b, Source::Sim(sp), &bopts, &AtomicBool::new(false)) {
-        Err(e @ host::link::BridgeError::NoSession) => assert!(e.to_string().contains("lives node"), "{e}"),
-        Err(e) => panic!("expected NoSession, got {e}"),
-        Ok(r) => panic!("a bridge without a node ran: {:?}", r.result),
-
 fn a_configuration_out_of_range_is_refused_by_the_node_and_the_bridge_stops_naming_the_field() {
     // A 5 km robot: sent by a bridge before `--set` checked its values, it stopped the node (an
     // overflow on its first plan), and the bridge then waited for the node for ever.
@@ -280,6 +245,44 @@ fn a_configuration_out_of_range_is_refused_by_the_node_and_the_bridge_stops_nami
         assert_eq!(report.mode, firmware::Mode::Idle);
         assert!(wall < Duration::from_secs(5), "{mode:?}: stopped after {wall:?}");
         eprintln!("[config out of range, {mode:?}] refused in {:.3} s", wall.as_secs_f64());
+    }
+}
+
+#[test]
+fn a_lockstep_bridge_refuses_a_node_on_its_own_clock_and_no_node_is_an_error_not_a_wait() {
+    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 2);
+    // A node in real time behind a lockstep bridge: it ticks on its own clock and never at the
+    // bridge's times.
+    let (mut a, mut b) = mem_pair();
+    let (stop_node, stop_bridge) = (AtomicBool::new(false), AtomicBool::new(false));
+    let bopts = BridgeOptions { max_wall: Some(Duration::from_secs(30)), ..BridgeOptions::new(TimeMode::Lockstep) };
+    let (res, ticks) = std::thread::scope(|s| {
+        let node = s.spawn(|| {
+            let mut p = NodeProcess::new(Config::DEFAULT, node_opts(TimeMode::RealTime)).expect("no model");
+            p.run(&mut a, &stop_node);
+            p.report()
+        });
+        let res = run_bridge(&mut b, Source::Sim(sp.clone()), &bopts, &stop_bridge);
+        stop_node.store(true, Ordering::Relaxed);
+        (res, node.join().expect("node thread").counters.ticks)
+    });
+    match res {
+        Err(e @ host::link::BridgeError::NotLockstep { t_us: 0, .. }) => {
+            assert!(e.to_string().contains("lives node --lockstep"), "{e}")
+        }
+        Err(e) => panic!("expected NotLockstep at t = 0, got {e}"),
+        Ok(r) => panic!("a lockstep bridge ran against a real-time node: {:?}", r.result),
+    }
+    assert!(ticks >= 5, "the node ticked on its own clock meanwhile ({ticks} ticks)");
+
+    // Nobody on the other end: a clear error once `first_hello_timeout` has passed.
+    let (_a, mut b) = mem_pair();
+    let bopts = BridgeOptions { first_hello_timeout: Some(Duration::from_millis(300)), ..BridgeOptions::new(TimeMode::Lockstep) };
+    // (No `max_wall`: only the timeout can end this run.)
+    match run_bridge(&mut b, Source::Sim(sp), &bopts, &AtomicBool::new(false)) {
+        Err(e @ host::link::BridgeError::NoSession) => assert!(e.to_string().contains("lives node"), "{e}"),
+        Err(e) => panic!("expected NoSession, got {e}"),
+        Ok(r) => panic!("a bridge without a node ran: {:?}", r.result),
     }
 }
 
