@@ -286,3 +286,12 @@ fn a_cut_off_trace_replays_its_good_records_then_fails() {
     assert!(out.stdout.is_empty());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn replay_refuses_an_absurd_max_range_in_few_digits() {
+    let out = lives().args(["replay", "/nonexistent/log.gz", "--max-range", "1e300"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--max-range 1e300: expected metres"), "{err}");
+    assert!(err.len() < 200, "{err}");
+}
