@@ -475,7 +475,9 @@ enum TraceCmd {
         #[arg(long)]
         labels: bool,
     },
-    /// Replay a trace through a fresh lockstep node and print `R record t_us ticks len crc32` per record.
+    /// Replay a trace through a fresh lockstep node and print `R record t_us ticks len crc32` per
+    /// record. A damaged trace replays as far as its records are good, then the error goes to
+    /// stderr: exit status 1 (2 when no record is good).
     Replay {
         /// The trace file.
         file: PathBuf,
@@ -1211,16 +1213,29 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         }
         Cmd::Trace(TraceCmd::Replay { file, decode }) => {
             let bytes = std::fs::read(&file).map_err(|e| format!("{}: {e}", file.display()))?;
-            if decode {
-                for line in host::trace::decode(&bytes).map_err(|e| format!("{}: {e}", file.display()))? {
+            // A damaged trace: its good records are printed, then the error (status 1; 2 when
+            // not even the first record is good).
+            let (printed, error) = if decode {
+                let r = host::trace::decode(&bytes).map_err(|e| format!("{}: {e}", file.display()))?;
+                for line in &r.records {
                     say!("{line}");
                 }
-                return Ok(ExitCode::SUCCESS);
+                (!r.records.is_empty(), r.error)
+            } else {
+                let r = host::trace::replay(&bytes).map_err(|e| format!("{}: {e}", file.display()))?;
+                for d in &r.records {
+                    say!("{}", host::trace::digest_line(d));
+                }
+                (!r.records.is_empty(), r.error)
+            };
+            match error {
+                Some(e) if printed => {
+                    eprintln!("error: {}: {e}", file.display());
+                    Ok(ExitCode::from(1))
+                }
+                Some(e) => Err(format!("{}: {e}", file.display())),
+                None => Ok(ExitCode::SUCCESS),
             }
-            for d in host::trace::replay(&bytes).map_err(|e| format!("{}: {e}", file.display()))? {
-                say!("{}", host::trace::digest_line(&d));
-            }
-            Ok(ExitCode::SUCCESS)
         }
         Cmd::Eval { trials, worlds, scenarios, planners, threads, out, no_pictures, set, sim } => {
             eval_cmd(trials, &worlds, &scenarios, &planners, threads, &out, no_pictures, &set, &sim)

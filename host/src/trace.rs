@@ -5,6 +5,8 @@
 //! (with the time of its last heartbeat) until the batch of the last wanted tick was written.
 //! [`replay`] feeds a trace to a fresh node and controller and returns the per-record digests
 //! of what the node answered; the MCU image `mcu-trace` prints the same digests (docs/mcu.md).
+//! A damaged trace (cut off, a bad record) replays as far as its records are good, and says
+//! where it stopped.
 
 use crate::link::{mem_pair, run_bridge, BridgeOptions, Link, MemLink, NodeOptions, NodeProcess, Source, TimeMode};
 use crate::search::{SearchSpec, TICK_US};
@@ -133,20 +135,36 @@ pub fn record(spec: SearchSpec, ticks: u32) -> Result<Vec<u8>, String> {
     Ok(out)
 }
 
-/// Replays `bytes` (a trace file) through a fresh lockstep node and controller.
-pub fn replay(bytes: &[u8]) -> Result<Vec<Digest>, String> {
-    let t = Trace::parse(bytes).map_err(|e| e.to_string())?;
+/// What a trace gave: one item per good record, and the damage after them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Replayed<T> {
+    /// Per good record, in order.
+    pub records: Vec<T>,
+    /// Where the trace stopped being good (`trace record 23 is cut off…`), if it did.
+    pub error: Option<String>,
+}
+
+/// The good records of `bytes` and the error after them; `Err` when its header is bad.
+fn parse_prefix(bytes: &[u8]) -> Result<(Trace<'_>, Option<String>), String> {
+    let (t, bad) = Trace::parse_prefix(bytes).map_err(|e| e.to_string())?;
+    Ok((t, bad.map(|e| if t.is_empty() { e.to_string() } else { format!("{e} (the {} records before it were replayed)", t.len()) })))
+}
+
+/// Replays `bytes` (a trace file) through a fresh lockstep node and controller, as far as its
+/// records are good.
+pub fn replay(bytes: &[u8]) -> Result<Replayed<Digest>, String> {
+    let (t, error) = parse_prefix(bytes)?;
     let mut ctl = Box::new(Controller::new(Config::DEFAULT));
     let mut node = Box::new(Node::new(NodeConfig::new(TimeMode::Lockstep)));
     let mut out = Vec::with_capacity(t.len() as usize);
     t.replay(&mut node, &mut ctl, |d| out.push(*d)).map_err(|e| e.to_string())?;
-    Ok(out)
+    Ok(Replayed { records: out, error })
 }
 
 /// The replay in words: per record its digest line, the messages in it (`>`) and the node's
-/// answers (`<`), scans shortened to their size.
-pub fn decode(bytes: &[u8]) -> Result<Vec<String>, String> {
-    let t = Trace::parse(bytes).map_err(|e| e.to_string())?;
+/// answers (`<`), scans shortened to their size; as far as the records are good.
+pub fn decode(bytes: &[u8]) -> Result<Replayed<String>, String> {
+    let (t, error) = parse_prefix(bytes)?;
     let mut ctl = Box::new(Controller::new(Config::DEFAULT));
     let mut node = Box::new(Node::new(NodeConfig::new(TimeMode::Lockstep)));
     if t.flags() & FLAG_EMBEDDED_MODEL != 0 {
@@ -173,7 +191,7 @@ pub fn decode(bytes: &[u8]) -> Result<Vec<String>, String> {
             });
         }
     }
-    Ok(lines)
+    Ok(Replayed { records: lines, error })
 }
 
 /// A digest as `mcu-trace` prints it (`R record t_us ticks len crc`, without the timings).
@@ -193,9 +211,23 @@ mod tests {
         let spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::Lives, 1);
         let bytes = record(spec, 4).unwrap();
         let a = replay(&bytes).unwrap();
-        assert_eq!(a.iter().map(|d| d.ticks).sum::<u32>(), 4);
-        assert_eq!(a.last().unwrap().t_us, 3 * TICK_US);
+        assert_eq!(a.error, None);
+        assert_eq!(a.records.iter().map(|d| d.ticks).sum::<u32>(), 4);
+        assert_eq!(a.records.last().unwrap().t_us, 3 * TICK_US);
         assert_eq!(a, replay(&bytes).unwrap());
-        assert!(replay(&bytes[..bytes.len() - 1]).unwrap_err().contains("cut off"));
+        // Cut off in its last record: the others replay as before, and the error says so.
+        let n = a.records.len();
+        let cut = replay(&bytes[..bytes.len() - 1]).unwrap();
+        assert_eq!(cut.records[..], a.records[..n - 1]);
+        let e = cut.error.unwrap();
+        assert!(
+            e.contains(&format!("trace record {} is cut off", n - 1)) && e.contains(&format!("the {} records before it", n - 1)),
+            "{e}"
+        );
+        let lines = decode(&bytes[..bytes.len() - 1]).unwrap();
+        assert_eq!(lines.records.iter().filter(|l| l.starts_with("record ")).count(), n - 1);
+        assert!(lines.error.is_some());
+        // A bad header reads nothing.
+        assert!(replay(&bytes[..10]).unwrap_err().contains("shorter than"));
     }
 }

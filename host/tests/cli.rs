@@ -265,3 +265,47 @@ fn node_and_replay_refuse_a_bad_model_before_starting() {
     let out = lives().args(["node", "--port", "/nonexistent/tty", "--model", readme, "--no-model"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2), "--model and --no-model conflict");
 }
+
+#[test]
+fn a_cut_off_trace_replays_its_good_records_then_fails() {
+    let golden = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/golden.trace");
+    let bytes = std::fs::read(&golden).unwrap();
+    let full = lives().args(["trace", "replay"]).arg(&golden).output().unwrap();
+    assert!(full.status.success(), "{}", String::from_utf8_lossy(&full.stderr));
+    let full = String::from_utf8(full.stdout).unwrap();
+    let dir = std::env::temp_dir().join(format!("lives-cli-trace-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let half = dir.join("half.trace");
+    std::fs::write(&half, &bytes[..bytes.len() / 2]).unwrap();
+    let out = lives().args(["trace", "replay"]).arg(&half).output().unwrap();
+    // Before: status 2 and nothing printed.
+    assert_eq!(out.status.code(), Some(1));
+    let printed = String::from_utf8(out.stdout).unwrap();
+    let n = printed.lines().count();
+    assert!(n > 10, "{printed}");
+    assert_eq!(
+        printed.lines().collect::<Vec<_>>(),
+        full.lines().take(n).collect::<Vec<_>>(),
+        "the good records replay as in the whole trace"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!("trace record {n} is cut off")) && err.contains(&format!("the {n} records before it were replayed")),
+        "{err}"
+    );
+    // No good record (the header and part of the first): nothing to replay, status 2.
+    std::fs::write(&half, &bytes[..30]).unwrap();
+    let out = lives().args(["trace", "replay"]).arg(&half).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn replay_refuses_an_absurd_max_range_in_few_digits() {
+    let out = lives().args(["replay", "/nonexistent/log.gz", "--max-range", "1e300"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--max-range 1e300: expected metres"), "{err}");
+    assert!(err.len() < 200, "{err}");
+}

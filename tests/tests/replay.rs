@@ -9,8 +9,10 @@ use std::collections::BTreeMap;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
+mod common;
+
 fn carmen(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/carmen").join(name)
+    common::root().join("../shared/data/carmen").join(name)
 }
 
 fn tmp(name: &str) -> PathBuf {
@@ -137,7 +139,7 @@ fn a_truncated_gzip_log_names_the_offset_and_keeps_the_scans_before() {
 }
 
 #[test]
-fn a_corrupt_line_names_the_file_and_line_and_keeps_the_scans_before() {
+fn a_corrupt_line_is_skipped_and_named_and_the_scans_around_it_are_used() {
     let text = gunzip(&carmen("intel-corrected.log.gz"));
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
     // Break the 101st FLASER line: its x becomes `1.2.3`.
@@ -148,18 +150,148 @@ fn a_corrupt_line_names_the_file_and_line_and_keeps_the_scans_before() {
     let path = tmp("intel-corrupt.log");
     std::fs::write(&path, lines.join("\n")).unwrap();
     let run = replay::replay(&path, &no_classifier()).unwrap();
-    let Some(ReplayError::CarmenLine { file, line, error }) = &run.error else { panic!("{:?}", run.error) };
+    assert!(run.error.is_none(), "{:?}", run.error);
+    assert_eq!(run.bad_records.total, 1);
+    let ReplayError::CarmenLine { file, line, error } = &run.bad_records.first[0] else { panic!("{:?}", run.bad_records) };
     assert_eq!((file, *line), (&path, idx + 1));
     assert_eq!(error, &replay::carmen::LineError::BadNumber { kind: replay::carmen::LineKind::Flaser, field: "x", token: "1.2.3".into() });
-    assert_eq!(run.report.format, LogFormat::Carmen);
-    assert_eq!((run.report.scans_read, run.report.scans_used), (100, 100));
-    assert!(run.report.error.as_deref().unwrap().contains(&format!("intel-corrupt.log:{}:", idx + 1)));
-    // The same log gzip-compressed, cut inside that line's neighbourhood, gives the same scans.
+    let r = &run.report;
+    assert_eq!(r.format, LogFormat::Carmen);
+    // Every other scan, before and after the line.
+    assert_eq!((r.scans_read, r.scans_used), (909, 909));
+    assert_eq!(r.skipped_records.by_reason, BTreeMap::from([("bad_number", 1)]));
+    assert!(r.skipped_records.first[0].contains(&format!("intel-corrupt.log:{}: FLASER x `1.2.3`", idx + 1)), "{:?}", r.skipped_records);
+    // The same log gzip-compressed gives the same scans.
     let gz = tmp("intel-corrupt.log.gz");
     std::fs::write(&gz, gzip(&lines.join("\n"))).unwrap();
     let run2 = replay::replay(&gz, &no_classifier()).unwrap();
-    assert!(matches!(run2.error, Some(ReplayError::CarmenLine { line, .. }) if line == idx + 1));
-    assert_eq!(run2.report.scans_used, 100);
+    assert!(matches!(run2.bad_records.first[..], [ReplayError::CarmenLine { line, .. }] if line == idx + 1));
+    assert_eq!(run2.report.scans_used, 909);
+    assert_eq!((run2.report.grid, &run2.report.goals), (r.grid, &r.goals));
+}
+
+/// The ACES log with lines broken the ways real logs break: an ODOM x of `nan`, a FLASER beam
+/// count one short, a FLASER time stamp of 1e300, and (`not_text`) a NEFF line that is not
+/// UTF-8. Returns the log and the broken lines (1-based, in that order).
+fn aces_with_bad_lines(not_text: bool) -> (Vec<u8>, Vec<usize>) {
+    let text = gunzip(&carmen("aces-corrected.log.gz"));
+    let mut lines: Vec<Vec<u8>> = text.lines().map(|l| l.as_bytes().to_vec()).collect();
+    let starts = |lines: &[Vec<u8>], kind: &str| -> Vec<usize> {
+        lines.iter().enumerate().filter(|(_, l)| l.starts_with(kind.as_bytes())).map(|(i, _)| i).collect()
+    };
+    let (flaser, odom) = (starts(&lines, "FLASER "), starts(&lines, "ODOM ")[4000]);
+    let mut set = |i: usize, field: Option<usize>, to: &str| {
+        let line = String::from_utf8(lines[i].clone()).unwrap();
+        let mut t: Vec<&str> = line.split(' ').collect();
+        let k = field.unwrap_or(t.len() - 3);
+        t[k] = to;
+        lines[i] = t.join(" ").into_bytes();
+    };
+    set(odom, Some(1), "nan");
+    set(flaser[100], Some(1), "179");
+    set(flaser[300], None, "1e300");
+    let mut at = vec![odom + 1, flaser[100] + 1, flaser[300] + 1];
+    if not_text {
+        let neff = flaser[50] + lines[flaser[50]..].iter().position(|l| l.starts_with(b"NEFF ")).unwrap();
+        lines[neff] = b"NEFF \xff".to_vec();
+        at.push(neff + 1);
+    }
+    (lines.join(&b'\n'), at)
+}
+
+#[test]
+fn bad_lines_are_skipped_counted_by_reason_and_the_rest_of_the_log_replays() {
+    let (bytes, at) = aces_with_bad_lines(true);
+    let path = tmp("aces-bad-lines.log");
+    std::fs::write(&path, &bytes).unwrap();
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let r = &run.report;
+    assert!(run.error.is_none() && r.error.is_none(), "{:?}", run.error);
+    // 440 scans less the two broken FLASER lines, all used: none lost after a bad line.
+    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (438, 438, 0), "{r:?}");
+    assert_eq!(r.odometry, 7813);
+    assert_eq!(r.skipped_records.total, 4);
+    let reasons = BTreeMap::from([("bad_number", 1), ("count_mismatch", 1), ("not_text", 1), ("out_of_range", 1)]);
+    assert_eq!(r.skipped_records.by_reason, reasons);
+    let lines: Vec<usize> = run
+        .bad_records
+        .first
+        .iter()
+        .map(|e| match e {
+            ReplayError::CarmenLine { line, .. } | ReplayError::NotText { line, .. } => *line,
+            e => panic!("{e:?}"),
+        })
+        .collect();
+    let mut want = at.clone();
+    want.sort();
+    assert_eq!(lines, want);
+    let first = &r.skipped_records.first;
+    assert!(first.iter().any(|m| m.ends_with(&format!(":{}: ODOM x `nan` is not a valid number", at[0]))), "{first:?}");
+    assert!(
+        first.iter().any(|m| m.contains(&format!(":{}: FLASER beam count 179 does not match the number of fields", at[1]))),
+        "{first:?}"
+    );
+    assert!(first.iter().any(|m| m.ends_with(&format!(":{}: not UTF-8 text", at[3]))), "{first:?}");
+    assert!(first.iter().any(|m| m.contains("FLASER ipc_timestamp `1e300` is out of range")), "{first:?}");
+    // The duration is the log's own, not 1e300 s.
+    assert!((r.duration_s - 1365.63).abs() < 0.01, "{}", r.duration_s);
+}
+
+#[test]
+fn lives_replay_reports_skipped_lines_and_exits_1_with_everything_written() {
+    let (bytes, at) = aces_with_bad_lines(false);
+    let path = tmp("aces-bad-lines-cli.log");
+    std::fs::write(&path, bytes).unwrap();
+    let png = tmp("aces-bad-lines.png");
+    let out = std::process::Command::new(common::lives())
+        .args(["replay", "--no-classifier", "--json", "--png"])
+        .arg(&png)
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1), "not clean: status 1");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("the JSON is written");
+    assert_eq!(v["skipped_records"]["total"], 3);
+    assert_eq!(v["scans_used"], 438);
+    assert_eq!(v["error"], serde_json::Value::Null);
+    assert!(std::fs::metadata(&png).unwrap().len() > 10_000, "the picture is written");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&format!("warning: {}:{}: ODOM x `nan` is not a valid number (skipped)", path.display(), at[0])), "{err}");
+    assert!(err.contains("error:") && err.contains("3 bad records skipped (1 bad_number, 1 count_mismatch, 1 out_of_range)"), "{err}");
+    // A clean log: status 0, nothing on stderr.
+    let clean = tmp("aces-head.log");
+    std::fs::write(&clean, gunzip(&carmen("aces-corrected.log.gz")).lines().take(2000).collect::<Vec<_>>().join("\n")).unwrap();
+    let out = std::process::Command::new(common::lives()).args(["replay", "--no-classifier"]).arg(&clean).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
+fn one_stray_pose_neither_moves_the_grid_nor_loses_the_other_scans() {
+    let text = gunzip(&carmen("aces-corrected.log.gz"));
+    let clean = tmp("aces-clean.log");
+    std::fs::write(&clean, &text).unwrap();
+    let log = replay::read_log(&clean).unwrap();
+    let clean_origin = replay::grid_origin(replay::place_grid(&log.scans).unwrap().bounds);
+    // One FLASER x of 1e9 (beyond the core's ±32 767 m) and one y of −5 000 m (in range, far
+    // from the rest): before, the first put the grid's origin at 0 while the JSON said
+    // 499999963.9, and 265 of the 440 scans fell outside the grid.
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let flaser: Vec<usize> = lines.iter().enumerate().filter(|(_, l)| l.starts_with("FLASER")).map(|(i, _)| i).collect();
+    for (k, field, to) in [(200, 2 + 180, "1e9"), (300, 3 + 180, "-5000")] {
+        let mut t: Vec<&str> = lines[flaser[k]].split(' ').collect();
+        t[field] = to;
+        lines[flaser[k]] = t.join(" ");
+    }
+    let path = tmp("aces-stray.log");
+    std::fs::write(&path, lines.join("\n")).unwrap();
+    let r = replay::replay(&path, &no_classifier()).unwrap().report;
+    assert_eq!(r.grid_origin, clean_origin);
+    assert_eq!(r.rejected, replay::Rejected { stray_pose: 2, ..Default::default() });
+    assert_eq!((r.scans_read, r.scans_used), (440, 438));
+    assert!(!r.exceeds_grid);
+    let w = r.warnings.iter().find(|w| w.contains("strays far")).expect("a warning");
+    assert!(w.contains(&format!("line {} at (1e9, ", flaser[200] + 1)) && w.contains(&format!("line {} at (", flaser[300] + 1)), "{w}");
 }
 
 #[test]
@@ -167,8 +299,24 @@ fn damage_before_any_scan_is_an_error_naming_the_file() {
     let path = tmp("broken-first.log");
     std::fs::write(&path, "ODOM 0 0 0 0 0 0 1.0 h 1.0\nFLASER 3 1 2\n").unwrap();
     let e = replay::replay(&path, &no_classifier()).err().expect("no scans");
-    assert!(matches!(&e, ReplayError::CarmenLine { line: 2, .. }), "{e:?}");
+    let ReplayError::NoGoodScans { skipped: 1, first, .. } = &e else { panic!("{e:?}") };
+    assert!(matches!(**first, ReplayError::CarmenLine { line: 2, .. }), "{e:?}");
     assert!(e.to_string().contains("broken-first.log:2:"), "{e}");
+    // Every laser position beyond the core's ±32 767 m (UTM coordinates): said, not an empty map.
+    let utm = tmp("utm.log");
+    std::fs::write(&utm, "FLASER 2 1 2 500000.5 4000000.25 0 0 0 0 1.0 h 1.0\nFLASER 2 1 2 500001 4000000 0 0 0 0 2.0 h 2.0\n").unwrap();
+    let e = replay::replay(&utm, &no_classifier()).err().expect("no usable pose");
+    assert!(matches!(e, ReplayError::PosesOutOfRange { scans: 2, at: Location::Line(1), .. }), "{e:?}");
+    assert!(
+        e.to_string().ends_with(
+            "none of the 2 scans has a laser position within the core's ±32767 m: the first is at (500000.5, 4.00000025e6) (line 1)"
+        ),
+        "{e}"
+    );
+    // A gzip stream cut before the first scan: its damage is the error.
+    let gz = tmp("broken-first.log.gz");
+    std::fs::write(&gz, &std::fs::read(carmen("intel-corrected.log.gz")).unwrap()[..600]).unwrap();
+    assert!(matches!(replay::replay(&gz, &no_classifier()).err(), Some(ReplayError::Gzip { .. })));
     let missing = replay::replay(Path::new("/nonexistent/log.gz"), &no_classifier()).err().unwrap();
     assert!(matches!(missing, ReplayError::Io { .. }));
 }
@@ -464,6 +612,106 @@ fn a_truncated_mcap_bag_names_the_offset_and_keeps_the_scans_before() {
     let run = replay::replay(&bad_path, &no_classifier()).unwrap();
     assert!(matches!(run.error, Some(ReplayError::Mcap { offset, .. }) if offset == chunk_at as u64), "{:?}", run.error);
     assert!(run.report.scans_read > 0 && run.report.scans_read < SCANS, "{}", run.report.scans_read);
+}
+
+#[test]
+fn an_undecodable_message_is_skipped_and_the_messages_after_it_are_used() {
+    // Scan 12's CDR encapsulation becomes 0x0009 (no such representation), in an MCAP and in a
+    // sqlite3 bag: before, reading stopped there and the 17 scans after it were lost.
+    let mut msgs = bag_messages(YAW_90);
+    let k = msgs.iter().enumerate().filter(|(_, m)| m.0 == "/scan").nth(12).unwrap().0;
+    msgs[k].3[1] = 0x09;
+    let (mcap_path, db3_path) = (tmp("bad-message.mcap"), tmp("bad-message.db3"));
+    write_mcap(&mcap_path, &msgs, 4096);
+    write_db3(&db3_path, &msgs);
+    for path in [&mcap_path, &db3_path] {
+        let run = replay::replay(path, &no_classifier()).unwrap();
+        assert!(run.error.is_none(), "{:?}", run.error);
+        let r = &run.report;
+        assert_eq!((r.scans_read, r.scans_used), (SCANS - 1, SCANS - 1), "{path:?}");
+        assert_eq!(r.skipped_records.by_reason, BTreeMap::from([("undecodable_message", 1)]));
+        let [ReplayError::Message { topic, at, error, .. }] = &run.bad_records.first[..] else { panic!("{:?}", run.bad_records) };
+        assert_eq!(topic, "/scan");
+        assert!(error.to_string().contains("unknown CDR encapsulation 0x0009"), "{error}");
+        if path == &db3_path {
+            assert_eq!(*at, Location::Row(k as i64 + 1));
+        }
+        assert!(occupied_near(&run, 1.5, 5.2));
+    }
+}
+
+/// An MCAP file without compression, its messages top-level or (`chunks`) in uncompressed chunks
+/// of about 2 kB: bytes a test can edit.
+fn write_plain_mcap(path: &Path, messages: &[(&str, &str, u64, Vec<u8>)], chunks: bool) {
+    let opts = mcap::WriteOptions::new().compression(None).use_chunks(chunks).chunk_size(Some(2048)).profile("ros2");
+    let mut w = opts.create(std::io::BufWriter::new(std::fs::File::create(path).unwrap())).unwrap();
+    let mut channels = BTreeMap::new();
+    for (seq, (topic, ty, t, data)) in messages.iter().enumerate() {
+        let id = *channels.entry(*topic).or_insert_with(|| {
+            let schema = w.add_schema(ty, "ros2msg", b"").unwrap();
+            w.add_channel(schema, topic, "cdr", &BTreeMap::new()).unwrap()
+        });
+        let header = mcap::records::MessageHeader { channel_id: id, sequence: seq as u32, log_time: *t, publish_time: *t };
+        w.write_to_known_channel(&header, data).unwrap();
+    }
+    w.finish().unwrap();
+}
+
+/// `bytes` with the record length at `at` (a record's offset) set to `len`.
+fn with_record_length(bytes: &[u8], at: usize, len: u64) -> Vec<u8> {
+    let mut b = bytes.to_vec();
+    b[at + 1..at + 9].copy_from_slice(&len.to_le_bytes());
+    b
+}
+
+#[test]
+fn a_wrong_mcap_record_length_names_the_record_and_what_it_needed() {
+    let path = tmp("plain.mcap");
+    write_plain_mcap(&path, &bag_messages(YAW_90), false);
+    let bytes = std::fs::read(&path).unwrap();
+    let (_, at, len) = records(&bytes).into_iter().filter(|r| r.0 == 0x05).nth(30).unwrap();
+    let replay_of = |name: &str, b: &[u8]| {
+        let p = tmp(name);
+        std::fs::write(&p, b).unwrap();
+        let run = replay::replay(&p, &no_classifier()).unwrap();
+        assert!(run.report.scans_read > 0 && run.report.scans_read < SCANS, "{}", run.report.scans_read);
+        assert_eq!(run.report.scans_used, run.report.scans_read);
+        match run.error {
+            Some(ReplayError::Mcap { offset, reason, .. }) => (offset, reason),
+            e => panic!("{e:?}"),
+        }
+    };
+    // Too short for a Message's fixed fields (before: `cannot parse Message record: Record parse
+    // failed`).
+    let (offset, reason) = replay_of("short-message.mcap", &with_record_length(&bytes, at, 10));
+    assert_eq!(offset, at as u64);
+    assert_eq!(
+        reason,
+        "Message record of 10 bytes is shorter than the 22 bytes of its channel id, sequence, log time and publish time \
+         (a wrong record length)"
+    );
+    // Too long: the next record header falls inside this message's data.
+    let (offset, reason) = replay_of("long-message.mcap", &with_record_length(&bytes, at, len as u64 + 40));
+    assert_eq!(offset, (at + 9 + len + 40) as u64);
+    assert!(reason.starts_with("no MCAP record starts here (opcode 0x"), "{reason}");
+    assert!(reason.ends_with(&format!("the Message record at byte {at} has a wrong length")), "{reason}");
+    // Inside an uncompressed chunk: the record's own byte (before: `damaged Chunk record: Record
+    // parse failed`). The chunk's CRC is zeroed (unchecked) so the crate reads its records.
+    let chunked = tmp("plain-chunks.mcap");
+    write_plain_mcap(&chunked, &bag_messages(YAW_90), true);
+    let bytes = std::fs::read(&chunked).unwrap();
+    let (_, chunk_at, _) = records(&bytes).into_iter().filter(|r| r.0 == 0x06).nth(3).unwrap();
+    let first = chunk_at + 9 + 40;
+    let inner = first + 9 + u64::from_le_bytes(bytes[first + 1..first + 9].try_into().unwrap()) as usize;
+    assert_eq!(bytes[inner], 0x05, "the chunk's second record is a message");
+    let mut bad = with_record_length(&bytes, inner, 10);
+    bad[chunk_at + 9 + 24..chunk_at + 9 + 28].fill(0);
+    let (offset, reason) = replay_of("short-chunked-message.mcap", &bad);
+    assert_eq!(offset, chunk_at as u64);
+    assert!(
+        reason.starts_with(&format!("damaged Chunk record: its record at byte {inner}: Message record of 10 bytes is shorter than the 22")),
+        "{reason}"
+    );
 }
 
 /// The top-level records of an MCAP file: (opcode, offset, body length).

@@ -129,6 +129,17 @@ fn u64_at(b: &[u8], at: usize) -> Option<u64> {
 impl<'a> Trace<'a> {
     /// Checks the header and every record.
     pub fn parse(bytes: &'a [u8]) -> Result<Self, TraceError> {
+        match Self::parse_prefix(bytes)? {
+            (trace, None) => Ok(trace),
+            (_, Some(e)) => Err(e),
+        }
+    }
+
+    /// Checks the header, then the records as far as they are good: the trace of the good
+    /// records before the first bad one (cut off, empty, too long, older than the one before),
+    /// and that record's error (or [`TraceError::TrailingBytes`] after a good last record). A
+    /// bad header is an error: nothing can be read.
+    pub fn parse_prefix(bytes: &'a [u8]) -> Result<(Self, Option<TraceError>), TraceError> {
         if bytes.len() < HEADER_LEN {
             return Err(TraceError::TooShort);
         }
@@ -144,21 +155,29 @@ impl<'a> Trace<'a> {
             return Err(TraceError::UnknownFlags(flags));
         }
         let records = u32_at(bytes, 16).ok_or(TraceError::TooShort)?;
-        let trace = Trace { flags, records, body: &bytes[HEADER_LEN..] };
+        let body = &bytes[HEADER_LEN..];
+        let mut trace = Trace { flags, records, body };
         let mut at = 0;
         let mut last_t = 0;
         for index in 0..records {
-            let (r, next) = trace.record_at(at).ok_or(TraceError::BadRecord { index })?;
-            if r.t_us < last_t {
-                return Err(TraceError::TimeGoesBack { index });
+            let bad = match trace.record_at(at) {
+                None => Some(TraceError::BadRecord { index }),
+                Some((r, _)) if r.t_us < last_t => Some(TraceError::TimeGoesBack { index }),
+                Some((r, next)) => {
+                    last_t = r.t_us;
+                    at = next;
+                    None
+                }
+            };
+            if bad.is_some() {
+                return Ok((Trace { flags, records: index, body: &body[..at] }, bad));
             }
-            last_t = r.t_us;
-            at = next;
         }
-        if at != trace.body.len() {
-            return Err(TraceError::TrailingBytes);
+        if at != body.len() {
+            trace.body = &body[..at];
+            return Ok((trace, Some(TraceError::TrailingBytes)));
         }
-        Ok(trace)
+        Ok((trace, None))
     }
 
     fn record_at(&self, at: usize) -> Option<(Record<'a>, usize)> {
@@ -290,6 +309,18 @@ mod tests {
         assert_eq!(Trace::parse(&back).err(), Some(TraceError::TimeGoesBack { index: 1 }));
         let empty_record = trace_of(0, &[(0, vec![])]);
         assert_eq!(Trace::parse(&empty_record).err(), Some(TraceError::BadRecord { index: 0 }));
+
+        // The good records before a bad one still read.
+        let (t, e) = Trace::parse_prefix(&good[..good.len() - 1]).unwrap();
+        assert_eq!((t.len(), e), (1, Some(TraceError::BadRecord { index: 1 })));
+        assert_eq!(t.records().collect::<Vec<_>>(), [Record { t_us: 0, bytes: &[1, 2, 3] }]);
+        let (t, e) = Trace::parse_prefix(&back).unwrap();
+        assert_eq!((t.len(), e), (1, Some(TraceError::TimeGoesBack { index: 1 })));
+        let mut trailing = good.clone();
+        trailing.push(0);
+        let (t, e) = Trace::parse_prefix(&trailing).unwrap();
+        assert_eq!((t.len(), t.records().count(), e), (2, 2, Some(TraceError::TrailingBytes)));
+        assert_eq!(Trace::parse_prefix(&good[..10]).err(), Some(TraceError::TooShort));
         assert!(TraceError::BadMagic.to_string().contains("LIVESTRC"));
     }
 

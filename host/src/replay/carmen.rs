@@ -19,12 +19,22 @@
 //! `+inf` (no return), zero or negative ranges NaN (invalid): the ROS conventions the rest of
 //! replay uses.
 //!
+//! A line that does not read (cut short, a bad number, a beam count that does not match the
+//! line's fields, a `ROBOTLASER1` `max_range` that is not positive, a time stamp beyond
+//! ±[`MAX_TIMESTAMP_S`]) is a [`LineError`]; replay skips that line and counts it by
+//! [`LineError::reason`].
+//!
 //! What this module must not do: know about the controller or pictures.
 
 use std::fmt;
 
 /// `FLASER` scans: readings at or beyond this are "no return".
 pub const FLASER_MAX_RANGE_M: f64 = 80.0;
+
+/// The largest time stamp a line may carry, either side of 0, seconds: 2200-01-01 00:00 UTC.
+/// CARMEN stamps are seconds since 1970 or since the start of the log; a larger one (`1e300`) is
+/// a corrupt field, and would make the log's duration absurd.
+pub const MAX_TIMESTAMP_S: f64 = 7_258_118_400.0;
 
 /// The kinds of line replay reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -117,6 +127,30 @@ pub enum LineError {
         /// The count.
         count: String,
     },
+    /// The line is complete (it ends in `ipc_timestamp hostname logger_timestamp`) but its beam
+    /// count (with a `ROBOTLASER1`'s remission count) says it has a different number of fields.
+    CountMismatch {
+        /// Line type.
+        kind: LineKind,
+        /// The beam count.
+        beams: usize,
+        /// Fields (after the line type) the counts need; `None` for a `ROBOTLASER1` line with no
+        /// remission count where its beam count puts one.
+        expected: Option<usize>,
+        /// Fields the line has.
+        found: usize,
+    },
+    /// A number outside what the field can hold.
+    OutOfRange {
+        /// Line type.
+        kind: LineKind,
+        /// The field.
+        field: &'static str,
+        /// What was there.
+        token: String,
+        /// What it must be.
+        expected: &'static str,
+    },
     /// More tokens than the line type has (two lines run together, or a corrupt count).
     ExtraFields {
         /// Line type.
@@ -136,9 +170,32 @@ impl fmt::Display for LineError {
             LineError::BadBeamCount { kind, count } => {
                 write!(f, "{kind} beam count `{count}` is not between 1 and {}", firmware::capacity::MAX_INPUT_BEAMS)
             }
+            LineError::CountMismatch { kind, beams, expected: Some(expected), found } => {
+                write!(f, "{kind} beam count {beams} does not match the number of fields: the line has {found}, its counts need {expected}")
+            }
+            LineError::CountMismatch { kind, beams, expected: None, found } => write!(
+                f,
+                "{kind} beam count {beams} does not match the number of fields: the line has {found}, with no remission count \
+                 after that many readings"
+            ),
+            LineError::OutOfRange { kind, field, token, expected } => write!(f, "{kind} {field} `{token}` is out of range ({expected})"),
             LineError::ExtraFields { kind, expected, found } => {
                 write!(f, "{kind} line has {found} fields where its counts say {expected}")
             }
+        }
+    }
+}
+
+impl LineError {
+    /// The reason replay counts a skipped line under (`--json`'s `skipped_records.by_reason`).
+    pub fn reason(&self) -> &'static str {
+        match self {
+            LineError::MissingField { .. } => "truncated_line",
+            LineError::BadNumber { .. } => "bad_number",
+            LineError::BadBeamCount { .. } => "bad_beam_count",
+            LineError::CountMismatch { .. } => "count_mismatch",
+            LineError::OutOfRange { .. } => "out_of_range",
+            LineError::ExtraFields { .. } => "extra_fields",
         }
     }
 }
@@ -192,11 +249,43 @@ impl<'a> Tokens<'a> {
         Ok([self.num(names[0])?, self.num(names[1])?, self.num(names[2])?])
     }
 
+    /// A time stamp: a number within ±[`MAX_TIMESTAMP_S`] (the Freiburg 079 log starts at
+    /// −0.96 s).
+    fn time(&mut self, field: &'static str) -> Result<f64, LineError> {
+        let t = self.num(field)?;
+        if t.abs() > MAX_TIMESTAMP_S {
+            let token = self.toks[self.i - 1].to_string();
+            return Err(LineError::OutOfRange {
+                kind: self.kind,
+                field,
+                token,
+                expected: "at most 7258118400 s either side of 0, the year 2200",
+            });
+        }
+        Ok(t)
+    }
+
+    /// The line ends like a complete one: `number hostname number`, the hostname not a number.
+    fn ends_with_stamp(&self) -> bool {
+        let n = self.toks.len();
+        let is_num = |t: &str| t.parse::<f64>().is_ok();
+        n >= 3 && is_num(self.toks[n - 3]) && !is_num(self.toks[n - 2]) && is_num(self.toks[n - 1])
+    }
+
+    /// A complete line must have `expected` tokens after its type (a truncated one is left to the
+    /// field-by-field reading, which names the first missing field).
+    fn check_counts(&self, beams: usize, expected: Option<usize>) -> Result<(), LineError> {
+        if expected != Some(self.toks.len()) && self.ends_with_stamp() {
+            return Err(LineError::CountMismatch { kind: self.kind, beams, expected, found: self.toks.len() });
+        }
+        Ok(())
+    }
+
     /// `ipc_timestamp hostname logger_timestamp`, and nothing after.
     fn stamp(&mut self) -> Result<f64, LineError> {
-        let t = self.num("ipc_timestamp")?;
+        let t = self.time("ipc_timestamp")?;
         self.next("hostname")?;
-        self.num("logger_timestamp")?;
+        self.time("logger_timestamp")?;
         if self.i != self.toks.len() {
             return Err(LineError::ExtraFields { kind: self.kind, expected: self.i, found: self.toks.len() });
         }
@@ -235,6 +324,8 @@ pub fn parse_line(line: &str) -> Result<Option<CarmenRecord>, LineError> {
         }
         LineKind::Flaser => {
             let n = t.beams()?;
+            // count, n ranges, 6 pose values, 3 stamp fields.
+            t.check_counts(n, Some(n + 10))?;
             let ranges_m = (0..n).map(|_| t.range("range").map(|r| ros_range(r, FLASER_MAX_RANGE_M))).collect::<Result<_, _>>()?;
             let laser_pose = t.pose(["x", "y", "theta"])?;
             let robot_pose = t.pose(["odom_x", "odom_y", "odom_theta"])?;
@@ -256,9 +347,17 @@ pub fn parse_line(line: &str) -> Result<Option<CarmenRecord>, LineError> {
             t.num("fov")?;
             let angle_increment = t.num("angular_resolution")?;
             let max_range = t.num("max_range")?;
+            if max_range <= 0.0 {
+                let token = t.toks[t.i - 1].to_string();
+                return Err(LineError::OutOfRange { kind, field: "max_range", token, expected: "metres above 0" });
+            }
             t.num("accuracy")?;
             t.next("remission_mode")?;
             let n = t.beams()?;
+            // 7 header fields, count, n ranges, remission count, the remissions, 6 pose values, 5
+            // motion fields, 3 stamp fields.
+            let remissions = t.toks.get(8 + n).and_then(|c| c.parse::<usize>().ok());
+            t.check_counts(n, remissions.map(|r| n.saturating_add(r).saturating_add(23)))?;
             let ranges_m = (0..n).map(|_| t.range("range").map(|r| ros_range(r, max_range))).collect::<Result<_, _>>()?;
             let n_rem = t.count("remission count", t.toks.len())?;
             for _ in 0..n_rem {
@@ -350,5 +449,68 @@ mod tests {
             LineError::ExtraFields { kind: LineKind::Odom, expected: 9, found: 10 }
         );
         assert!(matches!(parse_line("FLASER 99999 1"), Err(LineError::BadBeamCount { .. })));
+    }
+
+    #[test]
+    fn a_beam_count_that_does_not_match_a_complete_line_is_named() {
+        // Three readings under a count of 2: without the check the stamp would be read one field
+        // late (`logger_timestamp `pippo` is not a valid number`).
+        let e = parse_line("FLASER 2 1 2 3 0 0 0 0 0 0 5.0 pippo 5.0").unwrap_err();
+        assert_eq!(e, LineError::CountMismatch { kind: LineKind::Flaser, beams: 2, expected: Some(12), found: 13 });
+        assert_eq!(e.to_string(), "FLASER beam count 2 does not match the number of fields: the line has 13, its counts need 12");
+        assert_eq!(e.reason(), "count_mismatch");
+        // One reading short.
+        assert!(matches!(parse_line("FLASER 3 1 2 0 0 0 0 0 0 5.0 pippo 5.0"), Err(LineError::CountMismatch { found: 12, .. })));
+        // A line cut short is still a truncated line, named by its first missing field.
+        assert_eq!(parse_line("FLASER 3 1 2 0 0").unwrap_err(), LineError::MissingField { kind: LineKind::Flaser, field: "y" });
+        // ROBOTLASER1: 2 readings and 1 remission written, a beam count of 3 (which makes the
+        // remission `0.1` its remission count), then of 1 (the remission count `2.25`, no count).
+        let rl = |n: usize| {
+            format!(
+                "ROBOTLASER1 0 -1.5708 3.14159 0.0174533 50.0 0.01 0 {n} 1.5 2.25 1 0.1 1.0 2.0 0.5 0.9 2.1 0.45 0.3 0.01 1.2 0.4 \
+                 0.0 105.25 host 105.26"
+            )
+        };
+        assert!(parse_line(&rl(2)).is_ok());
+        let e = parse_line(&rl(3)).unwrap_err();
+        assert_eq!(e, LineError::CountMismatch { kind: LineKind::RobotLaser1, beams: 3, expected: None, found: 26 });
+        assert!(e.to_string().contains("with no remission count after that many readings"), "{e}");
+        // A beam count of 1 puts the remission count at `2.25`: not a count either.
+        assert!(matches!(parse_line(&rl(1)), Err(LineError::CountMismatch { beams: 1, expected: None, .. })));
+        // Counts 2 and 1 but a remission missing: the counts need 26 fields.
+        let short = rl(2).replace(" 1 0.1 ", " 1 ");
+        assert_eq!(
+            parse_line(&short).unwrap_err(),
+            LineError::CountMismatch { kind: LineKind::RobotLaser1, beams: 2, expected: Some(26), found: 25 }
+        );
+    }
+
+    #[test]
+    fn a_max_range_that_is_not_positive_and_absurd_time_stamps_are_refused() {
+        let rl = |max: &str, ts: &str| {
+            format!("ROBOTLASER1 0 -1.5708 3.14159 0.0174533 {max} 0.01 0 2 1.5 2.25 0 1.0 2.0 0.5 0.9 2.1 0.45 0.3 0.01 1.2 0.4 0.0 {ts} host {ts}")
+        };
+        assert!(parse_line(&rl("50.0", "105.25")).is_ok());
+        for max in ["-1", "0", "-0"] {
+            let e = parse_line(&rl(max, "105.25")).unwrap_err();
+            assert_eq!(
+                e,
+                LineError::OutOfRange { kind: LineKind::RobotLaser1, field: "max_range", token: max.into(), expected: "metres above 0" }
+            );
+            assert_eq!(e.reason(), "out_of_range");
+        }
+        for max in ["nan", "inf"] {
+            assert!(matches!(parse_line(&rl(max, "105.25")), Err(LineError::BadNumber { field: "max_range", .. })), "{max}");
+        }
+        // Stamps up to the year 2200, either side of 0 (the Freiburg 079 log starts at −0.96 s).
+        assert!(parse_line(&rl("50.0", "7258118400")).is_ok());
+        assert!(parse_line("ODOM 0 0 0 0 0 0 -0.958593 pippo -0.958593").is_ok());
+        for ts in ["1e300", "7258118401", "-1e10"] {
+            let e = parse_line(&format!("ODOM 0 0 0 0 0 0 {ts} pippo 1")).unwrap_err();
+            assert!(matches!(&e, LineError::OutOfRange { field: "ipc_timestamp", token, .. } if token == ts), "{e:?}");
+            assert!(e.to_string().contains("the year 2200"), "{e}");
+        }
+        let e = parse_line("ODOM 0 0 0 0 0 0 1 pippo 1e300").unwrap_err();
+        assert!(matches!(e, LineError::OutOfRange { field: "logger_timestamp", .. }), "{e:?}");
     }
 }

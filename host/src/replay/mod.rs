@@ -17,13 +17,19 @@
 //! replay gives it the laser's pose as the robot pose.
 //!
 //! [`replay`] then makes a first pass over the poses to centre the controller's 51.2 m grid on the
-//! trajectory (and says if the trajectory does not fit), and ticks the controller once per scan
+//! trajectory ([`place_grid`]: a few stray poses, such as one corrupt `x`, neither move it nor
+//! are used; it says if the trajectory does not fit), and ticks the controller once per scan
 //! at the log's own time stamps, with `Command::Start` on the first tick (and again whenever it
 //! reports `Exhausted`, at most once per replan interval, since new scans may open new frontiers),
 //! the embedded int8 classifier installed unless told otherwise. Each goal it chooses is recorded
-//! with its time. Damage (a truncated gzip stream, a corrupt line, a cut MCAP record, a bad
-//! sqlite page, a message that does not decode) stops reading; everything before it is replayed
-//! and the damage is reported with the file and the line, byte offset or row.
+//! with its time.
+//!
+//! Bad input loses nothing that was good. A bad record whose boundaries are known (a CARMEN line
+//! that does not read, a bag message that does not decode) is skipped and counted by reason
+//! ([`BadRecords`]), and reading goes on. Damage that loses the framing (a truncated or corrupt
+//! gzip stream, a cut or unparsable MCAP record or chunk, a bad sqlite page) stops reading;
+//! everything before it is replayed. Both are reported with the file and the line, byte offset
+//! or row.
 //!
 //! What this module must not do: decide anything the robot does (that is the core's job) or read
 //! a clock on the controller's behalf (only the replay's own wall time is measured).
@@ -37,6 +43,7 @@ use crate::search::encode_range;
 use firmware::classifier::ModelError;
 use firmware::{BinaryAngle, Command, Config, Controller, Inputs, Mode, Pose2, ScanInput};
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::fmt;
 use std::io::{BufRead, Read};
 use std::path::{Path, PathBuf};
@@ -196,6 +203,57 @@ pub enum ReplayError {
         /// The file.
         file: PathBuf,
     },
+    /// The log held no scan the controller could use, and bad records were skipped.
+    NoGoodScans {
+        /// The file.
+        file: PathBuf,
+        /// Bad records skipped.
+        skipped: u32,
+        /// The first of them.
+        first: Box<ReplayError>,
+    },
+    /// Every scan's laser position is beyond the core's fixed-point range (±32 767 m), e.g. a log
+    /// in UTM coordinates.
+    PosesOutOfRange {
+        /// The file.
+        file: PathBuf,
+        /// Scans read.
+        scans: usize,
+        /// The first of them.
+        at: Location,
+        /// Its position, metres.
+        position: [f64; 2],
+    },
+    /// The grid's origin is beyond the core's fixed-point range (±32 767 m).
+    GridOrigin {
+        /// The file.
+        file: PathBuf,
+        /// The origin, metres.
+        origin: [f64; 2],
+    },
+}
+
+impl ReplayError {
+    /// The reason a skipped bad record is counted under (`--json`'s `skipped_records.by_reason`):
+    /// [`carmen::LineError::reason`] for a CARMEN line, `not_text`, `undecodable_message`.
+    pub fn reason(&self) -> &'static str {
+        match self {
+            ReplayError::CarmenLine { error, .. } => error.reason(),
+            ReplayError::NotText { .. } => "not_text",
+            ReplayError::Message { .. } => "undecodable_message",
+            _ => "damage",
+        }
+    }
+}
+
+/// A number for a message: as Rust prints it below a million, in exponent form above (`1e9`, and
+/// `1e300` rather than 301 digits).
+pub fn compact(v: f64) -> String {
+    if v.is_finite() && v.abs() < 1e6 {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }
 
 impl fmt::Display for ReplayError {
@@ -219,11 +277,69 @@ impl fmt::Display for ReplayError {
             ReplayError::Model(e) => write!(f, "classifier model: {e:?}"),
             ReplayError::Record { file, reason } => write!(f, "{}: cannot record: {reason}", file.display()),
             ReplayError::NoScans { file } => write!(f, "{}: no laser scans to replay", file.display()),
+            ReplayError::NoGoodScans { file, skipped, first } => {
+                write!(f, "{}: no laser scans to replay: {}, the first {first}", file.display(), bad_records_skipped(*skipped))
+            }
+            ReplayError::PosesOutOfRange { file, scans, at, position } => write!(
+                f,
+                "{}: none of the {scans} scans has a laser position within the core's ±32767 m: the first is at ({}, {}) ({at})",
+                file.display(),
+                compact(position[0]),
+                compact(position[1])
+            ),
+            ReplayError::GridOrigin { file, origin } => write!(
+                f,
+                "{}: the grid's origin ({}, {}) is beyond the core's ±32767 m",
+                file.display(),
+                compact(origin[0]),
+                compact(origin[1])
+            ),
         }
     }
 }
 
 impl std::error::Error for ReplayError {}
+
+/// Bad records kept with their errors (all are counted).
+pub const BAD_RECORDS_KEPT: usize = 5;
+
+/// Bad records skipped while reading: records whose boundaries are known (a CARMEN line, a bag
+/// message) but whose content is not valid. Reading goes on after each.
+#[derive(Debug, Default)]
+pub struct BadRecords {
+    /// How many.
+    pub total: u32,
+    /// How many by [`ReplayError::reason`].
+    pub by_reason: BTreeMap<&'static str, u32>,
+    /// The first [`BAD_RECORDS_KEPT`], in the order they were found.
+    pub first: Vec<ReplayError>,
+}
+
+impl BadRecords {
+    /// Counts `e`, keeping it if it is among the first.
+    pub fn add(&mut self, e: ReplayError) {
+        self.total += 1;
+        *self.by_reason.entry(e.reason()).or_insert(0) += 1;
+        if self.first.len() < BAD_RECORDS_KEPT {
+            self.first.push(e);
+        }
+    }
+
+    /// Adds those of a later file.
+    pub fn append(&mut self, other: BadRecords) {
+        self.total += other.total;
+        for (reason, n) in other.by_reason {
+            *self.by_reason.entry(reason).or_insert(0) += n;
+        }
+        let room = BAD_RECORDS_KEPT.saturating_sub(self.first.len());
+        self.first.extend(other.first.into_iter().take(room));
+    }
+
+    /// `2 bad_number, 1 truncated_line`.
+    pub fn reasons(&self) -> String {
+        self.by_reason.iter().map(|(r, n)| format!("{n} {r}")).collect::<Vec<_>>().join(", ")
+    }
+}
 
 /// A log read into memory.
 #[derive(Debug)]
@@ -244,6 +360,8 @@ pub struct LogData {
     pub sources: Vec<String>,
     /// Assumptions made, for the user.
     pub warnings: Vec<String>,
+    /// Bad records skipped.
+    pub bad_records: BadRecords,
     /// The damage reading stopped at.
     pub error: Option<ReplayError>,
 }
@@ -279,6 +397,7 @@ fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
         span_s: None,
         sources: Vec::new(),
         warnings: Vec::new(),
+        bad_records: BadRecords::default(),
         error: None,
     };
     let counter = std::rc::Rc::new(std::cell::Cell::new(0u64));
@@ -306,8 +425,8 @@ fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
         }
         line_no += 1;
         let Ok(text) = std::str::from_utf8(&buf) else {
-            log.error = Some(ReplayError::NotText { file: file.to_path_buf(), line: line_no });
-            break;
+            log.bad_records.add(ReplayError::NotText { file: file.to_path_buf(), line: line_no });
+            continue;
         };
         match carmen::parse_line(text) {
             Ok(None) => {}
@@ -331,10 +450,8 @@ fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
                     }
                 }
             }
-            Err(error) => {
-                log.error = Some(ReplayError::CarmenLine { file: file.to_path_buf(), line: line_no, error });
-                break;
-            }
+            // The line ends where it ends: skip it and read on.
+            Err(error) => log.bad_records.add(ReplayError::CarmenLine { file: file.to_path_buf(), line: line_no, error }),
         }
     }
     for (i, name) in ["FLASER", "ROBOTLASER1", "ODOM"].iter().enumerate() {
@@ -367,9 +484,8 @@ fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -> LogData {
         span_s: contents.span_ns.map(|(a, b)| (a as f64 / 1e9, b as f64 / 1e9)),
         sources: contents.topics.iter().map(|(t, ty)| format!("{t} ({ty})")).collect(),
         warnings,
-        // Container damage comes first in the file's order of reading; a message that does not
-        // decode stops the replay where it is.
-        error: contents.error.or(scans.error),
+        bad_records: scans.bad_records,
+        error: contents.error,
     }
 }
 
@@ -437,6 +553,7 @@ pub fn read_log(path: &Path) -> Result<LogData, ReplayError> {
                     }
                 }
                 a.warnings.extend(part.warnings);
+                a.bad_records.append(part.bad_records);
                 a.error = part.error;
                 a
             }
@@ -519,6 +636,27 @@ pub struct Rejected {
     pub no_pose: u32,
     /// Refused by the controller (empty, too many beams, zero increment).
     pub controller: u32,
+    /// The laser's pose strays far from the rest of the trajectory ([`place_grid`]): it did not
+    /// place the grid.
+    pub stray_pose: u32,
+}
+
+/// Bad records skipped, for the report.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct SkippedRecords {
+    /// How many.
+    pub total: u32,
+    /// How many by reason (`truncated_line`, `bad_number`, `bad_beam_count`, `count_mismatch`,
+    /// `out_of_range`, `extra_fields`, `not_text`, `undecodable_message`).
+    pub by_reason: BTreeMap<&'static str, u32>,
+    /// The first few, with the file and line, byte offset or row.
+    pub first: Vec<String>,
+}
+
+impl SkippedRecords {
+    fn of(b: &BadRecords) -> Self {
+        SkippedRecords { total: b.total, by_reason: b.by_reason.clone(), first: b.first.iter().map(|e| e.to_string()).collect() }
+    }
 }
 
 /// The machine-readable result (`--json`).
@@ -538,6 +676,8 @@ pub struct ReplayReport {
     pub scans_rejected: u32,
     /// Why.
     pub rejected: Rejected,
+    /// Bad records skipped (reading went on after each).
+    pub skipped_records: SkippedRecords,
     /// Odometry messages read.
     pub odometry: u32,
     /// Time span of the log (everything time-stamped that was read), seconds.
@@ -564,7 +704,8 @@ pub struct ReplayReport {
     pub grid_origin: [f64; 2],
     /// Grid side, metres.
     pub grid_size_m: f64,
-    /// Bounding box of the laser's trajectory `[[min x, min y], [max x, max y]]`, metres.
+    /// Bounding box of the laser's trajectory `[[min x, min y], [max x, max y]]`, metres (without
+    /// stray poses).
     pub trajectory_bounds: [[f64; 2]; 2],
     /// The trajectory does not fit in the grid (scans outside it are not used).
     pub exceeds_grid: bool,
@@ -599,6 +740,8 @@ pub struct ReplayRun {
     pub first_pose: [f64; 3],
     /// See `first_pose`.
     pub last_pose: [f64; 3],
+    /// Bad records skipped.
+    pub bad_records: BadRecords,
     /// The damage reading stopped at, if any.
     pub error: Option<ReplayError>,
 }
@@ -608,23 +751,63 @@ pub fn grid_size_m() -> f64 {
     firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64
 }
 
-/// Bounds of the scans' laser positions.
-pub fn trajectory_bounds(scans: &[ScanRecord]) -> Option<[[f64; 2]; 2]> {
-    let mut it = scans.iter().map(|s| s.pose).filter(|p| p[0].is_finite() && p[1].is_finite());
+/// The largest coordinate the core's fixed-point poses hold, metres
+/// ([`fixed_point::meters_from_f64`]).
+pub const MAX_COORD_M: f64 = 32_767.0;
+
+/// Where the grid goes: the bounds of the laser positions that place it, and the scans whose
+/// position does not.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Placement {
+    /// Bounding box of the positions that place the grid `[[min x, min y], [max x, max y]]`,
+    /// metres.
+    pub bounds: [[f64; 2]; 2],
+    /// Per scan: a stray, whose finite position lies beyond the core's ±[`MAX_COORD_M`], or more
+    /// than a grid side ([`grid_size_m`]) outside the box of the middle half of the positions
+    /// (their x and y quartiles). Such a position could not share the grid with half of the
+    /// trajectory; counted in, one corrupt `x` of `1e9` would move the grid off the trajectory.
+    pub stray: Vec<bool>,
+}
+
+/// Places the grid on the scans' laser positions, robust to strays (up to a quarter of them):
+/// the bounding box of the positions that are finite and not strays. `None` when there is none.
+pub fn place_grid(scans: &[ScanRecord]) -> Option<Placement> {
+    let finite = |p: &[f64; 3]| p[0].is_finite() && p[1].is_finite();
+    let in_range = |p: &[f64; 3]| p[0].abs() <= MAX_COORD_M && p[1].abs() <= MAX_COORD_M;
+    let mut xs: Vec<f64> = scans.iter().map(|s| s.pose).filter(in_range).map(|p| p[0]).collect();
+    let mut ys: Vec<f64> = scans.iter().map(|s| s.pose).filter(in_range).map(|p| p[1]).collect();
+    xs.sort_by(f64::total_cmp);
+    ys.sort_by(f64::total_cmp);
+    let quartile = |v: &[f64], k: usize| v.get((v.len().saturating_sub(1)) * k / 4).copied();
+    let margin = grid_size_m();
+    let window = [
+        [quartile(&xs, 1).unwrap_or(0.0) - margin, quartile(&ys, 1).unwrap_or(0.0) - margin],
+        [quartile(&xs, 3).unwrap_or(0.0) + margin, quartile(&ys, 3).unwrap_or(0.0) + margin],
+    ];
+    let stray: Vec<bool> = scans
+        .iter()
+        .map(|s| {
+            let p = s.pose;
+            finite(&p) && (!in_range(&p) || p[0] < window[0][0] || p[1] < window[0][1] || p[0] > window[1][0] || p[1] > window[1][1])
+        })
+        .collect();
+    let mut it = scans.iter().zip(&stray).filter(|(s, stray)| finite(&s.pose) && !**stray).map(|(s, _)| s.pose);
     let first = it.next()?;
     let mut b = [[first[0], first[1]], [first[0], first[1]]];
     for p in it {
         b[0] = [b[0][0].min(p[0]), b[0][1].min(p[1])];
         b[1] = [b[1][0].max(p[0]), b[1][1].max(p[1])];
     }
-    Some(b)
+    Some(Placement { bounds: b, stray })
 }
 
-/// The grid origin (lower-left corner, on the 0.1 m lattice) that centres the grid on `bounds`.
+/// The grid origin (lower-left corner, on the 0.1 m lattice) that centres the grid on `bounds`,
+/// kept where the core's fixed-point coordinates hold the whole grid.
 pub fn grid_origin(bounds: [[f64; 2]; 2]) -> [f64; 2] {
     let half = grid_size_m() / 2.0;
     let c = [(bounds[0][0] + bounds[1][0]) / 2.0, (bounds[0][1] + bounds[1][1]) / 2.0];
-    [((c[0] - half) * 10.0).round() / 10.0, ((c[1] - half) * 10.0).round() / 10.0]
+    let (lo, hi) = (-MAX_COORD_M, ((MAX_COORD_M - grid_size_m()) * 10.0).floor() / 10.0);
+    [(((c[0] - half) * 10.0).round() / 10.0).clamp(lo, hi), (((c[1] - half) * 10.0).round() / 10.0).clamp(lo, hi)]
 }
 
 fn round3(v: f64) -> f64 {
@@ -642,10 +825,25 @@ pub fn replay(path: &Path, opts: &ReplayOptions) -> Result<ReplayRun, ReplayErro
 
 /// Replays a log already read ([`read_log`]); `t_start` is when reading began.
 pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: f64) -> Result<ReplayRun, ReplayError> {
-    let Some(bounds) = trajectory_bounds(&log.scans) else {
-        return Err(log.error.unwrap_or(ReplayError::NoScans { file: log.file }));
+    let Some(Placement { bounds, stray }) = place_grid(&log.scans) else {
+        if let Some(e) = log.error {
+            return Err(e);
+        }
+        if let Some(s) = log.scans.iter().find(|s| s.pose[0].is_finite() && s.pose[1].is_finite()) {
+            let (at, position) = (s.at, [s.pose[0], s.pose[1]]);
+            return Err(ReplayError::PosesOutOfRange { file: log.file, scans: log.scans.len(), at, position });
+        }
+        let mut bad = log.bad_records;
+        return Err(if bad.first.is_empty() {
+            ReplayError::NoScans { file: log.file }
+        } else {
+            ReplayError::NoGoodScans { file: log.file, skipped: bad.total, first: Box::new(bad.first.remove(0)) }
+        });
     };
     let origin = grid_origin(bounds);
+    let (Some(origin_x_m), Some(origin_y_m)) = (fixed_point::meters_from_f64(origin[0]), fixed_point::meters_from_f64(origin[1])) else {
+        return Err(ReplayError::GridOrigin { file: log.file, origin });
+    };
     let size = grid_size_m();
     let exceeds =
         bounds[0][0] < origin[0] || bounds[0][1] < origin[1] || bounds[1][0] >= origin[0] + size || bounds[1][1] >= origin[1] + size;
@@ -655,12 +853,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         (None, true) => fixed_point::meters_from_f64(CARMEN_MAX_RANGE_M).unwrap_or(opts.config.lidar_max_range_m),
         (None, false) => opts.config.lidar_max_range_m,
     };
-    let cfg = Config {
-        origin_x_m: fixed_point::meters_from_f64(origin[0]).unwrap_or_default(),
-        origin_y_m: fixed_point::meters_from_f64(origin[1]).unwrap_or_default(),
-        lidar_max_range_m: max_range,
-        ..opts.config
-    };
+    let cfg = Config { origin_x_m, origin_y_m, lidar_max_range_m: max_range, ..opts.config };
     let mut ctrl = Box::new(Controller::new(cfg));
     if let Some(blob) = opts.model {
         ctrl.set_model(blob).map_err(ReplayError::Model)?;
@@ -691,10 +884,18 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     let mut last_start: Option<u64> = None;
     let mut ranges_mm: Vec<u16> = Vec::new();
     let mut status = firmware::Status::default();
+    let mut strays = Vec::new();
     for (i, s) in log.scans.iter().enumerate() {
         let t_us = if synthetic_time { i as u64 * crate::search::TICK_US } else { ((s.t_s - t0) * 1e6).round().max(0.0) as u64 };
         let now_us = last_us.max(t_us);
         last_us = now_us;
+        if stray[i] {
+            rejected.stray_pose += 1;
+            if strays.len() < BAD_RECORDS_KEPT {
+                strays.push(format!("{} at ({}, {})", s.at, compact(s.pose[0]), compact(s.pose[1])));
+            }
+            continue;
+        }
         let (Some(pose), Some(angle_min), Some(angle_increment)) = (
             Pose2::from_f64(s.pose[0], s.pose[1], s.pose[2]),
             BinaryAngle::from_radians(s.angle_min),
@@ -783,6 +984,17 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     } else {
         log.span_s.map_or(0.0, |(a, b)| b - a)
     };
+    if rejected.stray_pose > 0 {
+        let more = rejected.stray_pose as usize - strays.len();
+        warnings.push(format!(
+            "{} whose laser pose strays far from the rest of the trajectory (beyond ±{MAX_COORD_M} m, or more than \
+             {size:.1} m outside the middle half of it) did not place the grid and {} not used: {}{}",
+            if rejected.stray_pose == 1 { "1 scan".to_string() } else { format!("{} scans", rejected.stray_pose) },
+            if rejected.stray_pose == 1 { "was" } else { "were" },
+            strays.join(", "),
+            if more > 0 { format!(" and {more} more") } else { String::new() }
+        ));
+    }
     if exceeds {
         warnings.push(format!(
             "the trajectory ({:.1} × {:.1} m) does not fit the controller's {size:.1} m grid: scans outside it are not used",
@@ -791,7 +1003,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         ));
     }
     let scans_read = log.scans.len() as u32 + log.no_pose as u32;
-    let scans_rejected = rejected.outside_grid + rejected.no_pose + rejected.controller;
+    let scans_rejected = rejected.outside_grid + rejected.no_pose + rejected.controller + rejected.stray_pose;
     let report = ReplayReport {
         file: log.file.display().to_string(),
         format: log.format,
@@ -800,6 +1012,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         scans_used: status.scans,
         scans_rejected,
         rejected,
+        skipped_records: SkippedRecords::of(&log.bad_records),
         odometry: log.odometry as u32,
         duration_s: round3(duration_s),
         wall_s: round3(wall_s),
@@ -820,19 +1033,28 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         record,
     };
     let first_pose = first_pose.unwrap_or(log.scans[0].pose);
-    Ok(ReplayRun { report, controller: ctrl, trajectory, first_pose, last_pose, error: log.error })
+    Ok(ReplayRun { report, controller: ctrl, trajectory, first_pose, last_pose, bad_records: log.bad_records, error: log.error })
+}
+
+/// `1 bad record skipped`, `2 bad records skipped`.
+fn bad_records_skipped(n: u32) -> String {
+    format!("{n} bad record{} skipped", if n == 1 { "" } else { "s" })
 }
 
 /// The one-line summary `lives replay` prints.
 pub fn summary_line(r: &ReplayReport) -> String {
     format!(
-        "{} ({}): {} scans read, {} used, {} rejected; {:.1} s of log replayed in {:.2} s ({:.2} % of its duration); \
+        "{} ({}): {} scans read, {} used, {} rejected{}; {:.1} s of log replayed in {:.2} s ({:.2} % of its duration); \
          {} goals; grid {} occupied / {} free cells; labels: {}",
         r.file,
         r.format,
         r.scans_read,
         r.scans_used,
         r.scans_rejected,
+        match r.skipped_records.total {
+            0 => String::new(),
+            n => format!(", {}", bad_records_skipped(n)),
+        },
         r.duration_s,
         r.wall_s,
         100.0 * r.ratio,
@@ -876,8 +1098,9 @@ pub struct ReplayArgs {
     pub set: Vec<String>,
 }
 
-/// Runs `lives replay`: exit status 0, 1 when the log is damaged (what came before it was
-/// replayed and is reported), `Err` (status 2) when nothing could be replayed.
+/// Runs `lives replay`: exit status 0, 1 when the log is not clean (bad records were skipped, or
+/// damage stopped reading: every good scan was replayed and is reported), `Err` (status 2) when
+/// nothing could be replayed.
 pub fn run_command(args: &ReplayArgs) -> Result<std::process::ExitCode, String> {
     use std::io::Write as _;
     let model = crate::model::model_option(args.model.as_deref(), args.no_classifier)?;
@@ -888,7 +1111,7 @@ pub fn run_command(args: &ReplayArgs) -> Result<std::process::ExitCode, String> 
     if let Some(m) = args.max_range {
         fixed_point::meters_from_f64(m)
             .filter(|v| *v > opts.config.lidar_min_range_m && m <= 65.0)
-            .ok_or_else(|| format!("--max-range {m}: expected metres above the minimum range and at most 65"))?;
+            .ok_or_else(|| format!("--max-range {}: expected metres above the minimum range and at most 65", compact(m)))?;
         opts.max_range_m = Some(m);
     }
     let run = replay(&args.file, &opts).map_err(|e| e.to_string())?;
@@ -915,11 +1138,24 @@ pub fn run_command(args: &ReplayArgs) -> Result<std::process::ExitCode, String> 
             eprintln!("warning: {w}");
         }
     }
-    if let Some(e) = &run.error {
-        eprintln!("error: {e} (the {} scans before it were replayed)", r.scans_read);
-        return Ok(std::process::ExitCode::from(1));
+    let bad = &run.bad_records;
+    for e in &bad.first {
+        eprintln!("warning: {e} (skipped)");
     }
-    Ok(std::process::ExitCode::SUCCESS)
+    if bad.total as usize > bad.first.len() {
+        eprintln!("warning: … and {} more", bad_records_skipped(bad.total - bad.first.len() as u32));
+    }
+    let mut code = std::process::ExitCode::SUCCESS;
+    if bad.total > 0 {
+        let around = if bad.total == 1 { "it" } else { "them" };
+        eprintln!("error: {}: {} ({}); the records around {around} were replayed", r.file, bad_records_skipped(bad.total), bad.reasons());
+        code = std::process::ExitCode::from(1);
+    }
+    if let Some(e) = &run.error {
+        eprintln!("error: {e} (reading stopped there; the {} scans before it were replayed)", r.scans_read);
+        code = std::process::ExitCode::from(1);
+    }
+    Ok(code)
 }
 
 #[cfg(test)]
@@ -943,5 +1179,52 @@ mod tests {
         for v in o {
             assert!(((v * 10.0).round() - v * 10.0).abs() < 1e-9, "on the 0.1 m lattice: {v}");
         }
+        // Near the ends of the core's fixed-point range the grid stays inside it.
+        assert_eq!(grid_origin([[-32_767.0, 32_767.0], [-32_760.0, 32_767.0]]), [-32_767.0, 32_715.8]);
+    }
+
+    fn scan_at(x: f64, y: f64, line: usize) -> ScanRecord {
+        ScanRecord {
+            t_s: line as f64,
+            pose: [x, y, 0.0],
+            angle_min: 0.0,
+            angle_increment: 0.01,
+            ranges_m: vec![1.0],
+            at: Location::Line(line),
+        }
+    }
+
+    #[test]
+    fn stray_poses_do_not_place_the_grid() {
+        // A 40 m walk along x, and y between −5 and 5.
+        let mut scans: Vec<ScanRecord> = (0..100).map(|i| scan_at(i as f64 * 0.4, (i % 11) as f64 - 5.0, i)).collect();
+        let clean = place_grid(&scans).unwrap();
+        assert_eq!(clean.bounds, [[0.0, -5.0], [39.6, 5.0]]);
+        assert!(clean.stray.iter().all(|s| !s));
+        // A corrupt x of 1e9 (beyond the core's range), one of 5 000 m (in range, far from the
+        // rest), one just within a grid side of the middle half, and non-finite ones (no pose,
+        // not strays).
+        scans[10].pose[0] = 1e9;
+        scans[20].pose[1] = 5_000.0;
+        scans[30].pose[0] = f64::NAN;
+        scans[40].pose[1] = f64::INFINITY;
+        scans.push(scan_at(29.7 + 51.2, 0.0, 100));
+        let p = place_grid(&scans).unwrap();
+        let strays: Vec<usize> = p.stray.iter().enumerate().filter(|(_, s)| **s).map(|(i, _)| i).collect();
+        assert_eq!(strays, [10, 20]);
+        assert_eq!(p.bounds, [[0.0, -5.0], [80.9, 5.0]]);
+        // Nothing finite: nothing places the grid.
+        assert_eq!(place_grid(&[scan_at(f64::NAN, 0.0, 1)]), None);
+        // Only strays beyond the core's range: nothing either.
+        assert_eq!(place_grid(&[scan_at(1e9, 0.0, 1), scan_at(-1e9, 0.0, 2)]), None);
+    }
+
+    #[test]
+    fn huge_numbers_print_compactly() {
+        assert_eq!(compact(1e300), "1e300");
+        assert_eq!(compact(-1e9), "-1e9");
+        assert_eq!(compact(f64::INFINITY), "inf");
+        assert_eq!(compact(65.5), "65.5");
+        assert_eq!(compact(-16.7655), "-16.7655");
     }
 }

@@ -7,8 +7,10 @@
 //! 1. [`read_mcap`] / [`read_db3`] pull the messages of those three types out of the container
 //!    in file order, with where each came from ([`Location`]): the byte offset of its MCAP record
 //!    (for a message inside a chunk, the chunk's offset) or its `messages` row id. They stop at
-//!    the first damaged record or row and hand back what came before, plus the error.
-//! 2. [`scans_from_messages`] decodes them (CDR, [`super::cdr`]), sorts them by the bag's receive
+//!    the first damaged record or row (the framing after it is lost) and hand back what came
+//!    before, plus the error.
+//! 2. [`scans_from_messages`] decodes them (CDR, [`super::cdr`]; a message that does not decode
+//!    is skipped and counted, the messages around it are used), sorts them by the bag's receive
 //!    time, and replays the frame tree: `tf_static` transforms apply to the whole bag,
 //!    `tf` transforms and odometry (`header.frame_id` → `child_frame_id`) update their edge as
 //!    they arrive. Each scan's pose is the laser frame's pose in the root of its frame tree
@@ -23,7 +25,7 @@
 //! What this module must not do: know about the controller or pictures.
 
 use super::cdr::{self, CdrError, Transform};
-use super::{Location, ReplayError, ScanRecord};
+use super::{BadRecords, Location, ReplayError, ScanRecord};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -118,6 +120,67 @@ fn op_name(op: u8) -> &'static str {
     }
 }
 
+/// The fixed fields a record's body needs before anything of variable length, by opcode: their
+/// size in bytes and what they are.
+fn fixed_fields(op: u8) -> Option<(usize, &'static str)> {
+    match op {
+        0x03 => Some((14, "id and the lengths of name, encoding and data")),
+        0x04 => Some((16, "id, schema id and the lengths of topic, encoding and metadata")),
+        0x05 => Some((22, "channel id, sequence, log time and publish time")),
+        0x06 => Some((40, "start and end time, uncompressed size and CRC, and the lengths of compression and records")),
+        _ => None,
+    }
+}
+
+/// Opcodes no MCAP record has (0x00 and 0x10–0x7f are reserved; 0x80 and up are private
+/// records, which are skipped): a record header there means the framing is lost.
+fn reserved(op: u8) -> bool {
+    op == 0x00 || (0x10..0x80).contains(&op)
+}
+
+/// Why the `mcap` crate could not parse an `op` record of `len` bytes, in the file's terms: what
+/// its length should have been at least, or the parser's own words.
+fn unparsable(op: u8, len: usize, e: &mcap::McapError) -> String {
+    match fixed_fields(op) {
+        Some((min, what)) if len < min => {
+            format!("{} record of {len} bytes is shorter than the {min} bytes of its {what} (a wrong record length)", op_name(op))
+        }
+        _ => match std::error::Error::source(e) {
+            Some(why) => format!("cannot parse {} record of {len} bytes: {e}: {why}", op_name(op)),
+            None => format!("cannot parse {} record of {len} bytes: {e}", op_name(op)),
+        },
+    }
+}
+
+/// The first record in `records` (an uncompressed chunk's, starting at byte `at` of the file)
+/// that does not parse, described with its byte offset.
+fn bad_inner_record(records: &[u8], at: usize) -> Option<String> {
+    let mut pos = 0;
+    while pos < records.len() {
+        if records.len() - pos < 9 {
+            return Some(format!("a record header at byte {} is cut off by the end of the chunk", at + pos));
+        }
+        let op = records[pos];
+        let mut len_bytes = [0u8; 8];
+        len_bytes.copy_from_slice(&records[pos + 1..pos + 9]);
+        let len = u64::from_le_bytes(len_bytes);
+        let left = (records.len() - pos - 9) as u64;
+        if len > left {
+            return Some(format!(
+                "its {} record (opcode 0x{op:02x}) at byte {} of {len} bytes runs past the end of the chunk, {left} bytes left",
+                op_name(op),
+                at + pos
+            ));
+        }
+        let body = &records[pos + 9..pos + 9 + len as usize];
+        if let Err(e) = mcap::parse_record(op, body) {
+            return Some(format!("its record at byte {}: {}", at + pos, unparsable(op, body.len(), &e)));
+        }
+        pos += 9 + len as usize;
+    }
+    None
+}
+
 /// Channel id → (topic, type name, message encoding).
 type Channels = HashMap<u16, (String, String, String)>;
 
@@ -133,6 +196,8 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
     let mut schemas: HashMap<u16, String> = HashMap::new();
     let mut channels: Channels = HashMap::new();
     let mut pos = MCAP_MAGIC.len();
+    // The record before `pos` (opcode, offset): the one whose length led here.
+    let mut prev: Option<(u8, usize)> = None;
     loop {
         if pos == buf.len() {
             out.error = Some(damage(pos, "file ends without its footer and closing magic (truncated)".into()));
@@ -149,6 +214,17 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
         let len = u64::from_le_bytes(len_bytes);
         let body_start = pos + 9;
         let left = (buf.len() - body_start) as u64;
+        if reserved(op) {
+            let culprit = match prev {
+                Some((p, at)) => format!("the {} record at byte {at} has a wrong length", op_name(p)),
+                None => "the file is damaged".to_string(),
+            };
+            out.error = Some(damage(
+                pos,
+                format!("no MCAP record starts here (opcode 0x{op:02x} is reserved; expected one of 0x01-0x0f or a private 0x80-0xff): {culprit}"),
+            ));
+            return out;
+        }
         if len > left {
             out.error = Some(damage(
                 pos,
@@ -170,7 +246,7 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
         let record = match mcap::parse_record(op, body) {
             Ok(r) => r,
             Err(e) => {
-                out.error = Some(damage(pos, format!("cannot parse {} record: {e}", op_name(op))));
+                out.error = Some(damage(pos, unparsable(op, body.len(), &e)));
                 return out;
             }
         };
@@ -178,11 +254,24 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
             mcap::records::Record::Chunk { header, data } => match mcap::read::ChunkReader::new(header.clone(), &data) {
                 Ok(reader) => {
                     let mut r = Ok(());
-                    for inner in reader {
+                    for (k, inner) in reader.enumerate() {
                         match inner {
                             Ok(rec) => take_record(rec, &mut schemas, &mut channels, &mut out, Location::Offset(pos as u64)),
                             Err(e) => {
-                                r = Err(format!("damaged Chunk record: {e}"));
+                                // Uncompressed records are in the file: name the bad one's byte.
+                                let records_at = body_start + 40 + header.compression.len();
+                                let detail = match header.compression.is_empty() {
+                                    true => bad_inner_record(&data, records_at),
+                                    false => None,
+                                };
+                                r = Err(format!(
+                                    "damaged Chunk record: {}",
+                                    detail.unwrap_or_else(|| format!(
+                                        "after {k} good records (of its {} uncompressed bytes): {e}{}",
+                                        header.uncompressed_size,
+                                        std::error::Error::source(&e).map(|w| format!(": {w}")).unwrap_or_default()
+                                    ))
+                                ));
                                 break;
                             }
                         }
@@ -206,6 +295,7 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
             out.error = Some(damage(pos, reason));
             return out;
         }
+        prev = Some((op, pos));
         pos = next;
     }
 }
@@ -432,8 +522,8 @@ pub struct BagScans {
     pub transforms: usize,
     /// Notes for the user (assumptions made).
     pub warnings: Vec<String>,
-    /// The first message that did not decode (nothing after it was used).
-    pub error: Option<ReplayError>,
+    /// Messages that did not decode (skipped).
+    pub bad_records: BadRecords,
 }
 
 enum Decoded {
@@ -442,8 +532,8 @@ enum Decoded {
     Tf(Vec<cdr::TransformStamped>),
 }
 
-/// Decodes the messages (stopping at the first that does not decode), replays the frame tree and
-/// returns every scan with the laser's pose.
+/// Decodes the messages (skipping and counting those that do not decode), replays the frame
+/// tree and returns every scan with the laser's pose.
 pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagScans {
     let mut out = BagScans::default();
     // Receive-time order (a stable sort keeps file order for equal stamps).
@@ -457,10 +547,7 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
         };
         match d {
             Ok(d) => decoded.push((m, d)),
-            Err(error) => {
-                out.error = Some(ReplayError::Message { file: file.to_path_buf(), at: m.at, topic: m.topic.clone(), error });
-                break;
-            }
+            Err(error) => out.bad_records.add(ReplayError::Message { file: file.to_path_buf(), at: m.at, topic: m.topic.clone(), error }),
         }
     }
     let mut tree = FrameTree::default();
