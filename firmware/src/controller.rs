@@ -299,8 +299,13 @@ impl Controller {
         Ok(())
     }
 
-    /// Forgets everything but the configuration and the model; idle.
+    /// Forgets everything but the configuration and the model, the status counters included
+    /// (a new search); idle.
     pub fn reset(&mut self) {
+        self.status = Status { mode: Some(Mode::Idle), ..Status::default() };
+        self.goal_best_dist = Meters::MAX;
+        self.goal_progress_us = 0;
+        self.blocked_since = None;
         self.classifier.reset();
         self.lidar.grid.clear();
         self.visual.grid.clear();

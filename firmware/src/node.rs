@@ -30,7 +30,9 @@
 //!   nothing and sends that tick's outputs again, the goal included; an older one is ignored.
 //!   Every host heartbeat is echoed *after* it was handled, so in this mode the echo says "batch
 //!   `t` is done" and follows the tick's `Status`: a host that sees the echo without `Status(t)`
-//!   knows the batch was incomplete (or its answer lost) and retries at once.
+//!   knows the batch was incomplete (or its answer lost) and retries at once. A
+//!   `Command(Reset)` is applied on arrival, not at a tick: the controller forgets everything but
+//!   its configuration and model, and time starts again, so one node serves search after search.
 //!
 //! In both modes the controller's own watchdog is the node's: no pose or scan for
 //! `watchdog_us` (by `now_us`) stops the robot. In lockstep time stands still while no batch
@@ -54,7 +56,7 @@ use crate::controller::{Controller, Mode, Outputs, Status};
 use crate::protocol::frame::CRC;
 use crate::protocol::{
     encode, output_messages, Accepted, Admission, ConfigMsg, CoreDecoder, CoreToHost, ErrorCode, ErrorMsg, Heartbeat, HostToCore, Inbox,
-    LabelsMsg, LinkCounters, Session, StatusMsg, MAX_CORE_TO_HOST_FRAME,
+    LabelsMsg, LinkCounters, Session, StatusMsg, WireCommand, MAX_CORE_TO_HOST_FRAME,
 };
 
 /// Who says what time it is (see the module documentation).
@@ -116,6 +118,8 @@ pub struct NodeCounters {
     pub configs_refused: u32,
     /// Configurations refused because a field was out of range ([`crate::Config::validate`]).
     pub configs_invalid: u32,
+    /// `Command(Reset)`s applied: the controller cleared and, in lockstep, time started again.
+    pub resets: u32,
     /// Lockstep: heartbeats for a new time whose pose or scan was missing, or whose scan was
     /// still missing beams (not ticked).
     pub lockstep_incomplete: u32,
@@ -187,6 +191,7 @@ impl Node {
                 configs_applied: 0,
                 configs_refused: 0,
                 configs_invalid: 0,
+                resets: 0,
                 lockstep_incomplete: 0,
                 lockstep_partial: 0,
                 lockstep_repeats: 0,
@@ -270,6 +275,22 @@ impl Node {
                 self.refused_since_beat = !is_beat;
                 return 0;
             }
+        }
+        if matches!(msg, HostToCore::Command(WireCommand::Reset)) {
+            // At once, not at the next tick: a host starting a new search resets first, then
+            // configures (refused unless idle) and starts; in lockstep its time starts again.
+            ctl.reset();
+            self.inbox.clear_inputs();
+            self.last_tick_us = None;
+            self.last_out = None;
+            self.pose_t_us = None;
+            self.scan_t_us = None;
+            self.partial_beats = None;
+            // The new search's goals count from 1 again: the first is news, whatever was sent.
+            self.goal_sent = None;
+            self.resend_goal = true;
+            self.counters.resets = self.counters.resets.wrapping_add(1);
+            return 0;
         }
         let (beat, pose_t, scan_t) = match &msg {
             HostToCore::Pose(p) => (None, Some(p.t_us), None),
@@ -566,6 +587,31 @@ mod tests {
         assert!(matches!(out[..], [CoreToHost::HelloAck(a)] if !a.accepted && a.reason == AckReason::VersionMismatch));
         let (_, out) = r.rx(&frame(&beat(0, 1)));
         assert_eq!(out, [CoreToHost::Error(ErrorMsg { code: ErrorCode::VersionMismatch { peer: PROTOCOL_VERSION + 1 } })]);
+    }
+
+    #[test]
+    fn reset_starts_a_new_search_at_once_and_lockstep_time_again() {
+        let mut r = Rig::new(TimeMode::Lockstep);
+        r.hello(false);
+        assert_eq!(r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)])).0, 1);
+        assert_eq!(r.rx(&batch(T, &[])).0, 1);
+        // An earlier time is ignored (stale) ...
+        assert_eq!(r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)])).0, 0);
+        assert_eq!(r.node.counters().lockstep_stale, 1);
+        // ... until a Reset: applied on arrival (the controller idle and empty, a configuration
+        // accepted again), and time starts over.
+        let (ticks, out) = r.rx(&frame(&HostToCore::Command(WireCommand::Reset)));
+        assert_eq!((ticks, out.len()), (0, 0));
+        assert_eq!(r.ctl.mode(), Mode::Idle);
+        assert_eq!(r.node.counters().resets, 1);
+        let (_, out) = r.rx(&frame(&HostToCore::Config(ConfigMsg::from_config(&Config::DEFAULT))));
+        assert!(out.is_empty(), "{out:?}");
+        assert_eq!(r.node.counters().configs_applied, 1);
+        let (ticks, out) = r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)]));
+        assert_eq!(ticks, 1);
+        let s = statuses(&out);
+        assert_eq!((s[0].t_us, s[0].ticks, s[0].mode), (0, 1, WireMode::Exploring), "a new search: its first tick");
+        assert_eq!(goals(&out)[0].seq, 1);
     }
 
     #[test]

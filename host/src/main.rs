@@ -924,6 +924,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                     "goals_sent": c.goals_sent,
                     "configs_applied": c.configs_applied,
                     "configs_invalid": c.configs_invalid,
+                    "resets": c.resets,
                     "config_error": report.config_error.map(|e| e.to_string()),
                     "lockstep_incomplete": c.lockstep_incomplete,
                     "lockstep_repeats": c.lockstep_repeats,

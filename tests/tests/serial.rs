@@ -249,6 +249,35 @@ fn a_configuration_out_of_range_is_refused_by_the_node_and_the_bridge_stops_nami
 }
 
 #[test]
+fn one_node_serves_search_after_search_each_as_the_in_process_run() {
+    // Before `Reset`, a second bridge against the same lockstep node hung: the node ignored its
+    // batches (their times were before the last tick of the first search) and echoed them, and
+    // the bridge retried for ever; in real time the new search went on with the old maps.
+    let (mut a, mut b) = mem_pair();
+    let stop_node = AtomicBool::new(false);
+    let bopts = BridgeOptions { max_wall: Some(Duration::from_secs(120)), ..BridgeOptions::new(TimeMode::Lockstep) };
+    let resets = std::thread::scope(|s| {
+        let node = s.spawn(|| {
+            let mut p = NodeProcess::new(Config::DEFAULT, node_opts(TimeMode::Lockstep)).expect("no model");
+            p.run(&mut a, &stop_node);
+            p.report()
+        });
+        for seed in [2, 3, 2] {
+            let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, seed);
+            let inproc = search::run(&sp, |_| {});
+            let r = run_bridge(&mut b, Source::Sim(sp), &bopts, &AtomicBool::new(false)).expect("a session");
+            assert_eq!(r.goals, inproc.goals, "seed {seed}: the goal sequence differs from the in-process run");
+            assert_eq!(r.trajectory, inproc.trajectory, "seed {seed}");
+            assert_eq!(r.result, inproc.result, "seed {seed}");
+        }
+        stop_node.store(true, Ordering::Relaxed);
+        node.join().expect("node thread").counters.resets
+    });
+    // Each bridge resets the node once per `Config` it sends in setup (three).
+    assert_eq!(resets, 9);
+}
+
+#[test]
 fn a_lockstep_bridge_refuses_a_node_on_its_own_clock_and_no_node_is_an_error_not_a_wait() {
     let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 2);
     // A node in real time behind a lockstep bridge: it ticks on its own clock and never at the

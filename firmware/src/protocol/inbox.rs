@@ -86,6 +86,18 @@ impl Inbox {
         }
     }
 
+    /// Drops every input waiting for a tick (pose, scan, detection, commands, base state, last
+    /// heartbeat); the counters stay. For a `Reset` from the host.
+    pub fn clear_inputs(&mut self) {
+        self.pose = None;
+        self.scan = None;
+        self.assembly = None;
+        self.detection = None;
+        self.commands.clear();
+        self.base_blocked = false;
+        self.last_heartbeat = None;
+    }
+
     /// Takes one admitted message.
     pub fn accept(&mut self, msg: HostToCore) -> Accepted {
         match msg {

@@ -34,7 +34,7 @@ use serde::{Deserialize, Serialize};
 /// * v3: the configuration carries `nonmap_view_cap`.
 /// * v4: the configuration carries `nonmap_drop_vacated`.
 /// * v5: `ErrorCode::ConfigInvalid`: a configuration outside the core's ranges is refused, naming
-///   the field.
+///   the field; `Command(Reset)` is applied on arrival (a new search, lockstep time from 0).
 pub const PROTOCOL_VERSION: u16 = 5;
 
 /// Most beams one scan carries, whole ([`ScanMsg`]) or in segments ([`ScanSegmentMsg`]): a 360°

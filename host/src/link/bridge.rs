@@ -5,7 +5,8 @@
 //! sends the robot's pose, the LiDAR scan, a detection (if any) and the base's state as frames;
 //! it drives the base with the goals that come back and stops it on `Stop`. It opens the session
 //! with `Hello` (sent again every `hello_interval` until a `HelloAck`, whose version it checks),
-//! sends the controller's configuration for the world, then `Start`.
+//! sends `Reset` (each run is a new search: the node clears its maps and, in lockstep, starts
+//! its time again) and the controller's configuration for the world, then `Start`.
 //!
 //! **Time.** In [`TimeMode::Lockstep`] the simulator waits for the node: batch `t` (the tick's
 //! frames closed by `Heartbeat { t_us: t }`) is sent, and the tick is done when `Status(t)` and
@@ -575,7 +576,10 @@ impl<'l, B: Base> Bridge<'l, B> {
         if !self.await_session()? {
             return Err(BridgeError::NoSession);
         }
-        let cfg = self.frame(&HostToCore::Config(*config));
+        // A new search: `Reset` first (the node clears its maps and, in lockstep, starts its time
+        // again, whatever it ran before), then the configuration (refused unless idle).
+        let mut cfg = self.frame(&HostToCore::Command(WireCommand::Reset));
+        cfg.extend(self.frame(&HostToCore::Config(*config)));
         for i in 0..self.opts.setup_probes.max(3) {
             let mut bytes = if i < 3 { cfg.clone() } else { Vec::new() };
             let (seq, hb) = self.probe(0, true);
