@@ -436,8 +436,10 @@ enum Cmd {
         /// Print this built-in world (or `random`) as TOML.
         #[arg(long)]
         export: Option<String>,
+        /// The scenario of the world `--export` prints: easy or hard.
         #[arg(long, default_value = "easy")]
         scenario: Scenario,
+        /// The seed of `--export random` (which building it generates).
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
@@ -1303,18 +1305,27 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         }
         Cmd::Replay(args) => host::replay::run_command(&args),
         Cmd::Params => {
-            say!("{:#?}", firmware::Config::DEFAULT);
+            let w = host::overrides::NAMES.iter().chain(host::overrides::SIM_NAMES).map(|n| n.0.len()).max().unwrap_or(0);
+            say!("The controller (`--set NAME=VALUE` on search, eval, replay, bridge; a value outside the core's");
+            say!("range is refused and the error gives the range):");
             say!();
+            say!("  {:w$}  {:>8}  meaning", "NAME", "DEFAULT");
             for (name, what) in host::overrides::NAMES {
-                say!("  --set {name}=VALUE   {what}");
+                let d = host::overrides::get(&firmware::Config::DEFAULT, name).unwrap_or_default();
+                say!("  {name:w$}  {d:>8}  {what}");
             }
             say!();
-            say!("The simulated robot (`lives search`, `lives eval`, `lives bridge --source sim`):");
-            say!("{:#?}", host::search::default_sim());
+            say!("The simulated robot (`--sim NAME=VALUE` on search, eval, bridge --source sim):");
             say!();
+            say!("  {:w$}  {:>8}  meaning", "NAME", "DEFAULT");
+            let sim = host::search::default_sim();
             for (name, what) in host::overrides::SIM_NAMES {
-                say!("  --sim {name}=VALUE   {what}");
+                let d = host::overrides::get_sim(&sim, name).unwrap_or_default();
+                say!("  {name:w$}  {d:>8}  {what}");
             }
+            say!();
+            say!("Everything else is fixed at build time: firmware/src/config.rs (`Config::DEFAULT`) and");
+            say!("firmware/src/capacity.rs.");
             Ok(ExitCode::SUCCESS)
         }
         Cmd::Bench { reps, explore_s, searches } => {

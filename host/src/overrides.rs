@@ -170,6 +170,58 @@ pub fn apply(cfg: &mut Config, assignment: &str) -> Result<(), String> {
     validated(cfg, before, name, v)
 }
 
+/// The value of `--set` parameter `name` in `cfg`, in the units `--set` takes (`None` for an
+/// unknown name). `lives params` prints the defaults with it.
+pub fn get(cfg: &Config, name: &str) -> Option<String> {
+    // Q16.16 metres to the millimetre (0.35 is stored as 0.350006...).
+    let m = |x: fixed_point::Meters| format!("{}", (x.to_num::<f64>() * 1000.0).round() / 1000.0);
+    let s = |us: u64| format!("{}", us as f64 / 1e6);
+    Some(match name {
+        "w_dist_per_m" => cfg.w_dist_per_m.to_string(),
+        "w_unknown_per_cell" => cfg.w_unknown_per_cell.to_string(),
+        "w_surface_per_ray" => cfg.w_surface_per_ray.to_string(),
+        "w_frontier_per_cell" => cfg.w_frontier_per_cell.to_string(),
+        "w_nonmap_per_point" => cfg.w_nonmap_per_point.to_string(),
+        "switch_margin" => cfg.switch_margin.to_string(),
+        "replan_interval_s" => s(cfg.replan_interval_us),
+        "goal_timeout_s" => s(cfg.goal_timeout_us),
+        "robot_radius_m" => m(cfg.robot_radius_m),
+        "camera_range_m" => m(cfg.camera_range_m),
+        "camera_fov_deg" => format!("{:.1}", cfg.camera_fov.to_radians().to_degrees()),
+        "min_frontier_cells" => cfg.min_frontier_cells.to_string(),
+        "unseen_unknown_eighths" => cfg.unseen_unknown_eighths.to_string(),
+        "nonmap_block_cap" => cfg.nonmap_block_cap.to_string(),
+        "nonmap_view_cap" => cfg.nonmap_view_cap.to_string(),
+        "look_around_here" => cfg.look_around_here.to_string(),
+        "gaze" => cfg.gaze.to_string(),
+        "gaze_min_gain" => cfg.gaze_min_gain.to_string(),
+        "nonmap_viewpoints" => cfg.nonmap_viewpoints.to_string(),
+        "nonmap_standoff_m" => m(cfg.nonmap_standoff_m),
+        "nonmap_pool_radius_m" => m(cfg.nonmap_pool_radius_m),
+        "nonmap_wall_clearance_m" => m(cfg.nonmap_wall_clearance_m),
+        "nonmap_drop_vacated" => cfg.nonmap_drop_vacated.to_string(),
+        "viewpoint_snap_radius_m" => m(cfg.viewpoint_snap_radius_m),
+        _ => return None,
+    })
+}
+
+/// The value of `--sim` setting `name` in `sim`, in the units `--sim` takes (`None` for an
+/// unknown name).
+pub fn get_sim(sim: &SimConfig, name: &str) -> Option<String> {
+    Some(match name {
+        "speed_mps" => sim.speed_mps.to_string(),
+        "turn_rate_rps" => sim.turn_rate_rps.to_string(),
+        "range_noise_std_m" => sim.range_noise_std_m.to_string(),
+        "dropout_prob" => sim.dropout_prob.to_string(),
+        "lidar_max_range_m" => sim.lidar_max_range_m.to_string(),
+        "camera_range_m" => sim.camera_range_m.to_string(),
+        "camera_fov_deg" => format!("{:.1}", sim.camera_fov_rad.to_degrees()),
+        "detect_min_visible_fraction" => sim.detect_min_visible_fraction.to_string(),
+        "robot_radius_m" => sim.robot_radius_m.to_string(),
+        _ => return None,
+    })
+}
+
 fn set(cfg: &mut Config, name: &str, v: &str) -> Result<(), String> {
     match name {
         "w_dist_per_m" => cfg.w_dist_per_m = weight(name, v)?,
@@ -238,6 +290,26 @@ mod tests {
             };
             apply(&mut c, &format!("{name}={value}")).unwrap_or_else(|e| panic!("{name}: {e}"));
         }
+    }
+
+    #[test]
+    fn every_setting_reads_back_what_was_set_and_defaults_round_trip() {
+        for (name, _) in NAMES {
+            let d = get(&Config::DEFAULT, name).unwrap_or_else(|| panic!("{name} has no value"));
+            // Setting a parameter to its printed default changes nothing.
+            let mut c = Config::DEFAULT;
+            apply(&mut c, &format!("{name}={d}")).unwrap_or_else(|e| panic!("{name}={d}: {e}"));
+            assert_eq!(get(&c, name), Some(d.clone()), "{name}");
+        }
+        let sim = crate::search::default_sim();
+        for (name, _) in SIM_NAMES {
+            let d = get_sim(&sim, name).unwrap_or_else(|| panic!("{name} has no value"));
+            let (mut s, mut c) = (sim.clone(), Config::DEFAULT);
+            apply_sim(&mut s, &mut c, &format!("{name}={d}")).unwrap_or_else(|e| panic!("{name}={d}: {e}"));
+            assert_eq!(get_sim(&s, name), Some(d.clone()), "{name}");
+        }
+        assert_eq!(get(&Config::DEFAULT, "nope"), None);
+        assert_eq!(get_sim(&sim, "nope"), None);
     }
 
     #[test]
