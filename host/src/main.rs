@@ -995,7 +995,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 let ticks = r.ticks.max(1) as f64;
                 say!("{}; {:.2} s wall", result_line(r), run.wall_s);
                 say!(
-                    "link: sent {} frames / {} B ({:.0} B per tick), received {} frames / {} B, rejected {} {:?}",
+                    "link: sent {} frames / {} B ({:.0} B per tick), received {} frames / {} B, rejected {} ({})",
                     st.frames_sent,
                     st.bytes_sent,
                     st.bytes_sent as f64 / ticks,
@@ -1019,7 +1019,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                     st.scan_frames
                 );
                 if let Some(n) = &st.node_status {
-                    say!("node: {:?}, {} ticks, {} scans, rejected {} {:?}", n.mode, n.ticks, n.scans, n.link.dropped(), n.link);
+                    say!("node: {:?}, {} ticks, {} scans, rejected {} ({})", n.mode, n.ticks, n.scans, n.link.dropped(), n.link);
                 }
             }
             Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) })

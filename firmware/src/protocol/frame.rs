@@ -105,6 +105,18 @@ pub struct LinkCounters {
     pub ignored: u32,
 }
 
+/// `crc 0, cobs 0, decode 0, too long 0, ignored 0`: why frames were dropped (and messages
+/// ignored), for logs.
+impl core::fmt::Display for LinkCounters {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "crc {}, cobs {}, decode {}, too long {}, ignored {}",
+            self.crc_errors, self.cobs_errors, self.decode_errors, self.overflows, self.ignored
+        )
+    }
+}
+
 impl LinkCounters {
     /// Frames dropped for any cause.
     pub const fn dropped(&self) -> u32 {

@@ -15,7 +15,8 @@
 //! whole batch, or its answer was damaged), is sent again, byte for byte: the node ticks a time
 //! once, so a retry never changes the run. With a clean link the run is the in-process
 //! [`crate::search::run`] tick for tick. In [`TimeMode::RealTime`] the bridge sends a batch every
-//! `period` of wall time, moves the base for that period, and applies goals as they arrive.
+//! `period` of wall time (closed by a heartbeat, so a node started in lockstep ticks it too),
+//! moves the base for that period, and applies goals as they arrive.
 //!
 //! **Link loss.** No frame from the node for `watchdog`, or the port failing, is a lost link: the
 //! base is stopped at once, the session is closed, and the bridge keeps reopening the port (when it
@@ -684,7 +685,6 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
     let mut base_blocked = false;
     let mut outcome = "time-limit";
     let mut need_start = true;
-    let mut last_beat = Instant::now();
     let realtime = opts.mode == TimeMode::RealTime;
     let mut next_tick = Instant::now();
 
@@ -791,11 +791,11 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
 
         if realtime {
             if b.open {
-                if last_beat.elapsed() >= Duration::from_secs(1) {
-                    last_beat = Instant::now();
-                    let (_, hb) = b.probe(now_us, true);
-                    batch.extend(hb);
-                }
+                // Every batch closes with a heartbeat: a node in real time echoes it at once (the
+                // link's round trip), and a node started in lockstep ticks on it, at this batch's
+                // time, instead of once per probe.
+                let (_, hb) = b.probe(now_us, true);
+                batch.extend(hb);
                 b.send(&batch);
             }
             ticks += 1;
