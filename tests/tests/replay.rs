@@ -444,6 +444,11 @@ const YAW_90: [f64; 4] = [0.0, 0.0, std::f64::consts::FRAC_1_SQRT_2, std::f64::c
 
 fn write_mcap(path: &Path, messages: &[(&str, &str, u64, Vec<u8>)], chunk_size: u64) {
     let opts = mcap::WriteOptions::new().compression(Some(mcap::Compression::Zstd)).chunk_size(Some(chunk_size)).profile("ros2");
+    write_mcap_with(path, messages, opts);
+}
+
+/// `messages` (topic, type, time, CDR bytes) written with `opts`, one channel per topic.
+fn write_mcap_with(path: &Path, messages: &[(&str, &str, u64, Vec<u8>)], opts: mcap::WriteOptions) {
     let mut w = opts.create(std::io::BufWriter::new(std::fs::File::create(path).unwrap())).unwrap();
     let mut channels = BTreeMap::new();
     for (seq, (topic, ty, t, data)) in messages.iter().enumerate() {
@@ -644,17 +649,7 @@ fn an_undecodable_message_is_skipped_and_the_messages_after_it_are_used() {
 /// of about 2 kB: bytes a test can edit.
 fn write_plain_mcap(path: &Path, messages: &[(&str, &str, u64, Vec<u8>)], chunks: bool) {
     let opts = mcap::WriteOptions::new().compression(None).use_chunks(chunks).chunk_size(Some(2048)).profile("ros2");
-    let mut w = opts.create(std::io::BufWriter::new(std::fs::File::create(path).unwrap())).unwrap();
-    let mut channels = BTreeMap::new();
-    for (seq, (topic, ty, t, data)) in messages.iter().enumerate() {
-        let id = *channels.entry(*topic).or_insert_with(|| {
-            let schema = w.add_schema(ty, "ros2msg", b"").unwrap();
-            w.add_channel(schema, topic, "cdr", &BTreeMap::new()).unwrap()
-        });
-        let header = mcap::records::MessageHeader { channel_id: id, sequence: seq as u32, log_time: *t, publish_time: *t };
-        w.write_to_known_channel(&header, data).unwrap();
-    }
-    w.finish().unwrap();
+    write_mcap_with(path, messages, opts);
 }
 
 /// `bytes` with the record length at `at` (a record's offset) set to `len`.
