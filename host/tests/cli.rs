@@ -309,3 +309,91 @@ fn replay_refuses_an_absurd_max_range_in_few_digits() {
     assert!(err.contains("--max-range 1e300: expected metres"), "{err}");
     assert!(err.len() < 200, "{err}");
 }
+
+#[test]
+fn lidar_decode_refuses_a_file_without_a_packet_and_names_the_damage_it_skips() {
+    let dir = std::env::temp_dir().join(format!("lives-cli-lidar-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let decode = |path: &std::path::Path, json: bool| {
+        let mut cmd = lives();
+        cmd.args(["lidar", "decode"]).arg(path);
+        if json {
+            cmd.arg("--json");
+        }
+        let out = cmd.output().unwrap();
+        (out.status.code(), String::from_utf8(out.stdout).unwrap(), String::from_utf8(out.stderr).unwrap())
+    };
+    // A text file and an empty file: one clear error each, status 2 (before: the README gave 28 lines
+    // of "rejected at byte …" and status 1, the empty file status 0 and no word).
+    let readme = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md");
+    let empty = dir.join("empty.bin");
+    std::fs::write(&empty, b"").unwrap();
+    for (path, why) in [(&readme, "no packet found (neither pcap nor raw 1206-byte payloads)"), (&empty, "the file is empty")] {
+        let (code, stdout, stderr) = decode(path, false);
+        assert_eq!(code, Some(2), "{stderr}");
+        assert_eq!(stdout, "");
+        assert_eq!(stderr, format!("error: {} is not a VLP-16 capture: {why}\n", path.display()));
+    }
+    // Nothing decoded is status 2 too: a pcap holding only its file header, a file cut inside its
+    // first packet.
+    let clean = std::fs::read(host::sensors::vlp16::default_recording()).unwrap();
+    let pcap = std::fs::read(host::sensors::vlp16::default_recording().with_file_name("velodyne_vlp16.pcap")).unwrap();
+    let (hdr, cut) = (dir.join("hdr.pcap"), dir.join("cut.bin"));
+    std::fs::write(&hdr, &pcap[..24]).unwrap();
+    std::fs::write(&cut, &clean[..500]).unwrap();
+    for (path, why) in [
+        (&hdr, "no VLP-16 data packet among its 0 pcap records (0 other traffic, 0 rejected)".to_string()),
+        (&cut, "byte 0: the file ends 500 bytes into a 1206-byte packet (no VLP-16 data packet before it)".to_string()),
+    ] {
+        let (code, stdout, stderr) = decode(path, true);
+        assert_eq!((code, stdout.as_str()), (Some(2), ""));
+        assert_eq!(stderr, format!("error: {}: {why}\n", path.display()));
+    }
+    // The real recording with one byte inserted into packet 500: resynchronised after it, status 1.
+    let mut bytes = clean.clone();
+    bytes.insert(500 * 1206 + 321, 0);
+    let ins = dir.join("ins.bin");
+    std::fs::write(&ins, &bytes).unwrap();
+    let (code, stdout, stderr) = decode(&ins, false);
+    assert_eq!(code, Some(1));
+    assert!(
+        stdout.ends_with(&format!(
+            "{} (raw): 999 data packets, 0 rejected, 0 other, 1207 bytes skipped; scans: 13 + 1 partial; lasers [1, -1]°, 897 beams\n",
+            ins.display()
+        )),
+        "{stdout}"
+    );
+    assert_eq!(
+        stderr,
+        format!(
+            "warning: byte 603000: 1207 bytes skipped to the next packet (none starts in them)\n\
+             error: {}: 1207 bytes skipped; the 999 packets around it were decoded\n",
+            ins.display()
+        )
+    );
+    let (code, stdout, _) = decode(&ins, true);
+    assert_eq!(code, Some(1));
+    let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert_eq!(v["packets"]["data"], 999);
+    assert_eq!(v["scans"].as_array().unwrap().len(), 13);
+    assert_eq!(v["skipped_bytes"], 1207);
+    assert_eq!(v["skips"], serde_json::json!([{"offset": 603000, "bytes": 1207}]));
+    // Ten packets with a broken flag: the first five are named, the rest counted.
+    let mut bytes = clean.clone();
+    for k in 0..10 {
+        bytes[k * 100 * 1206 + 500] = 0;
+    }
+    let flags = dir.join("flags.bin");
+    std::fs::write(&flags, &bytes).unwrap();
+    let (code, _, stderr) = decode(&flags, false);
+    assert_eq!(code, Some(1));
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 7, "{stderr}");
+    assert_eq!(lines[0], "warning: byte 0: block 5 starts with 00 EE, expected FF EE (packet rejected)");
+    assert_eq!(lines[5], "warning: … and 5 more packets rejected");
+    assert_eq!(lines[6], format!("error: {}: 10 packets rejected; the 990 packets around them were decoded", flags.display()));
+    // The clean recording: status 0, nothing on stderr.
+    let (code, _, stderr) = decode(&host::sensors::vlp16::default_recording(), false);
+    assert_eq!((code, stderr.as_str()), (Some(0), ""));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -7,7 +7,7 @@
 //! Beam 598 is exactly yaw +60° (598 · 360 / 897 = 240) and covers azimuths (299.80°, 300.20°].
 
 use host::sensors::vlp16::{
-    self, PacketError, PlanarScan, RejectReason, Vlp16Config, Vlp16Error, Vlp16Packet, Vlp16Udp, DATA_PORT, PACKET_LEN,
+    self, PacketError, PcapScans, PlanarScan, RejectReason, Skipped, Vlp16Config, Vlp16Error, Vlp16Packet, Vlp16Udp, DATA_PORT, PACKET_LEN,
 };
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -248,6 +248,93 @@ fn bits(s: &PlanarScan) -> (u64, Vec<u32>) {
     (s.stamp_us, s.ranges_m.iter().map(|r| r.to_bits()).collect())
 }
 
+/// Scans (and the open rotation) of `r` that differ from the clean decode `full`, by index.
+fn differing_scans(r: &PcapScans, full: &PcapScans) -> Vec<usize> {
+    assert_eq!(r.scans.len(), full.scans.len());
+    let mut d: Vec<usize> = r.scans.iter().zip(&full.scans).enumerate().filter(|(_, (a, b))| bits(a) != bits(b)).map(|(i, _)| i).collect();
+    if bits(r.partial.as_ref().unwrap()) != bits(full.partial.as_ref().unwrap()) {
+        d.push(r.scans.len());
+    }
+    d
+}
+
+#[test]
+fn raw_recording_with_bytes_inserted_or_lost_resynchronises() {
+    let bytes = std::fs::read(einride()).unwrap();
+    let cfg = Vlp16Config::default();
+    let full = vlp16::read_raw(&einride(), &cfg).unwrap();
+    // Before: one byte inserted into packet 500 put every later packet out of step, and all 500 were
+    // rejected (6 scans of 13). Now packet 500 and the byte are skipped (1207 bytes) and the other
+    // 999 packets decode: only the scan packet 500 was in (the 7th) differs.
+    let mut ins = bytes.clone();
+    ins.insert(500 * PACKET_LEN + 321, 0);
+    let r = vlp16::decode_raw_bytes(Path::new("ins.bin"), &ins, &cfg).unwrap();
+    assert!(r.error.is_none(), "{:?}", r.error);
+    assert_eq!((r.counts.data, r.counts.rejected), (999, 0));
+    assert_eq!((r.skipped_bytes, r.skips.clone()), (1_207, vec![Skipped { offset: 603_000, len: 1_207 }]));
+    assert_eq!(differing_scans(&r, &full), vec![6]);
+    // One byte lost from packet 500: the 1205 left of it are skipped.
+    let mut del = bytes.clone();
+    del.remove(500 * PACKET_LEN + 321);
+    let r = vlp16::decode_raw_bytes(Path::new("del.bin"), &del, &cfg).unwrap();
+    assert_eq!((r.counts.data, r.skipped_bytes), (999, 1_205));
+    assert_eq!(differing_scans(&r, &full), vec![6]);
+    // 5000 bytes of garbage between packets 300 and 301, and a byte inserted at the first read chunk's
+    // end (byte 262 144, in packet 217): packet 217 is lost, nothing else.
+    let mut junk = bytes.clone();
+    junk.splice(300 * PACKET_LEN..300 * PACKET_LEN, (0..5_000).map(|i| (i % 251) as u8));
+    junk.insert(262_144, 0xFF);
+    let r = vlp16::decode_raw_bytes(Path::new("junk.bin"), &junk, &cfg).unwrap();
+    assert_eq!((r.counts.data, r.counts.rejected, r.skipped_bytes), (999, 0, 1_207 + 5_000));
+    assert_eq!(r.skips, vec![Skipped { offset: 217 * 1_206, len: 1_207 }, Skipped { offset: 300 * 1_206 + 1, len: 5_000 }]);
+    assert_eq!(differing_scans(&r, &full).len(), 1);
+}
+
+#[test]
+fn pcap_with_one_payload_damaged_skips_that_packet() {
+    // Data packet 40 (record at 54574, payload at 54632) gets a byte inserted, with the record,
+    // IPv4 and UDP lengths grown to match: the frames are intact, the payload is 1207 bytes.
+    let mut bytes = std::fs::read(pcap()).unwrap();
+    let (rec, payload) = (54_574, 54_632);
+    for (at, be) in [(rec + 8, false), (rec + 12, false), (rec + 16 + 14 + 2, true), (rec + 16 + 14 + 20 + 4, true)] {
+        if be {
+            let v = u16::from_be_bytes([bytes[at], bytes[at + 1]]) + 1;
+            bytes[at..at + 2].copy_from_slice(&v.to_be_bytes());
+        } else {
+            let v = u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) + 1;
+            bytes[at..at + 4].copy_from_slice(&v.to_le_bytes());
+        }
+    }
+    bytes.insert(payload + 321, 0);
+    let r = vlp16::decode_pcap_bytes(Path::new("ins.pcap"), &bytes, &Vlp16Config::default()).unwrap();
+    assert!(r.error.is_none(), "{:?}", r.error);
+    assert_eq!((r.counts.data, r.counts.rejected, r.counts.other), (83, 1, 16));
+    assert_eq!(r.rejects[0].offset, payload as u64);
+    assert_eq!(r.rejects[0].reason, RejectReason::Packet(PacketError::Length { len: 1_207 }));
+    // Packet 40 is in the open rotation: the finished scan is untouched.
+    let full = vlp16::read_pcap(&pcap(), &Vlp16Config::default()).unwrap();
+    assert_eq!(bits(&r.scans[0]), bits(&full.scans[0]));
+}
+
+#[test]
+fn a_pcap_with_a_broken_magic_number_decodes_as_raw_payloads() {
+    // Not a pcap any more, so read as raw payloads: the reader resynchronises on every payload and
+    // skips the pcap and Ethernet/IP/UDP headers and the position packets between them.
+    let mut bytes = std::fs::read(pcap()).unwrap();
+    bytes[..4].fill(0);
+    let dir = temp_dir("magic");
+    let path = dir.join("magic.pcap");
+    std::fs::write(&path, &bytes).unwrap();
+    let (f, r) = vlp16::read_capture(&path, &Vlp16Config::default()).unwrap();
+    assert_eq!(f, vlp16::CaptureFormat::Raw);
+    assert_eq!((r.counts.data, r.counts.rejected), (84, 0));
+    assert_eq!(r.skipped_bytes, (bytes.len() - 84 * PACKET_LEN) as u64);
+    let full = vlp16::read_pcap(&pcap(), &Vlp16Config::default()).unwrap();
+    assert_eq!(bits(&r.scans[0]), bits(&full.scans[0]));
+    assert_eq!(bits(r.partial.as_ref().unwrap()), bits(full.partial.as_ref().unwrap()));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 #[test]
 fn live_udp_on_loopback_gives_the_same_scans_as_the_file() {
     let bytes = std::fs::read(einride()).unwrap();
@@ -314,9 +401,30 @@ fn mutated_captures_never_panic_and_every_packet_is_accounted_for() {
             let i = rng.below(raw.len());
             raw[i] = rng.next() as u8;
         }
+        // Every byte is decoded, rejected with its packet, or skipped.
         let r = vlp16::decode_raw_bytes(Path::new("m.bin"), &raw, &cfg).unwrap();
-        assert_eq!(r.counts.data + r.counts.rejected, 1000);
+        assert_eq!((r.counts.data + r.counts.rejected) * PACKET_LEN as u64 + r.skipped_bytes, raw.len() as u64);
+        assert!(r.counts.data + r.counts.rejected >= 1000 - 32, "{:?}", r.counts);
         assert!(r.error.is_none());
+        // Up to 4 bytes inserted or lost: each costs at most two packets, and the stream stays accounted for.
+        let mut raw = raw_bytes.clone();
+        let edits = 1 + rng.below(4);
+        for _ in 0..edits {
+            let i = rng.below(raw.len());
+            if rng.below(2) == 0 {
+                raw.insert(i, rng.next() as u8);
+            } else {
+                raw.remove(i);
+            }
+        }
+        let r = vlp16::decode_raw_bytes(Path::new("e.bin"), &raw, &cfg).unwrap();
+        let cut = match r.error {
+            None => 0,
+            Some(Vlp16Error::TruncatedPayload { len, .. }) => len,
+            Some(e) => panic!("{e}"),
+        };
+        assert_eq!((r.counts.data + r.counts.rejected) * PACKET_LEN as u64 + r.skipped_bytes + cut, raw.len() as u64);
+        assert!(r.counts.data >= 1000 - 2 * edits as u64, "{edits} edits: {:?}", r.counts);
         // Pcap: flip up to 16 bytes after the file header, and cut the file at a random place half the time.
         let mut p = pcap_bytes.clone();
         for _ in 0..1 + rng.below(16) {

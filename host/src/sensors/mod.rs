@@ -9,10 +9,10 @@ pub mod vlp16;
 
 use std::io::Write as _;
 use std::net::SocketAddr;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
-use vlp16::{CaptureFormat, PlanarScan, Vlp16Config, ELEVATION_DEG};
+use vlp16::{CaptureFormat, PcapScans, PlanarScan, Vlp16Config, ELEVATION_DEG};
 
 /// `lives lidar …`: decode a VLP-16 capture or listen to a live one.
 #[derive(clap::Subcommand, Debug)]
@@ -121,8 +121,79 @@ fn lasers_deg(lasers: &[usize]) -> Vec<i8> {
     lasers.iter().map(|&c| ELEVATION_DEG[c]).collect()
 }
 
-/// Runs `lives lidar …`. Exit status 0; 1 when a capture was damaged (its good part is still
-/// reported) or `listen` timed out; `Err` (status 2) when nothing could be read.
+/// At most this many rejected packets and skipped runs of bytes are named on stderr; the rest are
+/// counted in one line.
+const WARNINGS_SHOWN: usize = 5;
+
+/// Why a capture in which no data packet could be decoded is refused (status 2): the error that
+/// ended it, or what was found instead.
+fn nothing_decoded(file: &Path, format: CaptureFormat, r: &PcapScans) -> String {
+    if let Some(e) = &r.error {
+        return format!("{e} (no VLP-16 data packet before it)");
+    }
+    let first = r.rejects.first().map(|x| format!(", the first at byte {}: {}", x.offset, x.reason)).unwrap_or_default();
+    match format {
+        CaptureFormat::Pcap => format!(
+            "{}: no VLP-16 data packet among its {} pcap records ({} other traffic, {} rejected{first})",
+            file.display(),
+            r.counts.other + r.counts.rejected,
+            r.counts.other,
+            r.counts.rejected
+        ),
+        CaptureFormat::Raw => format!(
+            "{}: no valid VLP-16 data packet: {} rejected{first}{}",
+            file.display(),
+            r.counts.rejected,
+            skipped_bytes(r.skipped_bytes).map(|s| format!("; {s}")).unwrap_or_default()
+        ),
+    }
+}
+
+fn skipped_bytes(n: u64) -> Option<String> {
+    (n > 0).then(|| format!("{n} byte{} skipped", if n == 1 { "" } else { "s" }))
+}
+
+fn packets(n: u64) -> String {
+    format!("{n} packet{}", if n == 1 { "" } else { "s" })
+}
+
+/// The first [`WARNINGS_SHOWN`] rejected packets and skipped runs on stderr, in file order, and a
+/// count of the rest.
+fn warn_damage(r: &PcapScans) {
+    // (offset, bytes skipped or `None` for a rejected packet, warning)
+    let mut events: Vec<(u64, Option<u64>, String)> = r
+        .rejects
+        .iter()
+        .map(|x| (x.offset, None, format!("byte {}: {} (packet rejected)", x.offset, x.reason)))
+        .chain(r.skips.iter().map(|s| {
+            (s.offset, Some(s.len), format!("byte {}: {} bytes skipped to the next packet (none starts in them)", s.offset, s.len))
+        }))
+        .collect();
+    events.sort_by_key(|e| e.0);
+    events.truncate(WARNINGS_SHOWN);
+    for (_, _, w) in &events {
+        eprintln!("warning: {w}");
+    }
+    let shown_rejects = events.iter().filter(|e| e.1.is_none()).count() as u64;
+    let shown_bytes: u64 = events.iter().filter_map(|e| e.1).sum();
+    let more: Vec<String> = [
+        (r.counts.rejected > shown_rejects).then(|| {
+            let n = r.counts.rejected - shown_rejects;
+            format!("{n} more packet{} rejected", if n == 1 { "" } else { "s" })
+        }),
+        (r.skipped_bytes > shown_bytes).then(|| format!("{} more bytes skipped", r.skipped_bytes - shown_bytes)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    if !more.is_empty() {
+        eprintln!("warning: … and {}", more.join(", "));
+    }
+}
+
+/// Runs `lives lidar …`. Exit status 0; 1 when a capture was damaged (packets rejected, bytes
+/// skipped or the read cut short: its good part is still reported) or `listen` timed out; `Err`
+/// (status 2) when nothing could be read, or no data packet could be decoded.
 pub fn run(cmd: LidarCmd) -> Result<ExitCode, String> {
     match cmd {
         LidarCmd::Decode { file, json, opts } => {
@@ -139,6 +210,9 @@ pub fn run(cmd: LidarCmd) -> Result<ExitCode, String> {
                 n += 1;
             })
             .map_err(|e| e.to_string())?;
+            if r.counts.data == 0 {
+                return Err(nothing_decoded(&file, format, &r));
+            }
             let format = match format {
                 CaptureFormat::Pcap => "pcap",
                 CaptureFormat::Raw => "raw",
@@ -151,6 +225,8 @@ pub fn run(cmd: LidarCmd) -> Result<ExitCode, String> {
                     "beams": cfg.beams,
                     "packets": { "data": r.counts.data, "rejected": r.counts.rejected, "other": r.counts.other },
                     "rejects": r.rejects.iter().map(|x| serde_json::json!({"offset": x.offset, "reason": x.reason.to_string()})).collect::<Vec<_>>(),
+                    "skipped_bytes": r.skipped_bytes,
+                    "skips": r.skips.iter().map(|s| serde_json::json!({"offset": s.offset, "bytes": s.len})).collect::<Vec<_>>(),
                     "scans": lines,
                     "partial": r.partial.as_ref().map(scan_json),
                     "error": r.error.as_ref().map(|e| e.to_string()),
@@ -160,25 +236,33 @@ pub fn run(cmd: LidarCmd) -> Result<ExitCode, String> {
                 if let Some(s) = &r.partial {
                     out!("{}", scan_line("partial  ", s));
                 }
-                for x in &r.rejects {
-                    out!("rejected at byte {}: {}", x.offset, x.reason);
-                }
                 out!(
-                    "{} ({format}): {} data packets, {} rejected, {} other; scans: {n}{}; lasers {:?}°, {} beams",
+                    "{} ({format}): {} data packets, {} rejected, {} other{}; scans: {n}{}; lasers {:?}°, {} beams",
                     file.display(),
                     r.counts.data,
                     r.counts.rejected,
                     r.counts.other,
+                    skipped_bytes(r.skipped_bytes).map(|s| format!(", {s}")).unwrap_or_default(),
                     if r.partial.is_some() { " + 1 partial" } else { "" },
                     lasers_deg(&r.lasers),
                     cfg.beams
                 );
             }
+            warn_damage(&r);
+            let mut code = ExitCode::SUCCESS;
+            if r.counts.rejected > 0 || r.skipped_bytes > 0 {
+                let damage =
+                    [(r.counts.rejected > 0).then(|| format!("{} rejected", packets(r.counts.rejected))), skipped_bytes(r.skipped_bytes)];
+                let damage: Vec<String> = damage.into_iter().flatten().collect();
+                let around = if r.counts.rejected + r.skips.len() as u64 == 1 { "it" } else { "them" };
+                eprintln!("error: {}: {}; the {} around {around} were decoded", file.display(), damage.join(", "), packets(r.counts.data));
+                code = ExitCode::from(1);
+            }
             if let Some(e) = &r.error {
                 eprintln!("error: {e} (the {n} scans before it are above)");
-                return Ok(ExitCode::from(1));
+                code = ExitCode::from(1);
             }
-            Ok(ExitCode::SUCCESS)
+            Ok(code)
         }
         LidarCmd::Listen { bind, scans, timeout_s, opts } => {
             let cfg = opts.config()?;

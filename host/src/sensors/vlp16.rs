@@ -298,6 +298,19 @@ fn azimuth_diff(a: u16, b: u16) -> u32 {
     (b as u32 + AZIMUTH_TURN - a as u32) % AZIMUTH_TURN
 }
 
+/// Whether a data packet starts at `bytes[0]`: of the first 1206 bytes, every block flag (`FF EE`
+/// every 100 bytes) and the return-mode byte that lie within `bytes` are right, and there is at
+/// least block 0's flag. For a whole packet that is all twelve flags and a known return mode, the
+/// framing [`Vlp16Packet::check`] looks at first (azimuths and the product byte are not looked at);
+/// for fewer bytes, whether they could be the start of one cut by the end of a file. A raw payload
+/// file resynchronises on this after damage.
+pub fn frames_packet(bytes: &[u8]) -> bool {
+    let b = &bytes[..bytes.len().min(PACKET_LEN)];
+    b.len() >= BLOCK_FLAG.len()
+        && (0..BLOCKS).map(|k| k * BLOCK_LEN + field::FLAG.start).filter(|&at| at + 2 <= b.len()).all(|at| b[at..at + 2] == BLOCK_FLAG)
+        && b.get(field::RETURN_MODE).is_none_or(|&m| ReturnMode::from_byte(m).is_some())
+}
+
 /// What the scan assembler keeps: which lasers, how many beams, which ranges.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Vlp16Config {
@@ -584,6 +597,10 @@ pub enum Vlp16Error {
     CorruptRecord { path: PathBuf, offset: u64, reason: String },
     /// A raw payload file ends inside a packet.
     TruncatedPayload { path: PathBuf, offset: u64, len: u64 },
+    /// The file has no bytes.
+    Empty { path: PathBuf },
+    /// Not a pcap file, and no offset of it frames a VLP-16 data packet ([`frames_packet`]).
+    NoPacket { path: PathBuf },
 }
 
 impl fmt::Display for Vlp16Error {
@@ -610,6 +627,10 @@ impl fmt::Display for Vlp16Error {
             }
             Self::TruncatedPayload { path, offset, len } => {
                 write!(f, "{}: byte {offset}: the file ends {len} bytes into a {PACKET_LEN}-byte packet", path.display())
+            }
+            Self::Empty { path } => write!(f, "{} is not a VLP-16 capture: the file is empty", path.display()),
+            Self::NoPacket { path } => {
+                write!(f, "{} is not a VLP-16 capture: no packet found (neither pcap nor raw {PACKET_LEN}-byte payloads)", path.display())
             }
         }
     }
@@ -668,8 +689,19 @@ pub struct PacketCounts {
     pub other: u64,
 }
 
-/// At most this many rejected datagrams are kept with their reasons (all are counted).
+/// At most this many rejected datagrams (and skipped runs of bytes) are kept with their offsets
+/// (all are counted).
 pub const MAX_REJECTS_KEPT: usize = 100;
+
+/// A run of bytes of a raw payload file that frames no packet, skipped to the next offset that
+/// does ([`frames_packet`]): bytes inserted or lost, or a stretch of garbage.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Skipped {
+    /// Byte offset in the file of the first byte skipped.
+    pub offset: u64,
+    /// Bytes skipped.
+    pub len: u64,
+}
 
 /// Scans decoded from a capture (pcap or raw payloads), with what was skipped and, if the file is
 /// damaged, the error that ended the read: everything before the damage is still here.
@@ -687,6 +719,10 @@ pub struct PcapScans {
     pub counts: PacketCounts,
     /// The first [`MAX_REJECTS_KEPT`] rejected datagrams.
     pub rejects: Vec<Rejected>,
+    /// Bytes of a raw payload file skipped to resynchronise on the next packet (0 for pcap).
+    pub skipped_bytes: u64,
+    /// The first [`MAX_REJECTS_KEPT`] runs of skipped bytes (all are in `skipped_bytes`).
+    pub skips: Vec<Skipped>,
     /// The damage that ended the read early (truncated or corrupt record), if any.
     pub error: Option<Vlp16Error>,
     /// Channels (0–15) of the lasers used.
@@ -699,11 +735,27 @@ pub(crate) struct Decoder {
     pub asm: ScanAssembler,
     pub counts: PacketCounts,
     pub rejects: Vec<Rejected>,
+    pub skipped_bytes: u64,
+    pub skips: Vec<Skipped>,
 }
 
 impl Decoder {
     pub fn new(cfg: Vlp16Config) -> Result<Self, ConfigError> {
-        Ok(Self { asm: ScanAssembler::new(cfg)?, counts: PacketCounts::default(), rejects: Vec::new() })
+        Ok(Self {
+            asm: ScanAssembler::new(cfg)?,
+            counts: PacketCounts::default(),
+            rejects: Vec::new(),
+            skipped_bytes: 0,
+            skips: Vec::new(),
+        })
+    }
+
+    /// `len` bytes at `offset` that frame no packet.
+    pub fn skip(&mut self, offset: u64, len: u64) {
+        self.skipped_bytes += len;
+        if self.skips.len() < MAX_REJECTS_KEPT {
+            self.skips.push(Skipped { offset, len });
+        }
     }
 
     pub fn reject(&mut self, offset: u64, reason: RejectReason) {
@@ -736,6 +788,8 @@ impl Decoder {
             partial,
             counts: self.counts,
             rejects: self.rejects,
+            skipped_bytes: self.skipped_bytes,
+            skips: self.skips,
             error,
             lasers: self.asm.lasers(),
         }
@@ -788,8 +842,14 @@ pub fn stream_pcap<R: Read>(
 }
 
 /// Reads a file of raw 1206-byte payloads back to back (no framing, e.g.
-/// `einride_vlp16_recording.bin`). Invalid packets are counted and skipped; a file that ends inside
-/// a packet sets `error` (the scans before it are kept).
+/// `einride_vlp16_recording.bin`). A packet whose framing is right ([`frames_packet`]) is decoded,
+/// or counted and skipped when a later check fails (an azimuth). After a packet whose framing is
+/// wrong the reader resynchronises: it goes on at the next offset where a packet's framing is
+/// right. If that is exactly one packet on (or the end of the file, after an earlier packet), the
+/// stream is still in step and the packet is counted as rejected; otherwise the bytes up to it
+/// (inserted, lost or garbage) are counted in `skipped_bytes` and `skips`, and reading goes on.
+/// A file that ends inside a packet sets `error` (the scans before it are kept). `Err` when the
+/// file cannot be read, is empty, or frames no packet at any offset ([`Vlp16Error::NoPacket`]).
 pub fn read_raw(path: &Path, cfg: &Vlp16Config) -> Result<PcapScans, Vlp16Error> {
     collect(|on_scan| stream_raw(path, open(path)?, cfg, on_scan))
 }
@@ -807,24 +867,141 @@ pub fn stream_raw<R: Read>(
     on_scan: &mut dyn FnMut(PlanarScan),
 ) -> Result<PcapScans, Vlp16Error> {
     let mut dec = Decoder::new(*cfg)?;
-    let mut reader = io::BufReader::with_capacity(256 * 1024, reader);
-    let mut buf = [0u8; PACKET_LEN];
-    let mut offset = 0u64;
+    let mut w = RawWindow::new(reader);
+    // Whether any offset framed a packet (a whole one or one cut by the end of the file).
+    let mut framed = false;
+    let mut packet = [0u8; PACKET_LEN];
     let error = loop {
-        match super::pcap::read_full(&mut reader, &mut buf) {
-            Ok(PACKET_LEN) => {
-                if let Some(scan) = dec.payload(offset, &buf) {
-                    on_scan(scan);
-                }
-                offset += PACKET_LEN as u64;
+        let offset = w.offset();
+        if let Err(source) = w.ensure(PACKET_LEN) {
+            break Some(Vlp16Error::Io { path: Some(path.to_path_buf()), source });
+        }
+        let avail = w.rest();
+        if avail.is_empty() {
+            break None;
+        }
+        if frames_packet(avail) {
+            framed = true;
+            if avail.len() < PACKET_LEN {
+                break Some(Vlp16Error::TruncatedPayload { path: path.to_path_buf(), offset, len: avail.len() as u64 });
             }
-            Ok(0) => break None,
-            Ok(n) => break Some(Vlp16Error::TruncatedPayload { path: path.to_path_buf(), offset, len: n as u64 }),
-            Err(source) => break Some(Vlp16Error::Io { path: Some(path.to_path_buf()), source }),
+            if let Some(scan) = dec.payload(offset, &avail[..PACKET_LEN]) {
+                on_scan(scan);
+            }
+            w.consume(PACKET_LEN);
+            continue;
+        }
+        // Framing lost: find the next offset that frames a packet (or the end of the file).
+        let whole = avail.len() >= PACKET_LEN;
+        if whole {
+            packet.copy_from_slice(&avail[..PACKET_LEN]);
+        }
+        w.consume(1);
+        let mut skipped = 1u64;
+        let found = loop {
+            if let Err(source) = w.ensure(PACKET_LEN) {
+                break Err(source);
+            }
+            let avail = w.rest();
+            if let Some(i) = next_packet_start(avail, w.eof) {
+                w.consume(i);
+                skipped += i as u64;
+                break Ok(true);
+            }
+            // Nothing here frames a packet: keep only the bytes a later start could still need.
+            let n = if w.eof { avail.len() } else { avail.len() + 1 - PACKET_LEN };
+            w.consume(n);
+            skipped += n as u64;
+            if w.eof && w.rest().is_empty() {
+                break Ok(false);
+            }
+        };
+        let found = match found {
+            Ok(f) => f,
+            Err(source) => {
+                dec.skip(offset, skipped);
+                break Some(Vlp16Error::Io { path: Some(path.to_path_buf()), source });
+            }
+        };
+        if whole && skipped == PACKET_LEN as u64 && (found || framed) {
+            // Still in step: one damaged packet (its check names what is wrong).
+            if let Some(scan) = dec.payload(offset, &packet) {
+                on_scan(scan);
+            }
+        } else {
+            dec.skip(offset, skipped);
         }
     };
+    if error.is_none() && !framed {
+        return Err(if w.offset() == 0 {
+            Vlp16Error::Empty { path: path.to_path_buf() }
+        } else {
+            Vlp16Error::NoPacket { path: path.to_path_buf() }
+        });
+    }
     Ok(dec.into_scans(path, error))
 }
+
+/// The first `i` from which `window` frames a packet ([`frames_packet`]). Before the end of the
+/// file only offsets with a whole packet after them are tried; at the end (`eof`), also the start
+/// of a packet cut by it.
+fn next_packet_start(window: &[u8], eof: bool) -> Option<usize> {
+    let last = if eof { window.len().checked_sub(BLOCK_FLAG.len())? } else { window.len().checked_sub(PACKET_LEN)? };
+    (0..=last).find(|&i| window[i..i + 2] == BLOCK_FLAG && frames_packet(&window[i..]))
+}
+
+/// A window on a raw payload file: `buf[0]` is file byte `base`; `buf[pos..end]` is read and not
+/// yet consumed. The buffer is allocated once (zeroing a fresh chunk per read, at the host's
+/// opt-level, cost more than decoding).
+struct RawWindow<R: Read> {
+    reader: R,
+    buf: Vec<u8>,
+    pos: usize,
+    end: usize,
+    base: u64,
+    /// The reader is exhausted: `buf[pos..end]` is the rest of the file.
+    eof: bool,
+}
+
+impl<R: Read> RawWindow<R> {
+    fn new(reader: R) -> Self {
+        Self { reader, buf: vec![0; RAW_CHUNK], pos: 0, end: 0, base: 0, eof: false }
+    }
+
+    /// Offset in the file of the next unconsumed byte.
+    fn offset(&self) -> u64 {
+        self.base + self.pos as u64
+    }
+
+    /// Reads on until at least `n` (at most a packet) bytes are unconsumed, or to the end of the file.
+    fn ensure(&mut self, n: usize) -> io::Result<()> {
+        while self.end - self.pos < n && !self.eof {
+            self.buf.copy_within(self.pos..self.end, 0);
+            self.base += self.pos as u64;
+            self.end -= self.pos;
+            self.pos = 0;
+            let want = self.buf.len() - self.end;
+            let got = super::pcap::read_full(&mut self.reader, &mut self.buf[self.end..]);
+            let got_n = *got.as_ref().unwrap_or(&0);
+            self.end += got_n;
+            self.eof = got_n < want;
+            got?;
+        }
+        Ok(())
+    }
+
+    /// The unconsumed bytes.
+    fn rest(&self) -> &[u8] {
+        &self.buf[self.pos..self.end]
+    }
+
+    fn consume(&mut self, n: usize) {
+        self.pos += n;
+    }
+}
+
+/// Bytes read from a raw payload file at a time.
+const RAW_CHUNK: usize = 256 * 1024;
 
 /// Reads a pcap capture, or a raw payload file when the file does not start with a pcap (or
 /// pcap-ng) magic number.
@@ -1177,5 +1354,137 @@ mod tests {
             e => panic!("{e:?}"),
         }
         assert_eq!(r.error.unwrap().to_string(), "x.bin: byte 1206: the file ends 300 bytes into a 1206-byte packet");
+    }
+
+    #[test]
+    fn framing_is_the_twelve_flags_and_the_return_mode() {
+        let good = golden_packet();
+        assert!(frames_packet(&good));
+        // Whatever follows the packet is not looked at; a packet's first bytes frame one (cut by the end of a file).
+        assert!(frames_packet(&[&good[..], &[0u8; 7][..]].concat()));
+        assert!(frames_packet(&good[..2]));
+        assert!(frames_packet(&good[..1_205]));
+        assert!(!frames_packet(&good[..1]));
+        assert!(!frames_packet(&good[1..]));
+        let mut b = good;
+        b[11 * BLOCK_LEN] = 0xFE;
+        assert!(!frames_packet(&b));
+        assert!(frames_packet(&b[..11 * BLOCK_LEN + 1])); // the broken flag is not within these bytes
+        let mut b = good;
+        b[field::RETURN_MODE] = 0x22;
+        assert!(!frames_packet(&b));
+        // Azimuths and the product byte are the check's business, not the framing's.
+        let mut b = good;
+        b[4 * BLOCK_LEN + 2..4 * BLOCK_LEN + 4].copy_from_slice(&36_000u16.to_le_bytes());
+        b[field::PRODUCT] = 0x99;
+        assert!(frames_packet(&b) && Vlp16Packet::new_checked(&b[..]).is_err());
+    }
+
+    /// Golden packets back to back with `edit` applied; each one ends a scan (its block 0 wraps).
+    fn raw(packets: usize, edit: impl FnOnce(&mut Vec<u8>)) -> PcapScans {
+        let mut bytes: Vec<u8> = (0..packets).flat_map(|_| golden_packet()).collect();
+        edit(&mut bytes);
+        decode_raw_bytes(Path::new("r.bin"), &bytes, &Vlp16Config::default()).unwrap()
+    }
+
+    fn fates(r: &PcapScans) -> (u64, u64, u64, Vec<Skipped>) {
+        (r.counts.data, r.counts.rejected, r.skipped_bytes, r.skips.clone())
+    }
+
+    #[test]
+    fn raw_stream_resynchronises_after_bytes_inserted_or_lost() {
+        let skip = |offset, len| Skipped { offset, len };
+        // One byte inserted into packet 2 (of 6): packet 2 and the byte are skipped, 3..6 decode.
+        let r = raw(6, |b| b.insert(2 * PACKET_LEN + 321, 0));
+        assert_eq!(fates(&r), (5, 0, 1_207, vec![skip(2_412, 1_207)]));
+        assert!(r.error.is_none());
+        // One byte lost from packet 2: the rest of it (1205 bytes) is skipped.
+        let r = raw(6, |b| {
+            b.remove(2 * PACKET_LEN + 321);
+        });
+        assert_eq!(fates(&r), (5, 0, 1_205, vec![skip(2_412, 1_205)]));
+        // Garbage between packets 3 and 4 (with a lone FF EE in it): nothing good is lost.
+        let r = raw(6, |b| {
+            let mut junk = vec![0x20u8; 700];
+            junk[100..102].copy_from_slice(&BLOCK_FLAG);
+            b.splice(3 * PACKET_LEN..3 * PACKET_LEN, junk);
+        });
+        assert_eq!(fates(&r), (6, 0, 700, vec![skip(3_618, 700)]));
+        assert_eq!(r.scans.len(), 6);
+        // Garbage at the start and the end of the file.
+        let r = raw(2, |b| {
+            b.splice(0..0, *b"hello");
+            b.extend_from_slice(&[0x20; 1_300]);
+        });
+        assert_eq!(fates(&r), (2, 0, 1_305, vec![skip(0, 5), skip(2_417, 1_300)]));
+        assert!(r.error.is_none());
+    }
+
+    #[test]
+    fn raw_stream_in_step_rejects_a_damaged_packet_and_skips_a_damaged_run() {
+        let skip = |offset, len| Skipped { offset, len };
+        // A broken flag in packet 1, the next packet where it should be: rejected, by its check's reason.
+        let r = raw(4, |b| b[PACKET_LEN + 7 * BLOCK_LEN + 1] = 0xEF);
+        assert_eq!(fates(&r), (3, 1, 0, vec![]));
+        assert_eq!(
+            r.rejects[0],
+            Rejected { offset: 1_206, reason: RejectReason::Packet(PacketError::BlockFlag { block: 7, found: [0xFF, 0xEF] }) }
+        );
+        // The same in the last packet: the end of the file is where the next one should be.
+        let r = raw(4, |b| b[3 * PACKET_LEN + field::RETURN_MODE] = 0);
+        assert_eq!(fates(&r), (3, 1, 0, vec![]));
+        assert_eq!(r.rejects[0].reason, RejectReason::Packet(PacketError::ReturnMode(0)));
+        // Two damaged packets in a row: one run of 2412 bytes skipped; every byte is accounted for.
+        let r = raw(5, |b| {
+            b[PACKET_LEN] = 0;
+            b[2 * PACKET_LEN] = 0;
+        });
+        assert_eq!(fates(&r), (3, 0, 2_412, vec![skip(1_206, 2_412)]));
+        // A file cut inside a packet after garbage: the cut packet is still named.
+        let r = raw(2, |b| {
+            b.extend_from_slice(&[1, 2, 3]);
+            b.extend_from_slice(&golden_packet()[..300]);
+        });
+        assert_eq!(fates(&r), (2, 0, 3, vec![skip(2_412, 3)]));
+        assert!(matches!(r.error, Some(Vlp16Error::TruncatedPayload { offset: 2_415, len: 300, .. })), "{:?}", r.error);
+    }
+
+    #[test]
+    fn raw_file_without_a_packet_is_an_error() {
+        let cfg = Vlp16Config::default();
+        let e = decode_raw_bytes(Path::new("empty.bin"), &[], &cfg).unwrap_err();
+        assert!(matches!(e, Vlp16Error::Empty { .. }), "{e:?}");
+        assert_eq!(e.to_string(), "empty.bin is not a VLP-16 capture: the file is empty");
+        // Text, and text as long as a few packets: no offset frames a packet.
+        let text = "# LIVES\\nA robot looks for things.\\n".repeat(200);
+        for bytes in [&b"hi"[..], &text.as_bytes()[..3 * PACKET_LEN], text.as_bytes()] {
+            let e = decode_raw_bytes(Path::new("README.md"), bytes, &cfg).unwrap_err();
+            assert_eq!(
+                e.to_string(),
+                "README.md is not a VLP-16 capture: no packet found (neither pcap nor raw 1206-byte payloads)",
+                "{} bytes",
+                bytes.len()
+            );
+        }
+        // The first bytes of a packet are one, cut short.
+        let r = decode_raw_bytes(Path::new("cut.bin"), &golden_packet()[..500], &cfg).unwrap();
+        assert!(matches!(r.error, Some(Vlp16Error::TruncatedPayload { offset: 0, len: 500, .. })));
+    }
+
+    #[test]
+    fn resync_search_crosses_read_chunks() {
+        // A run of 300 050 garbage bytes (longer than a read chunk) with FF EE every 100 bytes, all
+        // but the twelfth flag of a packet: framing is lost for the whole run, then found again.
+        let r = raw(3, |b| {
+            let mut junk = vec![0u8; 300_050];
+            for at in (0..junk.len()).step_by(BLOCK_LEN) {
+                if at % (12 * BLOCK_LEN) != 11 * BLOCK_LEN {
+                    junk[at..at + 2].copy_from_slice(&BLOCK_FLAG);
+                }
+            }
+            b.splice(PACKET_LEN..PACKET_LEN, junk);
+        });
+        assert_eq!(fates(&r), (3, 0, 300_050, vec![Skipped { offset: 1_206, len: 300_050 }]));
+        assert_eq!(r.scans.len(), 3);
     }
 }
