@@ -162,6 +162,8 @@ fn a_simulated_robot_behind_the_adapter_gets_goals_in_its_room_and_is_stopped_on
         node.tick_us.mean / 1e3,
         node.tick_us.max / 1e3
     );
+    // The run is a new mission: the node was reset once, before the configuration.
+    assert_eq!(node.counters.resets, 1);
     assert_eq!(robot.status.code(), Some(0), "sim_robot.py exits 0 on stop(target-found): {summary}");
     assert_eq!(summary["result"], "target-found");
     assert_eq!(summary["stops"].as_array().and_then(|s| s.last()).map(|s| s["reason"].clone()), Some(Value::from("target-found")));

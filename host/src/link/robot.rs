@@ -3,7 +3,9 @@
 //!
 //! The session with the node is the bridge's own ([`Bridge`]: `Hello`, link watchdog, reopening,
 //! health counters); this module supplies the base ([`RobotBase`], which implements [`Base`]) and
-//! the real-time loop. Each `period` (200 ms) it sends the node, stamped on the bridge's
+//! the real-time loop. A run is a new mission: its first configuration follows a `Reset`, so the
+//! node forgets what it mapped before (a link lost and reopened during the run keeps the maps).
+//! Each `period` (200 ms) it sends the node, stamped on the bridge's
 //! monotonic clock at the time the adapter received them: the base's blocked state, the latest
 //! odometry as `Pose`, a `Detection` if the client reported one, and the latest scan if a new one
 //! came. Goals from the node go to the client as `goal` lines; the node's `Stop`, a lost link, a
@@ -510,8 +512,10 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
         }
         if b.open {
             if let (false, Some(c)) = (configured, config) {
-                // v1 has no acknowledgement of a configuration: three copies.
-                let mut bytes = Vec::new();
+                // A new mission: `Reset` first (the node forgets the maps of whatever it ran
+                // before; a link lost later in this run keeps them), then the configuration. v1 has
+                // no acknowledgement of a configuration: three copies.
+                let mut bytes = b.frame(&HostToCore::Command(WireCommand::Reset));
                 for _ in 0..3 {
                     bytes.extend(b.frame(&HostToCore::Config(c)));
                 }
