@@ -497,22 +497,20 @@ macro_rules! say {
     }};
 }
 
-fn load_world(name: &str, scenario: Scenario, seed: u64) -> Result<(String, World), String> {
+/// The world `name` names, its report name, and the scenario it was loaded in: `None` for a
+/// world file, which holds one scenario of its own.
+fn load_world(name: &str, scenario: Scenario, seed: u64) -> Result<(String, World, Option<Scenario>), String> {
     if name == "random" {
-        return Ok((format!("random-{seed}"), World::random_scenario(seed, scenario)));
+        return Ok((format!("random-{seed}"), World::random_scenario(seed, scenario), Some(scenario)));
     }
     if let Some(w) = World::builtin(name, scenario) {
-        return Ok((name.to_string(), w));
+        return Ok((name.to_string(), w, Some(scenario)));
     }
     let path = std::path::Path::new(name);
     if path.extension().is_some_and(|e| e == "toml") || path.exists() {
+        // Reports name the world as the file does (`name = ...`, else the file's name).
         let w = World::load(path).map_err(|e| e.to_string())?;
-        // Reports name the world as the file does (`name = ...`), else by the file's name.
-        let label = match w.name.trim() {
-            "" => path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| name.to_string()),
-            n => n.to_string(),
-        };
-        return Ok((label, w));
+        return Ok((w.name.clone(), w, None));
     }
     Err(format!("unknown world `{name}`: expected one of {}, `random`, or a .toml world file", World::builtin_names().join(", ")))
 }
@@ -521,15 +519,13 @@ fn load_world(name: &str, scenario: Scenario, seed: u64) -> Result<(String, Worl
 /// scenario of its own: `--scenario` with one is refused rather than ignored, and reports say
 /// `file` where a built-in world says `easy` or `hard`.
 fn load_spec(run: &RunArgs) -> Result<SearchSpec, String> {
-    let builtin_or_random = run.world == "random" || World::builtin_names().contains(&run.world.as_str());
-    if !builtin_or_random && run.scenario.is_some() && std::path::Path::new(&run.world).exists() {
+    let scenario = run.scenario.unwrap_or(Scenario::Easy);
+    let (name, w, loaded_in) = load_world(&run.world, scenario, run.seed)?;
+    if loaded_in.is_none() && run.scenario.is_some() {
         return Err(format!("--scenario applies to the built-in and random worlds; the world file {} holds its own scenario", run.world));
     }
-    let (name, w) = load_world(&run.world, run.scenario.unwrap_or(Scenario::Easy), run.seed)?;
-    let mut spec = SearchSpec::new(&name, w, run.scenario.unwrap_or(Scenario::Easy), run.planner, run.seed);
-    if !builtin_or_random {
-        spec.scenario = None;
-    }
+    let mut spec = SearchSpec::new(&name, w, scenario, run.planner, run.seed);
+    spec.scenario = loaded_in;
     Ok(spec)
 }
 
@@ -807,7 +803,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Worlds { export, scenario, seed } => {
             match export {
                 Some(name) => {
-                    let (_, w) = load_world(&name, scenario, seed)?;
+                    let (_, w, _) = load_world(&name, scenario, seed)?;
                     say!("{}", w.to_toml_string().trim_end());
                 }
                 None => {

@@ -418,15 +418,9 @@ pub const MAX_BLOB_BYTES: u64 = 4 << 20;
 /// clear error before anything runs. The bytes live for the rest of the process, as the models
 /// embedded in the firmware do.
 pub fn read_blob(path: &std::path::Path) -> Result<&'static [u8], String> {
-    // Read at most one byte more than the largest blob, so `/dev/zero` or a huge file is refused
-    // without being read whole.
-    let mut bytes = Vec::new();
-    std::fs::File::open(path)
-        .and_then(|f| std::io::Read::read_to_end(&mut std::io::Read::take(f, MAX_BLOB_BYTES + 1), &mut bytes))
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    if bytes.len() as u64 > MAX_BLOB_BYTES {
-        return Err(format!("{}: larger than any classifier blob ({MAX_BLOB_BYTES} bytes at most)", path.display()));
-    }
+    let bytes = crate::sim::read_at_most(path, MAX_BLOB_BYTES)
+        .map_err(|e| format!("{}: {e}", path.display()))?
+        .ok_or_else(|| format!("{}: larger than any classifier blob ({MAX_BLOB_BYTES} bytes at most)", path.display()))?;
     validate_blob(&bytes).map_err(|e| format!("{}: the model does not validate: {e}", path.display()))?;
     Ok(Box::leak(bytes.into_boxed_slice()))
 }

@@ -33,6 +33,16 @@ use std::str::FromStr;
 pub use simulator::{BaseStatus, Scan, Sim, SimConfig};
 pub use world::{Obstacle, Person, Start, Target, World, WorldError};
 
+/// The bytes of the file at `path` if it holds at most `max`; `Ok(None)` if it holds more, found
+/// by reading one byte past `max`, so `/dev/zero` or a huge file is refused without being read
+/// whole. For the files users hand the program: world files, classifier blobs.
+pub fn read_at_most(path: &std::path::Path, max: u64) -> std::io::Result<Option<Vec<u8>>> {
+    use std::io::Read as _;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?.take(max.saturating_add(1)).read_to_end(&mut bytes)?;
+    Ok((bytes.len() as u64 <= max).then_some(bytes))
+}
+
 /// A point or vector in the plane, `[x, y]` in metres.
 pub type P2 = [f64; 2];
 

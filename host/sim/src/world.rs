@@ -566,15 +566,11 @@ impl World {
     /// Read and parse a world file.
     pub fn load(path: &Path) -> Result<World, WorldError> {
         let file = path.display().to_string();
-        // At most one byte more than the largest world file, so `/dev/zero` or a huge file is
-        // refused without being read whole.
-        let mut bytes = Vec::new();
-        std::fs::File::open(path)
-            .and_then(|f| std::io::Read::read_to_end(&mut std::io::Read::take(f, MAX_WORLD_FILE_BYTES + 1), &mut bytes))
+        let bytes = super::read_at_most(path, MAX_WORLD_FILE_BYTES)
             .map_err(|e| WorldError::Io { file: file.clone(), message: format!("cannot read: {e}") })?;
-        if bytes.len() as u64 > MAX_WORLD_FILE_BYTES {
+        let Some(bytes) = bytes else {
             return Err(WorldError::Io { file, message: format!("larger than a world file may be ({MAX_WORLD_FILE_BYTES} bytes)") });
-        }
+        };
         let text = String::from_utf8(bytes).map_err(|e| WorldError::Io {
             file: file.clone(),
             message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),

@@ -274,7 +274,7 @@ impl fmt::Display for ReplayError {
                 None => write!(f, "{}: sqlite error before any message: {reason}", file.display()),
             },
             ReplayError::Message { file, at, topic, error } => write!(f, "{}: {at}: message on {topic}: {error}", file.display()),
-            ReplayError::Model(e) => write!(f, "classifier model: {e:?}"),
+            ReplayError::Model(e) => write!(f, "classifier model: {e}"),
             ReplayError::Record { file, reason } => write!(f, "{}: cannot record: {reason}", file.display()),
             ReplayError::NoScans { file } => write!(f, "{}: no laser scans to replay", file.display()),
             ReplayError::NoGoodScans { file, skipped, first } => {
