@@ -738,8 +738,8 @@ mod tests {
 
     #[test]
     fn candidate_lines_rank_the_step_best_first_and_mark_the_chosen_goal() {
-        let w = World::builtin("apartment", Scenario::Easy).unwrap();
-        let spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, 3);
+        let w = World::builtin("apartment", Scenario::Hard).unwrap();
+        let spec = SearchSpec::new("apartment", w, Scenario::Hard, PlannerChoice::LivesGt, 3);
         let (mut steps, mut marked) = (0, 0);
         let mut observe = |v: &TickView<'_>| {
             if !v.outputs.new_goal || steps >= 4 {

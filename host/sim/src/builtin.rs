@@ -9,7 +9,7 @@
 //!
 //! | world | size | easy | hard | time limit (easy / hard) |
 //! |---|---|---|---|---|
-//! | `apartment` | 20 × 30 m | start in the hallway, target in a room next to or behind it, little clutter | start in the living room, target in a far bedroom, more clutter, two people | 120 / 180 s |
+//! | `apartment` | 20 × 30 m | start in bedroom 2 facing away from its door, target 5.5–7.5 m away in view from that door (the hallway, the dining room's doorway), little clutter | start in the living room, target in a far bedroom, more clutter, two people | 120 / 180 s |
 //! | `office` | 25 × 45 m | target in the southern half, where the robot starts | target in the northern half | 180 / 300 s |
 //! | `hallway` | 15 × 38 m | target behind the start, in the trunk's rooms | target up one of the two branches of the fork | 240 / 240 s |
 //!
@@ -70,6 +70,7 @@ pub fn load(name: &str, scenario: Scenario) -> Option<World> {
 mod tests {
     use super::*;
     use crate::geometry::dist;
+    use crate::P2;
     use crate::{HitKind, SimConfig};
 
     fn all() -> Vec<(String, Scenario, World)> {
@@ -143,6 +144,17 @@ mod tests {
         let a_hard = World::builtin("apartment", Scenario::Hard).unwrap();
         assert!(mean_target_distance(&a_hard) > mean_target_distance(&a_easy) + 3.0);
         assert!(clutter(&a_hard) > clutter(&a_easy) + 5);
+        // Apartment easy: the robot starts in a room with one door (bedroom 2's, x = 9,
+        // y 17-18), and every place is outside the room, within the camera's 4 m of the doorway
+        // and in line of sight from it through no wall.
+        let door = [9.0, 17.5];
+        let in_room = |p: P2| (1.0..9.0).contains(&p[0]) && (14.0..21.0).contains(&p[1]);
+        assert!(in_room([a_easy.start.pose[0], a_easy.start.pose[1]]));
+        for p in a_easy.targets[0].positions() {
+            assert!(!in_room(p) && dist(p, door) <= 4.0, "apartment easy: {p:?}");
+            let seg = |w: &[P2; 2]| crate::geometry::segments_intersect(door, p, w[0], w[1]);
+            assert!(!a_easy.walls.iter().any(seg), "apartment easy: a wall between the door and {p:?}");
+        }
         // Office: easy targets in the start's half (split at the middle of y), hard in the other.
         for (sc, same) in [(Scenario::Easy, true), (Scenario::Hard, false)] {
             let w = World::builtin("office", sc).unwrap();

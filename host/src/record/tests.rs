@@ -13,6 +13,12 @@ fn spec() -> SearchSpec {
     SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, 1)
 }
 
+/// A search long enough to fill several chunks of 100 messages (the easy one ends in seconds).
+fn long_spec() -> SearchSpec {
+    let w = World::builtin("apartment", Scenario::Hard).expect("built-in world");
+    SearchSpec::new("apartment", w, Scenario::Hard, PlannerChoice::LivesGt, 1)
+}
+
 /// One message as the streaming reader returns it: topic, schema name, schema encoding, message
 /// encoding, log time, JSON.
 type StreamMessage = (String, String, String, String, u64, Value);
@@ -128,7 +134,7 @@ fn a_crash_loses_only_the_messages_after_the_last_flushed_chunk() {
     let path = tmp("crash.mcap");
     let opts = RecordOptions { flush_every: Duration::from_secs(3600), flush_every_messages: 100, ..RecordOptions::default() };
     let mut rec = Recorder::create(&path, opts).unwrap();
-    let (_, ok) = record_search(&spec(), Some(&mut rec), |_| {}).unwrap();
+    let (_, ok) = record_search(&long_spec(), Some(&mut rec), |_| {}).unwrap();
     ok.unwrap();
     let total = rec.summary().total_messages();
     let lost = rec.unflushed_messages();
