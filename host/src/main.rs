@@ -451,7 +451,7 @@ enum Cmd {
         /// Virtual seconds of search before measuring (how explored the map is).
         #[arg(long, default_value_t = 120.0)]
         explore_s: f64,
-        /// Also time whole simulated searches (apartment easy, seeds 1–5) against real time.
+        /// Also time whole simulated searches (apartment hard, seeds 1–5, `lives-gt` and `lives`) against real time.
         #[arg(long)]
         searches: bool,
     },
