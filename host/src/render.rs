@@ -349,10 +349,14 @@ fn legend_rows(input: &RenderInput) -> Vec<LegendRow> {
             LegendRow { label: "Target (true)", swatch: Swatch::Outline(TARGET) },
         ]);
     }
-    rows.extend([
-        LegendRow { label: "Non-map points", swatch: Swatch::Dots(NONMAP) },
-        LegendRow { label: "Frontier cells", swatch: Swatch::Squares(FRONTIER) },
-    ]);
+    // Only what the picture holds: a replayed log of a map-only planner has no non-map points,
+    // and a fully explored map no frontier.
+    if !input.nonmap_points.is_empty() {
+        rows.push(LegendRow { label: "Non-map points", swatch: Swatch::Dots(NONMAP) });
+    }
+    if !input.frontier_cells.is_empty() {
+        rows.push(LegendRow { label: "Frontier cells", swatch: Swatch::Squares(FRONTIER) });
+    }
     if !input.viewpoints.is_empty() {
         rows.push(LegendRow { label: "Candidate viewpoints", swatch: Swatch::Arrow(VIEWPOINT) });
     }
@@ -1206,6 +1210,22 @@ mod tests {
             camera_fov_rad: std::f64::consts::FRAC_PI_2,
             camera_range_m: 4.0,
         }
+    }
+
+    #[test]
+    fn the_legend_lists_non_map_points_and_frontiers_only_when_the_picture_has_them() {
+        let d = data();
+        let labels = |inp: &RenderInput| legend_rows(inp).iter().map(|r| r.label).collect::<Vec<_>>();
+        let full = labels(&input(&d, None));
+        assert!(full.contains(&"Non-map points") && full.contains(&"Frontier cells"), "{full:?}");
+        let mut inp = input(&d, None);
+        inp.nonmap_points = &[];
+        inp.frontier_cells = &[];
+        let bare = labels(&inp);
+        assert!(!bare.contains(&"Non-map points") && !bare.contains(&"Frontier cells"), "{bare:?}");
+        assert_eq!(bare.len() + 2, full.len());
+        // The legend's height follows its rows.
+        assert!(layout(&inp).height <= layout(&input(&d, None)).height);
     }
 
     #[test]
