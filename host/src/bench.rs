@@ -178,16 +178,22 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
         // easy ones end in seconds. `lives` runs the committed int8 classifier every scan, as
         // `lives search` does.
         println!("{:<28} {:>10} {:>10} {:>12}", "search (apartment hard)", "sim s", "wall s", "x real time");
-        for planner in [PlannerChoice::LivesGt, PlannerChoice::Lives] {
+        let planners = [PlannerChoice::LivesGt, PlannerChoice::Lives];
+        let specs = crate::eval::eval_specs(
+            &["apartment".to_string()],
+            &[Scenario::Hard],
+            &planners,
+            5,
+            firmware::classifier::EMBEDDED_GEO_MODEL,
+            |_| Ok(()),
+        )
+        .expect("the built-in apartment");
+        for planner in planners {
             let (mut sim_total, mut wall_total) = (0.0, 0.0);
-            for seed in 1..=5 {
-                let w = World::builtin("apartment", Scenario::Hard).expect("apartment");
-                let mut spec = SearchSpec::new("apartment", w, Scenario::Hard, planner, seed);
-                if planner == PlannerChoice::Lives {
-                    spec.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
-                }
+            for spec in specs.iter().filter(|s| s.planner == planner) {
+                let seed = spec.seed;
                 let t = Instant::now();
-                let Ok(r) = search::try_run(&spec, |_| {}) else {
+                let Ok(r) = search::try_run(spec, |_| {}) else {
                     println!("{planner} seed {seed}: the committed model does not validate");
                     continue;
                 };
