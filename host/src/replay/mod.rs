@@ -728,6 +728,15 @@ pub struct RecordInfo {
     pub error: Option<String>,
 }
 
+/// A laser pose at a log time stamp.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct TimedPose {
+    /// The scan's time stamp in the log, seconds (as the log prints it, not since the first scan).
+    pub t_s: f64,
+    /// `[x, y, θ]`, metres and radians.
+    pub pose: [f64; 3],
+}
+
 /// A finished replay: the report and what a picture needs.
 pub struct ReplayRun {
     /// The report.
@@ -736,6 +745,9 @@ pub struct ReplayRun {
     pub controller: Box<Controller>,
     /// Laser positions, one per scan used.
     pub trajectory: Vec<[f64; 2]>,
+    /// One per scan used: its log time stamp and the laser pose the controller mapped it at
+    /// (`[x, y, θ]`, metres and radians, in the log's frame).
+    pub poses: Vec<TimedPose>,
     /// First and last laser pose used.
     pub first_pose: [f64; 3],
     /// See `first_pose`.
@@ -879,6 +891,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     let mut rejected = Rejected { no_pose: log.no_pose as u32, ..Rejected::default() };
     let mut goals = Vec::new();
     let mut trajectory = Vec::new();
+    let mut poses = Vec::new();
     let (mut first_pose, mut last_pose) = (None, [0.0; 3]);
     let mut last_us = 0u64;
     let mut last_start: Option<u64> = None;
@@ -934,6 +947,11 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             }
         }
         trajectory.push([s.pose[0], s.pose[1]]);
+        let used = ctrl.pose().map_or(s.pose, |p| {
+            let (x, y, th) = p.to_f64();
+            [x, y, th]
+        });
+        poses.push(TimedPose { t_s: s.t_s, pose: used });
         first_pose.get_or_insert(s.pose);
         last_pose = s.pose;
         if let (true, Some(g)) = (out.new_goal, &out.goal) {
@@ -1033,7 +1051,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         record,
     };
     let first_pose = first_pose.unwrap_or(log.scans[0].pose);
-    Ok(ReplayRun { report, controller: ctrl, trajectory, first_pose, last_pose, bad_records: log.bad_records, error: log.error })
+    Ok(ReplayRun { report, controller: ctrl, trajectory, poses, first_pose, last_pose, bad_records: log.bad_records, error: log.error })
 }
 
 /// `1 bad record skipped`, `2 bad records skipped`.
