@@ -307,7 +307,7 @@ impl Controller {
         self.goal_progress_us = 0;
         self.blocked_since = None;
         self.classifier.reset();
-        self.lidar.grid.clear();
+        self.lidar.clear();
         self.visual.grid.clear();
         self.nonmap.clear();
         self.planner.clear();
@@ -365,6 +365,9 @@ impl Controller {
         }
 
         if let (Some(scan), Some(pose)) = (inputs.scan, self.pose) {
+            // The robot's own body: readings below the configured minimum are invalid too.
+            let body_mm = (self.cfg.lidar_min_range_m.to_bits() as i64 * 1000 >> 16).clamp(0, u16::MAX as i64) as u16;
+            let scan = ScanInput { range_min_mm: scan.range_min_mm.max(body_mm), ..scan };
             match self.beams.resample(&scan) {
                 Ok(_) => {
                     self.last_scan_us = Some(now_us);
@@ -379,7 +382,7 @@ impl Controller {
                         self.budget_check(4, w);
                     }
                     obs.begin(Stage::Lidar);
-                    let w = self.lidar.integrate(&pose, &self.beams, self.cfg.lidar_max_range_m);
+                    let w = self.lidar.integrate(&pose, &self.beams, self.cfg.lidar_max_range_m).work;
                     obs.end(Stage::Lidar);
                     self.status.cost.lidar = w;
                     self.budget_check(0, w);

@@ -21,6 +21,8 @@ fn one_beam_scan(angle_deg: i32, range_mm: u16) -> BeamScan {
         angle_increment: BinaryAngle::from_degrees(1),
         ranges_mm: &ranges,
         labels: None,
+        range_min_mm: 0,
+        range_max_mm: firmware::scan::RANGE_LIMIT_MM,
     };
     s.resample(&input).unwrap();
     s
@@ -60,6 +62,8 @@ fn a_beam_clears_the_cells_it_crosses_and_marks_its_hit() {
         angle_increment: BinaryAngle::from_fraction(1, 897),
         ranges_mm: &ranges,
         labels: None,
+        range_min_mm: 0,
+        range_max_mm: firmware::scan::RANGE_LIMIT_MM,
     })
     .unwrap();
     g.integrate(&p, &s2, Config::DEFAULT.lidar_max_range_m);
@@ -78,6 +82,8 @@ fn a_beam_that_grazes_its_surface_frees_unknown_cells_but_erases_no_occupied_one
             angle_increment: BinaryAngle::from_fraction(1, 897),
             ranges_mm: &ranges,
             labels: None,
+            range_min_mm: 0,
+            range_max_mm: firmware::scan::RANGE_LIMIT_MM,
         })
         .unwrap();
         let mut g = Box::new(LidarGrid::new(geom()));

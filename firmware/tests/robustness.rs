@@ -72,6 +72,13 @@ fn random_run(seed: u64, ticks: u32) {
             angle_increment: increment,
             ranges_mm: &ranges,
             labels: with_labels.then_some(&labels[..]),
+            // Mostly sane limits; sometimes a zero, inverted or equal pair, which is refused.
+            range_min_mm: rng.below(200) as u16,
+            range_max_mm: match rng.below(10) {
+                0 => 0,
+                1 => rng.below(200) as u16,
+                _ => firmware::scan::RANGE_LIMIT_MM,
+            },
         });
         let command = match rng.below(30) {
             0 => Some(Command::Stop),

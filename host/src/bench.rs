@@ -42,7 +42,7 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
 
     let mut lidar = Box::new(ctrl.lidar.clone());
     let mut lidar_work = 0;
-    let t_lidar = time(reps, || lidar_work = lidar.integrate(&pose, &beams, cfg.lidar_max_range_m));
+    let t_lidar = time(reps, || lidar_work = lidar.integrate(&pose, &beams, cfg.lidar_max_range_m).work);
     let mut visual = Box::new(ctrl.visual.clone());
     let mut visual_work = 0;
     let t_visual = time(reps, || visual_work = visual.integrate(&ctrl.lidar, &pose, cfg.camera_fov, cfg.camera_range_m));

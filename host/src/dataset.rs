@@ -32,7 +32,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::labeller::{hit_code, Agreement, GtLabel, Labeller, LabellerConfig};
-use crate::search::{controller_config, EncodedScan, PlannerChoice, TICK_US};
+use crate::search::{controller_config, encode_sim_scan, PlannerChoice, TICK_US};
 use crate::sim::generate::{random_world_with_density, DEFAULT_DENSITY, GENERATOR_ROBOT_RADIUS_M};
 use crate::sim::geometry::dist;
 use crate::sim::reach::ReachMap;
@@ -675,7 +675,7 @@ fn drive_episode(
         let mut handed_over = false;
         if let Some((c, planner)) = ctrl.as_mut() {
             let use_labels = matches!(planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
-            let encoded = EncodedScan::new(&scan, cfg.lidar_min_range_m);
+            let encoded = encode_sim_scan(&scan, &cfg);
             let inputs = Inputs {
                 pose: Pose2::from_f64(p[0], p[1], p[2]),
                 scan: Some(encoded.input(use_labels)),

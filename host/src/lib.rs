@@ -9,6 +9,7 @@ pub mod link;
 pub mod model;
 pub mod overrides;
 pub mod picture;
+pub mod range;
 pub mod record;
 pub mod render;
 pub mod replay;

@@ -6,9 +6,10 @@
 //! world, planner and seed give the same run bit for bit.
 
 use crate::sim::{BaseStatus, HitKind, Scan, Scenario, Sim, SimConfig, World};
+use crate::range::{encode_range, EncodedScan, RangeLimits};
 use firmware::planner::Viewpoint;
-use firmware::scan::{BeamLabel, BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
-use firmware::{BinaryAngle, Command, Config, Controller, Detection, Inputs, Mode, PlannerKind, Pose2, ScanInput};
+use firmware::scan::{BeamLabel, BeamScan};
+use firmware::{BinaryAngle, Command, Config, Controller, Detection, Inputs, Mode, PlannerKind, Pose2};
 use serde::Serialize;
 use std::fmt;
 use std::str::FromStr;
@@ -407,56 +408,24 @@ pub struct SearchRun {
     pub goals: Vec<((i32, i32), firmware::BinaryAngle)>,
 }
 
-/// Converts a simulated scan into the core's integer encoding (the host/core boundary):
-/// NaN or below the minimum range → invalid, +inf or beyond 65.5 m → no return.
-pub fn encode_ranges(scan: &Scan, min_range_m: f64) -> Vec<u16> {
-    scan.ranges_m.iter().map(|&r| encode_range(r as f64, min_range_m)).collect()
+/// The sensor limits of the simulator's LiDAR (what its scans say in `range_min`/`range_max`).
+pub fn sim_limits(cfg: &SimConfig) -> RangeLimits {
+    RangeLimits::new(cfg.lidar_min_range_m, cfg.lidar_max_range_m)
 }
 
-/// One range in metres to the core's millimetre encoding.
-pub fn encode_range(r: f64, min_range_m: f64) -> u16 {
-    if r.is_nan() || r < min_range_m {
-        RANGE_INVALID
-    } else if r.is_infinite() || r * 1000.0 >= RANGE_NO_RETURN as f64 - 0.5 {
-        RANGE_NO_RETURN
-    } else {
-        ((r * 1000.0).round() as u16).max(1)
-    }
-}
-
-/// One simulated scan in the core's encoding (the host/core boundary): ranges in integer
-/// millimetres, the scan's angles as binary angles, and the ground-truth label of every beam.
-pub struct EncodedScan {
-    /// Ranges, see [`encode_range`].
-    pub ranges_mm: Vec<u16>,
-    /// Ground-truth labels (from the simulator's per-beam truth).
-    pub labels: Vec<BeamLabel>,
-    /// First beam's angle.
-    pub angle_min: BinaryAngle,
-    /// Angle between beams.
-    pub angle_increment: BinaryAngle,
-}
-
-impl EncodedScan {
-    /// Encodes `scan`; readings below `min_range_m` are invalid.
-    pub fn new(scan: &Scan, min_range_m: f64) -> Self {
-        let fallback = BinaryAngle::from_fraction(1, scan.ranges_m.len().max(1) as i64);
-        EncodedScan {
-            ranges_mm: encode_ranges(scan, min_range_m),
-            labels: scan.hits.iter().map(|&h| gt_label(h)).collect(),
-            angle_min: BinaryAngle::from_radians(scan.angle_min).unwrap_or(BinaryAngle::HALF),
-            angle_increment: BinaryAngle::from_radians(scan.angle_increment).unwrap_or(fallback),
-        }
-    }
-
-    /// The core's view of it, with or without the ground-truth labels.
-    pub fn input(&self, with_labels: bool) -> ScanInput<'_> {
-        ScanInput {
-            angle_min: self.angle_min,
-            angle_increment: self.angle_increment,
-            ranges_mm: &self.ranges_mm,
-            labels: with_labels.then_some(&self.labels[..]),
-        }
+/// One simulated scan in the core's encoding (the host/core boundary, [`crate::range`]), with the
+/// ground-truth label of every beam.
+pub fn encode_sim_scan(scan: &Scan, cfg: &SimConfig) -> EncodedScan {
+    let fallback = BinaryAngle::from_fraction(1, scan.ranges_m.len().max(1) as i64);
+    let limits = sim_limits(cfg);
+    let (range_min_mm, range_max_mm) = limits.mm();
+    EncodedScan {
+        angle_min: BinaryAngle::from_radians(scan.angle_min).unwrap_or(BinaryAngle::HALF),
+        angle_increment: BinaryAngle::from_radians(scan.angle_increment).unwrap_or(fallback),
+        ranges_mm: scan.ranges_m.iter().map(|&r| encode_range(r as f64, &limits)).collect(),
+        range_min_mm,
+        range_max_mm,
+        labels: scan.hits.iter().map(|&h| gt_label(h)).collect(),
     }
 }
 
@@ -624,7 +593,7 @@ fn run_with(
         let p = sim.pose();
         let scan = sim.scan();
         tally.scan(now_us, &scan);
-        let encoded = EncodedScan::new(&scan, spec.sim.lidar_min_range_m);
+        let encoded = encode_sim_scan(&scan, &spec.sim);
         let detection = sim.detect().map(|_| Detection { position: None });
         let inputs = Inputs {
             pose: Pose2::from_f64(p[0], p[1], p[2]),
@@ -795,19 +764,6 @@ mod tests {
         assert_eq!(both.beams, 8);
         assert_eq!(both.nonmap_recall, 0.3333);
         assert_eq!(both.nonmap_precision, s.nonmap_precision);
-    }
-
-    #[test]
-    fn ranges_cross_the_float_boundary_by_the_ros_conventions() {
-        let min = 0.1;
-        assert_eq!(encode_range(f64::NAN, min), RANGE_INVALID);
-        assert_eq!(encode_range(-1.0, min), RANGE_INVALID);
-        assert_eq!(encode_range(0.05, min), RANGE_INVALID, "below the minimum range");
-        assert_eq!(encode_range(f64::INFINITY, min), RANGE_NO_RETURN);
-        assert_eq!(encode_range(f64::NEG_INFINITY, min), RANGE_INVALID);
-        assert_eq!(encode_range(1e9, min), RANGE_NO_RETURN, "beyond what u16 millimetres hold");
-        assert_eq!(encode_range(1.2344, min), 1234);
-        assert_eq!(encode_range(65.534, min), 65_534);
     }
 
     #[test]

@@ -31,7 +31,8 @@
 use crate::dataset::{self, DatasetReader, Split};
 use crate::labeller::{Labeller, LabellerConfig};
 use crate::model::{normalise_pose_f32, normalise_scan_f32, quantise_with, FloatHistory, FloatInputs, FloatModel, QuantiseOptions};
-use crate::search::{encode_range, TICK_US};
+use crate::range::{encode_range, RangeLimits};
+use crate::search::TICK_US;
 use crate::sim::reach::ReachMap;
 use crate::sim::{BaseStatus, Scenario, Sim, World, P2};
 use candle_core::{Device, Tensor, Var};
@@ -384,21 +385,21 @@ pub fn label_sign(code: u8) -> f32 {
     }
 }
 
-/// The simulator's minimum range (below it a range is invalid), as the search loop encodes.
-fn min_range_m() -> f64 {
-    dataset::sim_config().lidar_min_range_m
+/// The simulator's range limits, as the search loop encodes its scans.
+fn sim_limits() -> RangeLimits {
+    crate::search::sim_limits(&dataset::sim_config())
 }
 
 fn pose_of(p: [f64; 3]) -> Result<Pose2> {
     Pose2::from_f64(p[0], p[1], p[2]).ok_or_else(|| TrainError(format!("pose {p:?} out of the Q16.16 range")))
 }
 
-/// A step from a dataset record (ranges encoded as `search::encode_range` does for the core).
+/// A step from a dataset record (ranges encoded as `crate::range::encode_range` does for the core).
 pub fn step_of_record(r: &dataset::Record) -> Result<Step> {
-    let min = min_range_m();
+    let min = sim_limits();
     Ok(Step {
         pose: pose_of([r.pose[0] as f64, r.pose[1] as f64, r.pose[2] as f64])?,
-        ranges_mm: r.ranges.iter().map(|&x| encode_range(x as f64, min)).collect(),
+        ranges_mm: r.ranges.iter().map(|&x| encode_range(x as f64, &min)).collect(),
         labels: r.labels.clone(),
     })
 }
@@ -1228,7 +1229,7 @@ pub fn load_checkpoint(path: &Path) -> Result<(FloatModel, Option<TrainLog>)> {
 /// labeller — an evaluation episode in a world no dataset contains.
 pub fn drive_random_walk(world: &World, name: &str, sim_seed: u64, seconds: f64) -> Result<Episode> {
     let cfg = dataset::sim_config();
-    let min = cfg.lidar_min_range_m;
+    let min = crate::search::sim_limits(&cfg);
     let start = [world.start.pose[0], world.start.pose[1]];
     let reach = ReachMap::new(world, start, cfg.robot_radius_m + 0.1);
     let [lo, hi] = world.bounds;
@@ -1247,7 +1248,7 @@ pub fn drive_random_walk(world: &World, name: &str, sim_seed: u64, seconds: f64)
         let labels = lab.label_scan(p, &scan);
         steps.push(Step {
             pose: pose_of(p)?,
-            ranges_mm: scan.ranges_m.iter().map(|&r| encode_range(r as f64, min)).collect(),
+            ranges_mm: scan.ranges_m.iter().map(|&r| encode_range(r as f64, &min)).collect(),
             labels: labels.iter().map(|l| l.code()).collect(),
         });
         blocked_ticks = if blocked { blocked_ticks + 1 } else { 0 };

@@ -26,6 +26,8 @@ fn run(ctrl: &mut Controller, ticks: u32) -> Vec<(firmware::Outputs, Vec<BeamLab
                     angle_increment: BinaryAngle::from_fraction(1, 897),
                     ranges_mm: &r,
                     labels: None,
+                    range_min_mm: 100,
+                    range_max_mm: 30_000,
                 }),
                 command: (t == 0).then_some(Command::Start),
                 ..Inputs::default()

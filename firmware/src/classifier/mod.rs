@@ -416,7 +416,7 @@ mod tests {
             let mut probe = c.clone();
             probe.history_mut().push_scan(&pose, &ranges, &model.normalisation());
             let (s, o) = reference(&model, probe.history());
-            let scan = BeamScan { ranges_mm: ranges, labels: [BeamLabel::Unlabelled; BEAMS] };
+            let scan = BeamScan { ranges_mm: ranges, ..BeamScan::new() };
             assert_eq!(c.classify(&pose, &scan, &mut out), WORK_PER_CLASSIFY);
             assert_eq!(&c.scores()[..], &s[..]);
             assert_eq!(&c.output()[..], &o[..]);

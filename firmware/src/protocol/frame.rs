@@ -39,7 +39,7 @@ pub const fn frame_len_for(message_len: usize) -> usize {
 }
 
 /// Largest host-to-core frame, delimiter included (a full [`MAX_WIRE_BEAMS`] scan with labels):
-/// 3345 bytes.
+/// 3351 bytes.
 ///
 /// [`MAX_WIRE_BEAMS`]: crate::protocol::message::MAX_WIRE_BEAMS
 pub const MAX_HOST_TO_CORE_FRAME: usize = frame_len_for(MAX_HOST_TO_CORE_LEN);
@@ -267,7 +267,7 @@ impl<M: DeserializeOwned, const N: usize> Iterator for Feed<'_, '_, M, N> {
 }
 
 // The sizes stated in the docs (and docs/protocol.md), checked at compile time.
-const _: () = assert!(MAX_HOST_TO_CORE_FRAME == 3345);
+const _: () = assert!(MAX_HOST_TO_CORE_FRAME == 3351);
 const _: () = assert!(MAX_CORE_TO_HOST_FRAME == 919);
 const _: () = assert!(MAX_FRAME_LEN <= u16::MAX as usize);
 
@@ -306,7 +306,14 @@ mod tests {
     }
 
     fn full_scan(labels: bool) -> ScanMsg {
-        let mut s = ScanMsg { t_us: u64::MAX, angle_min: i32::MIN, angle_increment: i32::MIN, ..Default::default() };
+        let mut s = ScanMsg {
+            t_us: u64::MAX,
+            angle_min: i32::MIN,
+            angle_increment: i32::MIN,
+            range_min_mm: u16::MAX,
+            range_max_mm: u16::MAX,
+            ..Default::default()
+        };
         s.ranges_mm.extend_from_slice(&[u16::MAX; MAX_WIRE_BEAMS]).unwrap();
         if labels {
             s.labels = Some(heapless::Vec::from_slice(&[BeamLabel::NonMap; MAX_WIRE_BEAMS]).unwrap());
@@ -325,7 +332,7 @@ mod tests {
         let mut buf = [0u8; MAX_FRAME_LEN];
         assert_eq!(postcard::to_slice(&msg, &mut buf).unwrap().len(), MAX_HOST_TO_CORE_LEN, "the worst case is exact");
         let frame = encode(&msg, &mut buf).unwrap();
-        assert!(frame.len() <= MAX_HOST_TO_CORE_FRAME && MAX_HOST_TO_CORE_FRAME == 3345, "{}", frame.len());
+        assert!(frame.len() <= MAX_HOST_TO_CORE_FRAME && MAX_HOST_TO_CORE_FRAME == 3351, "{}", frame.len());
         let mut dec = CoreDecoder::new();
         let got: std::vec::Vec<_> = dec.feed(frame).collect();
         assert_eq!(got, std::vec![Ok(msg)]);
@@ -390,8 +397,14 @@ mod tests {
     #[test]
     fn a_scan_over_the_wire_limit_is_refused_by_sender_and_receiver() {
         let ranges = [1000u16; MAX_WIRE_BEAMS + 1];
-        let input =
-            crate::ScanInput { angle_min: BinaryAngle::ZERO, angle_increment: BinaryAngle(1 << 20), ranges_mm: &ranges, labels: None };
+        let input = crate::ScanInput {
+            angle_min: BinaryAngle::ZERO,
+            angle_increment: BinaryAngle(1 << 20),
+            ranges_mm: &ranges,
+            labels: None,
+            range_min_mm: 0,
+            range_max_mm: crate::scan::RANGE_LIMIT_MM,
+        };
         assert_eq!(ScanMsg::from_scan_input(0, &input).unwrap_err(), WireError::TooManyBeams(MAX_WIRE_BEAMS + 1));
         // A hand-made frame claiming 1101 ranges (valid CRC): dropped as undecodable, counted.
         let mut payload: heapless::Vec<u8, 4096> = heapless::Vec::new();

@@ -135,6 +135,7 @@ impl Inbox {
                 s.t_us == seg.t_us
                     && s.angle_min == seg.angle_min
                     && s.angle_increment == seg.angle_increment
+                    && (s.range_min_mm, s.range_max_mm) == (seg.range_min_mm, seg.range_max_mm)
                     && s.ranges_mm.len() == total
                     && s.labels.is_some() == seg.labels.is_some()
             });
@@ -147,6 +148,7 @@ impl Inbox {
             s.t_us = seg.t_us;
             s.angle_min = seg.angle_min;
             s.angle_increment = seg.angle_increment;
+            (s.range_min_mm, s.range_max_mm) = (seg.range_min_mm, seg.range_max_mm);
             s.ranges_mm.clear();
             // Cannot fail: check() bounds total by MAX_WIRE_BEAMS, the capacity.
             let _ = s.ranges_mm.resize(total, RANGE_INVALID);

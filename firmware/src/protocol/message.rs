@@ -22,7 +22,7 @@ use crate::config::{Config, PlannerKind, StageBudgets, Weight};
 use crate::controller::{Command, Detection, Mode, Outputs, StageCost, Status};
 use crate::planner::Goal;
 use crate::protocol::frame::LinkCounters;
-use crate::scan::{BeamLabel, BeamScan, ScanError, ScanInput};
+use crate::scan::{BeamLabel, BeamScan, ScanError, ScanInput, RANGE_LIMIT_MM};
 use fixed_point::{BinaryAngle, Meters, Pose2};
 use serde::{Deserialize, Serialize};
 
@@ -35,7 +35,10 @@ use serde::{Deserialize, Serialize};
 /// * v4: the configuration carries `nonmap_drop_vacated`.
 /// * v5: `ErrorCode::ConfigInvalid`: a configuration outside the core's ranges is refused, naming
 ///   the field; `Command(Reset)` is applied on arrival (a new search, lockstep time from 0).
-pub const PROTOCOL_VERSION: u16 = 5;
+/// * v6: scans and scan segments carry their sensor's `range_min_mm` and `range_max_mm` (REP 117:
+///   a reading at or beyond `range_max` is "no return" and clears no farther than it);
+///   `WireScanError::BadRangeLimits`.
+pub const PROTOCOL_VERSION: u16 = 6;
 
 /// Most beams one scan carries, whole ([`ScanMsg`]) or in segments ([`ScanSegmentMsg`]): a 360°
 /// scan at 0.33° (1091 beams) fits. Larger scans are refused ([`WireError::TooManyBeams`]).
@@ -72,10 +75,12 @@ const U32_MAX_LEN: usize = varint_len(u32::MAX as u64); // 5 (also any zigzag i3
 const U64_MAX_LEN: usize = varint_len(u64::MAX); // 10 (also any zigzag i64)
 
 /// Largest [`HostToCore`] message: a [`ScanMsg`] of [`MAX_WIRE_BEAMS`] beams with labels
-/// (tag, `t_us`, two angles, length + 2 bytes per range, `Some` + length + 1 byte per label).
+/// (tag, `t_us`, two angles, the two range limits, length + 2 bytes per range, `Some` + length +
+/// 1 byte per label).
 pub const MAX_HOST_TO_CORE_LEN: usize = 1
     + U64_MAX_LEN
     + 2 * U32_MAX_LEN
+    + 2 * varint_len(u16::MAX as u64)
     + varint_len(MAX_WIRE_BEAMS as u64)
     + 2 * MAX_WIRE_BEAMS
     + 1
@@ -295,7 +300,8 @@ impl PoseMsg {
 
 /// A LiDAR scan as the sensor produced it (any beam count up to [`MAX_WIRE_BEAMS`], its own field
 /// of view), ranges in millimetres (`0` invalid, `65535` no return; see [`crate::scan`]).
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+/// `Default` is an empty scan with the widest limits (0 and [`RANGE_LIMIT_MM`]).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ScanMsg {
     /// When the scan was taken, host clock, microseconds.
     pub t_us: u64,
@@ -303,6 +309,10 @@ pub struct ScanMsg {
     pub angle_min: i32,
     /// Angle between consecutive beams, binary angle (negative for clockwise sensors).
     pub angle_increment: i32,
+    /// The sensor's minimum range, millimetres ([`ScanInput::range_min_mm`]).
+    pub range_min_mm: u16,
+    /// The sensor's maximum range, millimetres ([`ScanInput::range_max_mm`]).
+    pub range_max_mm: u16,
     /// One range per beam, millimetres. On the wire: a length, then 2 bytes little-endian each.
     #[serde(with = "ser::ranges")]
     pub ranges_mm: heapless::Vec<u16, MAX_WIRE_BEAMS>,
@@ -310,6 +320,20 @@ pub struct ScanMsg {
     /// one byte each, `0` unlabelled, `1` map, `2` non-map.
     #[serde(with = "ser::opt_labels")]
     pub labels: Option<heapless::Vec<BeamLabel, MAX_WIRE_BEAMS>>,
+}
+
+impl Default for ScanMsg {
+    fn default() -> Self {
+        Self {
+            t_us: 0,
+            angle_min: 0,
+            angle_increment: 0,
+            range_min_mm: 0,
+            range_max_mm: RANGE_LIMIT_MM,
+            ranges_mm: heapless::Vec::new(),
+            labels: None,
+        }
+    }
 }
 
 impl ScanMsg {
@@ -322,7 +346,15 @@ impl ScanMsg {
             Some(l) if l.len() != n => return Err(WireError::LabelCountMismatch),
             Some(l) => Some(heapless::Vec::from_slice(l).map_err(|_| WireError::TooManyBeams(n))?),
         };
-        Ok(Self { t_us, angle_min: scan.angle_min.0, angle_increment: scan.angle_increment.0, ranges_mm, labels })
+        Ok(Self {
+            t_us,
+            angle_min: scan.angle_min.0,
+            angle_increment: scan.angle_increment.0,
+            range_min_mm: scan.range_min_mm,
+            range_max_mm: scan.range_max_mm,
+            ranges_mm,
+            labels,
+        })
     }
 
     /// The scan as the core takes it, borrowing this message's vectors.
@@ -332,6 +364,8 @@ impl ScanMsg {
             angle_increment: BinaryAngle(self.angle_increment),
             ranges_mm: &self.ranges_mm,
             labels: self.labels.as_deref(),
+            range_min_mm: self.range_min_mm,
+            range_max_mm: self.range_max_mm,
         }
     }
 
@@ -369,6 +403,8 @@ impl Iterator for Segments<'_> {
             t_us: self.scan.t_us,
             angle_min: self.scan.angle_min,
             angle_increment: self.scan.angle_increment,
+            range_min_mm: self.scan.range_min_mm,
+            range_max_mm: self.scan.range_max_mm,
             total_beams: total as u16,
             first_beam: first as u16,
             ranges_mm,
@@ -398,6 +434,10 @@ pub struct ScanSegmentMsg {
     pub angle_min: i32,
     /// Angle between consecutive beams, binary angle.
     pub angle_increment: i32,
+    /// The scan's minimum range, millimetres.
+    pub range_min_mm: u16,
+    /// The scan's maximum range, millimetres.
+    pub range_max_mm: u16,
     /// Beams in the whole scan (`1 ..= 1100`).
     pub total_beams: u16,
     /// Index in the scan of this segment's first beam.
@@ -878,6 +918,13 @@ pub enum WireScanError {
         /// Labels given.
         labels: u32,
     },
+    /// [`ScanError::BadRangeLimits`].
+    BadRangeLimits {
+        /// The scan's `range_min`, millimetres.
+        min_mm: u16,
+        /// The scan's `range_max`, millimetres.
+        max_mm: u16,
+    },
 }
 
 impl From<ScanError> for WireScanError {
@@ -888,6 +935,7 @@ impl From<ScanError> for WireScanError {
             ScanError::TooManyBeams(b) => Self::TooManyBeams(n(b)),
             ScanError::ZeroIncrement => Self::ZeroIncrement,
             ScanError::LabelCountMismatch { ranges, labels } => Self::LabelCountMismatch { ranges: n(ranges), labels: n(labels) },
+            ScanError::BadRangeLimits { min_mm, max_mm } => Self::BadRangeLimits { min_mm, max_mm },
         }
     }
 }
@@ -1259,11 +1307,15 @@ mod tests {
             angle_increment: BinaryAngle::from_fraction(1, 4),
             ranges_mm: &ranges,
             labels: Some(&labels),
+            range_min_mm: 100,
+            range_max_mm: 12_000,
         };
         let m = ScanMsg::from_scan_input(5, &input).unwrap();
+        assert_eq!((m.range_min_mm, m.range_max_mm), (100, 12_000));
         let back = m.scan_input();
         assert_eq!(back.ranges_mm.as_ptr(), m.ranges_mm.as_ptr(), "borrowed, not copied");
         assert_eq!((back.angle_min, back.angle_increment), (input.angle_min, input.angle_increment));
+        assert_eq!((back.range_min_mm, back.range_max_mm), (100, 12_000));
         assert_eq!((back.ranges_mm, back.labels), (&ranges[..], Some(&labels[..])));
         let mut beams = BeamScan::new();
         assert_eq!(beams.resample(&back), Ok(2));
@@ -1364,7 +1416,7 @@ mod tests {
 
     #[test]
     fn worst_case_sizes() {
-        assert_eq!(MAX_HOST_TO_CORE_LEN, 3326);
+        assert_eq!(MAX_HOST_TO_CORE_LEN, 3332);
         assert_eq!(MAX_GOAL_LEN, 677);
         assert_eq!(MAX_LABELS_LEN, 910);
         assert_eq!((varint_len(0), varint_len(127), varint_len(128), varint_len(u64::MAX)), (1, 1, 2, 10));

@@ -73,6 +73,8 @@ pub fn scan_input<'a>(ranges: &'a [u16], labels: Option<&'a [BeamLabel]>) -> Sca
         angle_increment: BinaryAngle::from_fraction(1, ranges.len() as i64),
         ranges_mm: ranges,
         labels,
+        range_min_mm: 0,
+        range_max_mm: firmware::scan::RANGE_LIMIT_MM,
     }
 }
 

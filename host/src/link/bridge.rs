@@ -29,14 +29,13 @@
 
 use super::robot::Base;
 use super::{Link, Summary, TimeMode};
-use crate::search::{controller_config, encode_ranges, gt_label, step_base, PlannerChoice, RunTally, SearchResult, SearchSpec, TICK_US};
+use crate::search::{controller_config, encode_sim_scan, step_base, PlannerChoice, RunTally, SearchResult, SearchSpec, TICK_US};
 use crate::sim::Sim;
 use firmware::protocol::{
     encode, BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, ErrorCode, GoalMsg, Heartbeat, Hello, HostDecoder, HostToCore,
     IncompatiblePeer, LinkCounters, PoseMsg, Role, ScanMsg, StatusMsg, WireCommand, WireMode, MAX_FRAME_LEN,
 };
-use firmware::scan::BeamLabel;
-use firmware::{BinaryAngle, GridGeometry, Meters, Pose2, ScanInput};
+use firmware::{BinaryAngle, GridGeometry, Meters, Pose2};
 use std::collections::VecDeque;
 use std::fmt;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -676,7 +675,6 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
     let classifier = spec.planner == PlannerChoice::Lives && spec.model.is_some();
     let use_labels = !classifier && matches!(spec.planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
     let mut classifier_check = ClassifierCheck { expected: classifier, seen: false };
-    let increment = BinaryAngle::from_fraction(1, spec.sim.beams.max(1) as i64);
     let mut trajectory = vec![[start[0], start[1]]];
     let mut goals = Vec::new();
     let mut recorded_seq = None;
@@ -745,18 +743,11 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         let p = b.sim.pose();
         let scan = b.sim.scan();
         tally.scan(now_us, &scan);
-        let ranges = encode_ranges(&scan, spec.sim.lidar_min_range_m);
-        let labels: Vec<BeamLabel> = scan.hits.iter().map(|&h| gt_label(h)).collect();
+        let encoded = encode_sim_scan(&scan, &spec.sim);
         let detected = b.sim.detect().is_some();
-        let scan_in = ScanInput {
-            angle_min: BinaryAngle::from_radians(scan.angle_min).unwrap_or(BinaryAngle::HALF),
-            angle_increment: BinaryAngle::from_radians(scan.angle_increment).unwrap_or(increment),
-            ranges_mm: &ranges,
-            labels: use_labels.then_some(&labels[..]),
-        };
-        let scan_msg = match ScanMsg::from_scan_input(now_us, &scan_in) {
+        let scan_msg = match ScanMsg::from_scan_input(now_us, &encoded.input(use_labels)) {
             Ok(m) => m,
-            Err(e) => panic!("the simulator's {} beams must fit a scan frame: {e:?}", ranges.len()),
+            Err(e) => panic!("the simulator's {} beams must fit a scan frame: {e:?}", encoded.ranges_mm.len()),
         };
         let mut batch = Vec::new();
         if need_start {

@@ -27,14 +27,15 @@ use super::adapter::{round_to, AdapterConfig, AdapterServer, AdapterStats, Detec
 use super::bridge::{resume_from, Bridge, BridgeError, BridgeOptions, BridgeResult};
 use super::SerialLink;
 use super::{Link, Summary, TimeMode};
-use crate::search::{encode_range, PlannerChoice, SearchResult};
+use crate::range::{EncodedScan, RangeLimits};
+use crate::search::{PlannerChoice, SearchResult};
 use crate::sensors::vlp16::{PlanarScan, Vlp16Config, Vlp16Udp};
 use crate::sim::Sim;
 use firmware::protocol::{
     BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, GoalMsg, HostToCore, PoseMsg, ScanMsg, StatusMsg, WireCommand, WireMode,
     MAX_WIRE_BEAMS,
 };
-use firmware::{BinaryAngle, Config, Meters, Pose2, ScanInput};
+use firmware::{BinaryAngle, Config, Meters, Pose2};
 use serde_json::{json, Value};
 use std::io::Write as _;
 use std::net::SocketAddr;
@@ -134,48 +135,21 @@ pub struct RobotRun {
     pub log: Vec<(f64, String)>,
 }
 
-/// A scan in the core's encoding.
-struct WireScan {
-    angle_min: BinaryAngle,
-    angle_increment: BinaryAngle,
-    ranges_mm: Vec<u16>,
-}
-
-/// Encodes a planar scan with ROS conventions (REP-117): NaN and −inf invalid, +inf no return,
-/// below `range_min` invalid, above `range_max` no return. More than [`MAX_WIRE_BEAMS`] ranges are
-/// decimated (every k-th range, the increment k times larger; the core resamples onto its 897
-/// beams anyway).
-fn encode_planar(angle_min: f64, angle_increment: f64, ranges: &[f32], range_min: f64, range_max: f64) -> Option<WireScan> {
+/// Encodes a planar scan ([`crate::range`]: REP 117, its limits travel with it). More than
+/// [`MAX_WIRE_BEAMS`] ranges are decimated (every k-th range, the increment k times larger; the
+/// core resamples onto its 897 beams anyway).
+fn encode_planar(angle_min: f64, angle_increment: f64, ranges: &[f32], limits: RangeLimits) -> Option<EncodedScan> {
     let k = ranges.len().div_ceil(MAX_WIRE_BEAMS).max(1);
-    let ranges_mm = ranges
-        .iter()
-        .step_by(k)
-        .map(|&r| {
-            let r = r as f64;
-            let r = if r.is_nan() || r == f64::NEG_INFINITY {
-                f64::NAN
-            } else if r > range_max {
-                f64::INFINITY
-            } else {
-                r
-            };
-            encode_range(r, range_min.max(0.0))
-        })
-        .collect();
-    Some(WireScan {
-        angle_min: BinaryAngle::from_radians(angle_min)?,
-        angle_increment: BinaryAngle::from_radians(angle_increment * k as f64)?,
-        ranges_mm,
-    })
+    EncodedScan::new(angle_min, angle_increment * k as f64, ranges.iter().step_by(k).map(|&r| r as f64), &limits)
 }
 
-fn encode_laser_scan(s: &LaserScan) -> Option<WireScan> {
-    encode_planar(s.angle_min, s.angle_increment, &s.ranges, s.range_min, s.range_max)
+fn encode_laser_scan(s: &LaserScan) -> Option<EncodedScan> {
+    encode_planar(s.angle_min, s.angle_increment, &s.ranges, RangeLimits::new(s.range_min, s.range_max))
 }
 
-/// A VLP-16 scan: its ranges already are "+inf no return, NaN nothing fired" within its limits.
-fn encode_vlp16(s: &PlanarScan) -> Option<WireScan> {
-    encode_planar(s.angle_min_rad, s.angle_increment_rad, &s.ranges_m, 0.0, f64::INFINITY)
+/// A VLP-16 scan: `+inf` fired but no return, NaN nothing fired, within its configured limits.
+fn encode_vlp16(s: &PlanarScan) -> Option<EncodedScan> {
+    encode_planar(s.angle_min_rad, s.angle_increment_rad, &s.ranges_m, RangeLimits::new(s.range_limits_m[0], s.range_limits_m[1]))
 }
 
 /// What the VLP-16 thread hands over.
@@ -357,7 +331,7 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
     let mut last_beat = Instant::now();
     let mut odom_at: Option<Instant> = None;
     let mut first_odom: Option<Instant> = None;
-    let mut scan: Option<(WireScan, Instant)> = None;
+    let mut scan: Option<(EncodedScan, Instant)> = None;
     let mut scan_new = false;
     let mut detection: Option<(Detection, Instant)> = None;
     let mut first_detection: Option<Instant> = None;
@@ -549,8 +523,7 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
                         sent_detection = Some(msg);
                     }
                     if let (true, Some((w, at))) = (scan_new, &scan) {
-                        let input =
-                            ScanInput { angle_min: w.angle_min, angle_increment: w.angle_increment, ranges_mm: &w.ranges_mm, labels: None };
+                        let input = w.input(false);
                         if let Ok(msg) = ScanMsg::from_scan_input(stamp(b.started, *at), &input) {
                             if let (Some(Ok(mut obs)), Some(pose)) =
                                 (opts.observer.as_ref().map(|o| o.0.lock()), Pose2::from_f64(o.x, o.y, o.yaw))

@@ -74,6 +74,9 @@ pub struct CarmenScan {
     pub angle_increment: f64,
     /// Ranges, metres: `+inf` no return, NaN invalid.
     pub ranges_m: Vec<f32>,
+    /// The scanner's maximum range, metres: [`FLASER_MAX_RANGE_M`] for `FLASER` (its line has
+    /// none), the line's own `max_range` for `ROBOTLASER1`.
+    pub range_max_m: f64,
 }
 
 /// One message replay uses.
@@ -339,6 +342,7 @@ pub fn parse_line(line: &str) -> Result<Option<CarmenRecord>, LineError> {
                 angle_min: -std::f64::consts::FRAC_PI_2,
                 angle_increment: std::f64::consts::PI / steps as f64,
                 ranges_m,
+                range_max_m: FLASER_MAX_RANGE_M,
             })
         }
         LineKind::RobotLaser1 => {
@@ -369,7 +373,7 @@ pub fn parse_line(line: &str) -> Result<Option<CarmenRecord>, LineError> {
                 t.num(f)?;
             }
             let t_s = t.stamp()?;
-            CarmenRecord::Scan(CarmenScan { kind, t_s, laser_pose, robot_pose, angle_min, angle_increment, ranges_m })
+            CarmenRecord::Scan(CarmenScan { kind, t_s, laser_pose, robot_pose, angle_min, angle_increment, ranges_m, range_max_m: max_range })
         }
     };
     Ok(Some(rec))

@@ -39,9 +39,9 @@ pub mod cdr;
 pub mod picture;
 pub mod rosbag;
 
-use crate::search::encode_range;
+use crate::range::{EncodedScan, RangeLimits};
 use firmware::classifier::ModelError;
-use firmware::{BinaryAngle, Command, Config, Controller, Inputs, Mode, Pose2, ScanInput};
+use firmware::{Command, Config, Controller, Inputs, Mode, Pose2};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt;
@@ -88,6 +88,9 @@ pub struct ScanRecord {
     pub angle_increment: f64,
     /// Ranges, metres: `+inf` no return, NaN invalid.
     pub ranges_m: Vec<f32>,
+    /// The scanner's `range_min` and `range_max`, metres (REP 117: readings at or beyond
+    /// `range_max` mean "nothing within it"; see [`crate::range`]).
+    pub range_limits_m: [f64; 2],
     /// Where it came from.
     pub at: Location,
 }
@@ -445,6 +448,7 @@ fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
                             angle_min: s.angle_min,
                             angle_increment: s.angle_increment,
                             ranges_m: s.ranges_m,
+                            range_limits_m: [0.0, s.range_max_m],
                             at: Location::Line(line_no),
                         });
                     }
@@ -881,7 +885,6 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         None => None,
     };
     let mut record_error: Option<String> = None;
-    let min_range_m = cfg.lidar_min_range_m.to_num::<f64>();
     let geom = ctrl.lidar.geom;
     let t0 = log.scans[0].t_s;
     // Time stamps that do not advance (the CSAIL log prints them with 6 significant digits, i.e.
@@ -895,7 +898,6 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     let (mut first_pose, mut last_pose) = (None, [0.0; 3]);
     let mut last_us = 0u64;
     let mut last_start: Option<u64> = None;
-    let mut ranges_mm: Vec<u16> = Vec::new();
     let mut status = firmware::Status::default();
     let mut strays = Vec::new();
     for (i, s) in log.scans.iter().enumerate() {
@@ -909,10 +911,11 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             }
             continue;
         }
-        let (Some(pose), Some(angle_min), Some(angle_increment)) = (
+        // A non-finite pose or beam angle: no pose to map the scan at.
+        let limits = RangeLimits::new(s.range_limits_m[0], s.range_limits_m[1]);
+        let (Some(pose), Some(encoded)) = (
             Pose2::from_f64(s.pose[0], s.pose[1], s.pose[2]),
-            BinaryAngle::from_radians(s.angle_min),
-            BinaryAngle::from_radians(s.angle_increment),
+            EncodedScan::new(s.angle_min, s.angle_increment, s.ranges_m.iter().map(|&r| r as f64), &limits),
         ) else {
             rejected.no_pose += 1;
             continue;
@@ -923,8 +926,6 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             rejected.outside_grid += 1;
             continue;
         }
-        ranges_mm.clear();
-        ranges_mm.extend(s.ranges_m.iter().map(|&r| encode_range(r as f64, min_range_m)));
         let start = match last_start {
             None => true,
             Some(t) => ctrl.mode() == Mode::Exhausted && now_us.saturating_sub(t) >= cfg.replan_interval_us,
@@ -934,7 +935,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         }
         let inputs = Inputs {
             pose: Some(pose),
-            scan: Some(ScanInput { angle_min, angle_increment, ranges_mm: &ranges_mm, labels: None }),
+            scan: Some(encoded.input(false)),
             detection: None,
             command: start.then_some(Command::Start),
             base_blocked: false,
@@ -1208,6 +1209,7 @@ mod tests {
             angle_min: 0.0,
             angle_increment: 0.01,
             ranges_m: vec![1.0],
+            range_limits_m: [0.0, 80.0],
             at: Location::Line(line),
         }
     }

@@ -615,29 +615,16 @@ fn scan_record(s: &cdr::LaserScan, pose: &Iso, t_ns: u64, at: Location) -> ScanR
     let yaw = x_axis[1].atan2(x_axis[0]);
     // Upside down: a beam at +a in the laser frame points to −a about the world's z.
     let sign = if z_axis[2] < 0.0 { -1.0 } else { 1.0 };
-    let (lo, hi) = (s.range_min as f64, s.range_max as f64);
-    let ranges_m = s
-        .ranges
-        .iter()
-        .map(|&r| {
-            let v = r as f64;
-            if v.is_nan() || v == f64::NEG_INFINITY {
-                f32::NAN
-            } else if v == f64::INFINITY {
-                f32::INFINITY
-            } else if v < lo || v > hi {
-                f32::NAN
-            } else {
-                r
-            }
-        })
-        .collect();
+    // The readings as recorded: the range rule (REP 117) is applied once, with the scan's own
+    // limits, when the scan is encoded for the core (`crate::range`).
+    let ranges_m = s.ranges.clone();
     ScanRecord {
         t_s: t_ns as f64 / 1e9,
         pose: [pose.t[0], pose.t[1], yaw],
         angle_min: sign * s.angle_min as f64,
         angle_increment: sign * s.angle_increment as f64,
         ranges_m,
+        range_limits_m: [s.range_min as f64, s.range_max as f64],
         at,
     }
 }
@@ -675,10 +662,15 @@ mod tests {
         let r = scan_record(&s, &flipped, 2_000_000_000, Location::Row(1));
         assert_eq!((r.angle_min, r.angle_increment), (0.5, -0.25));
         assert_eq!(r.t_s, 2.0);
-        let want = [f32::NAN, f32::NAN, f32::INFINITY, f32::NAN, f32::NAN, 5.0, 10.0];
-        for (a, b) in r.ranges_m.iter().zip(want) {
-            assert!(a == &b || (a.is_nan() && b.is_nan()), "{:?}", r.ranges_m);
+        // Kept as recorded, with the scan's limits: the range rule is applied when encoding.
+        for (a, b) in r.ranges_m.iter().zip(&s.ranges) {
+            assert!(a == b || (a.is_nan() && b.is_nan()), "{:?}", r.ranges_m);
         }
+        assert_eq!(r.range_limits_m, [0.2f32 as f64, 10.0]);
+        let lim = crate::range::RangeLimits::new(r.range_limits_m[0], r.range_limits_m[1]);
+        let enc: Vec<u16> = r.ranges_m.iter().map(|&v| crate::range::encode_range(v as f64, &lim)).collect();
+        use firmware::scan::{RANGE_INVALID as I, RANGE_NO_RETURN as N};
+        assert_eq!(enc, [I, I, N, I, N, 5000, N], "NaN, -inf, +inf, below min, beyond max, a return, at max");
     }
 
     #[test]

@@ -404,6 +404,9 @@ pub struct PlanarScan {
     pub angle_increment_rad: f64,
     /// One per beam: nearest horizontal range in metres; `+∞` fired but no return; `NaN` nothing fired.
     pub ranges_m: Vec<f32>,
+    /// The configured minimum and maximum range ([`Vlp16Config`]), metres: the scan's `range_min`
+    /// and `range_max`.
+    pub range_limits_m: [f64; 2],
 }
 
 impl PlanarScan {
@@ -571,6 +574,7 @@ impl ScanAssembler {
             angle_min_rad: -std::f64::consts::PI,
             angle_increment_rad: std::f64::consts::TAU / n as f64,
             ranges_m,
+            range_limits_m: [self.cfg.min_range_m, self.cfg.max_range_m],
         }
     }
 }
