@@ -983,11 +983,8 @@ pub fn table(r: &MapcheckReport) -> String {
         "other-log" => format!("the scans of {} at its poses", r.reference.file.as_deref().unwrap_or("?")),
         _ => "the true world's walls and obstacles the run's noise-free rays hit".to_string(),
     };
-    let _ = writeln!(
-        s,
-        "  reference: {what}; {} viewpoints × {} rays for the leak",
-        r.reference.viewpoints, r.reference.rays_per_viewpoint
-    );
+    let _ =
+        writeln!(s, "  reference: {what}; {} viewpoints × {} rays for the leak", r.reference.viewpoints, r.reference.rays_per_viewpoint);
     if let Some(a) = &r.reference.alignment {
         let _ = writeln!(
             s,
@@ -1012,7 +1009,8 @@ pub fn table(r: &MapcheckReport) -> String {
         m.reference_wall_cells,
         m.reference_walls_outside_grid
     );
-    let _ = writeln!(s, "  {:<18} {:>8}   {} of {} occupied cells", "phantom walls", pct(m.phantom_walls), m.phantom_cells, m.occupied_cells);
+    let _ =
+        writeln!(s, "  {:<18} {:>8}   {} of {} occupied cells", "phantom walls", pct(m.phantom_walls), m.phantom_cells, m.occupied_cells);
     let _ = writeln!(s, "  {:<18} {:>8}   {} of {} free cells", "free-space leak", pct(m.free_space_leak), m.leak_cells, m.free_cells);
     if let Some(rel) = &r.relations {
         let _ = writeln!(s, "  relations {} ({} relations): translation (m) and rotation (°), mean ± std", rel.file, rel.relations);
@@ -1181,8 +1179,11 @@ mod tests {
         ];
         // A perfect estimate, in another frame (moved and turned): zero error.
         let moved = |p: [f64; 3]| compose(&[5.0, -3.0, 1.0], &p);
-        let perfect: Vec<TimedPose> =
-            [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, q], [1.0, 1.0, q]].iter().enumerate().map(|(i, p)| timed(i as f64, moved(*p))).collect();
+        let perfect: Vec<TimedPose> = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 0.0, q], [1.0, 1.0, q]]
+            .iter()
+            .enumerate()
+            .map(|(i, p)| timed(i as f64, moved(*p)))
+            .collect();
         let s = relation_errors(&PoseIndex::new(&perfect), &rels);
         assert_eq!(s.used, 3);
         assert!(s.trans_mean_m.unwrap() < 1e-12 && s.rot_mean_deg.unwrap() < 1e-9, "{s:?}");
@@ -1192,12 +1193,7 @@ mod tests {
         // relation 3: from (1.2, 0, 100°) 1 m forward: δ_est = (1, 0, 0): no error.
         let ten = 10f64.to_radians();
         let p2 = [1.2, 0.0, q + ten];
-        let est = [
-            timed(0.0, [0.0, 0.0, 0.0]),
-            timed(1.0, [1.2, 0.0, 0.0]),
-            timed(2.0, p2),
-            timed(3.0, compose(&p2, &[1.0, 0.0, 0.0])),
-        ];
+        let est = [timed(0.0, [0.0, 0.0, 0.0]), timed(1.0, [1.2, 0.0, 0.0]), timed(2.0, p2), timed(3.0, compose(&p2, &[1.0, 0.0, 0.0]))];
         let s = relation_errors(&PoseIndex::new(&est), &rels);
         assert_eq!(s.used, 3);
         let close = |a: Option<f64>, b: f64| (a.unwrap() - b).abs() < 1e-9;
