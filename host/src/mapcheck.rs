@@ -207,8 +207,7 @@ impl Reference {
                 let (tdx, tdy) = (step(d[0]), step(d[1]));
                 let (mut tmx, mut tmy) = (first(o[0], x0, d[0]), first(o[1], y0, d[1]));
                 let (mut x, mut y) = (x0, y0);
-                loop {
-                    let Some(i) = self.index(x, y) else { break };
+                while let Some(i) = self.index(x, y) {
                     vis[i] = true;
                     if self.wall[i] && (x, y) != (x0, y0) {
                         break;
