@@ -6,6 +6,7 @@ pub mod dataset;
 pub mod eval;
 pub mod labeller;
 pub mod link;
+pub mod mapcheck;
 pub mod model;
 pub mod overrides;
 pub mod picture;

@@ -431,6 +431,10 @@ enum Cmd {
     /// Replay a recorded log through the controller (no base to move): CARMEN logs (FLASER,
     /// ROBOTLASER1, ODOM; plain or gzip) and ROS 2 bags (MCAP or sqlite3) (docs/replay.md).
     Replay(host::replay::ReplayArgs),
+    /// Score a LiDAR map against a reference: walls recovered, phantom walls, free-space leak
+    /// (a replayed log against its own poses or another log; a simulated search against the true
+    /// world), and pose errors on ground-truth relations (docs/mapcheck.md).
+    Mapcheck(host::mapcheck::MapcheckArgs),
     /// List the built-in worlds, or print one as a world file.
     Worlds {
         /// Print this built-in world (or `random`) as TOML.
@@ -1300,6 +1304,9 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             Ok(ExitCode::SUCCESS)
         }
         Cmd::Replay(args) => host::replay::run_command(&args),
+        Cmd::Mapcheck(args) => host::mapcheck::run_command(&args, |world, scenario, planner, seed| {
+            load_spec(&RunArgs { world: world.to_string(), scenario, planner, seed })
+        }),
         Cmd::Params => {
             let w = host::overrides::NAMES.iter().chain(host::overrides::SIM_NAMES).map(|n| n.0.len()).max().unwrap_or(0);
             say!("The controller (`--set NAME=VALUE` on search, eval, replay, bridge; a value outside the core's");

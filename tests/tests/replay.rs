@@ -1,4 +1,4 @@
-//! `lives replay` end to end (issue 8 part 2): the real CARMEN logs in `../shared/data/carmen/`,
+//! `lives replay` end to end (issue 8 part 2): the real CARMEN logs in `tests/data/carmen/`,
 //! damaged copies of them, and ROS 2 bags (MCAP and sqlite3) made here with the same crates
 //! replay reads them with.
 
@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 mod common;
 
 fn carmen(name: &str) -> PathBuf {
-    common::root().join("../shared/data/carmen").join(name)
+    common::root().join("tests/data/carmen").join(name)
 }
 
 fn tmp(name: &str) -> PathBuf {

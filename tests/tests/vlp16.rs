@@ -1,4 +1,4 @@
-//! The VLP-16 source on the real captures in `../shared/data/velodyne/` (see its README): packet
+//! The VLP-16 source on the real captures in `tests/data/velodyne/` (see its README): packet
 //! counts, rotations, ranges checked by hand against the bytes, damaged files, and live UDP.
 //!
 //! Hand checks: the bytes were read with `xxd` at the offsets given, distances are 2 mm units,
@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/velodyne").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data/velodyne").join(name)
 }
 
 fn pcap() -> PathBuf {

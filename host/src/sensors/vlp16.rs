@@ -1131,9 +1131,9 @@ pub struct DecodeBench {
     pub packets_per_s: f64,
 }
 
-/// The recorded VLP-16 payloads the benchmark and tests use (`../shared/data/velodyne/`).
+/// The recorded VLP-16 payloads the benchmark and tests use (`tests/data/velodyne/`).
 pub fn default_recording() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/velodyne/einride_vlp16_recording.bin")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/velodyne/einride_vlp16_recording.bin")
 }
 
 /// Times checking, decoding and binning the payloads of `path` (raw format) into scans with the
