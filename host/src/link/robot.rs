@@ -790,7 +790,9 @@ mod tests {
         };
         let w = encode_laser_scan(&s).unwrap();
         use firmware::scan::{RANGE_INVALID, RANGE_NO_RETURN};
-        assert_eq!(w.ranges_mm, vec![1000, RANGE_INVALID, RANGE_NO_RETURN, RANGE_INVALID, RANGE_INVALID, RANGE_NO_RETURN, 10_000]);
+        // A reading at range_max says "nothing within it" (REP 117 as issue 27 reads it), as +inf does.
+        assert_eq!(w.ranges_mm, vec![1000, RANGE_INVALID, RANGE_NO_RETURN, RANGE_INVALID, RANGE_INVALID, RANGE_NO_RETURN, RANGE_NO_RETURN]);
+        assert_eq!((w.range_min_mm, w.range_max_mm), (200, 10_000), "the limits travel with the scan");
         assert_eq!(w.angle_increment, BinaryAngle::from_radians(0.5).unwrap());
         let long = LaserScan { ranges: vec![2.0; 2 * MAX_WIRE_BEAMS + 1], angle_increment: 0.001, ..s };
         let w = encode_laser_scan(&long).unwrap();
