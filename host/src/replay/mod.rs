@@ -594,9 +594,8 @@ impl Default for ReplayOptions {
 }
 
 /// The LiDAR range used for CARMEN logs unless `--max-range` says otherwise: 10 m, the usable
-/// range mappers give these SICK LMS logs (gmapping's `maxUrange`). Their long readings (through
-/// windows and glass, up to the 80 m "no return") would otherwise clear whole walls that a beam
-/// grazes on its way out, in the core's last-observation-wins grid.
+/// range mappers give these SICK LMS logs (gmapping's `maxUrange`): their long readings go through
+/// windows and glass, up to the 80 m "no return", and clear free space outside the building.
 pub const CARMEN_MAX_RANGE_M: f64 = 10.0;
 
 /// A goal the controller would have sent.
