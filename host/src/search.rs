@@ -832,3 +832,53 @@ mod tests {
         assert_eq!((t.lidar_saw_target_s(), t.target_in_camera_reach_s()), (Some(0.2), Some(0.4)), "the first times stay");
     }
 }
+
+#[cfg(test)]
+mod ideal_sensor_digest {
+    use super::*;
+
+    /// FNV-1a over bytes.
+    fn fnv(h: &mut u64, bytes: &[u8]) {
+        for &b in bytes {
+            *h ^= b as u64;
+            *h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+
+    /// The digest of what the controller was given (pose, ranges, labels) over the first `n`
+    /// ticks of `apartment easy`, seed 1, lives-gt, on `sim`.
+    pub(super) fn digest(sim: SimConfig, n: u64) -> u64 {
+        let w = World::builtin("apartment", Scenario::Easy).unwrap();
+        let mut spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, 1);
+        spec.sim = sim;
+        spec.world.time_limit_s = n as f64 * TICK_US as f64 / 1e6;
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        let mut observe = |v: &TickView<'_>| {
+            let p = v.inputs.pose.unwrap_or_default();
+            fnv(&mut h, &p.x.to_bits().to_le_bytes());
+            fnv(&mut h, &p.y.to_bits().to_le_bytes());
+            fnv(&mut h, &p.theta.0.to_le_bytes());
+            if let Some(s) = &v.inputs.scan {
+                for r in s.ranges_mm {
+                    fnv(&mut h, &r.to_le_bytes());
+                }
+                for l in s.labels.unwrap_or(&[]) {
+                    fnv(&mut h, &[*l as u8]);
+                }
+            }
+        };
+        try_run_observed(&spec, |_| {}, &mut observe).unwrap();
+        h
+    }
+
+    /// What the controller was given over the first 150 ticks before the simulator had LiDAR
+    /// profiles, materials, mounts and odometry drift (computed at commit 831efe1 with that
+    /// day's default robot: the clean 897-beam sensor, a 0.25 m body).
+    const BEFORE_PROFILES: u64 = 0x9430_73f3_517c_f956;
+
+    #[test]
+    fn the_ideal_sensor_without_drift_gives_the_controller_what_it_was_given_before() {
+        let sim = SimConfig { robot_radius_m: 0.25, ..SimConfig::default() };
+        assert_eq!(digest(sim, 150), BEFORE_PROFILES);
+    }
+}

@@ -886,4 +886,43 @@ rect = { center = [8.0, 3.0], size = [0.5, 0.35] }
         }
         assert!(blocked);
     }
+
+    /// FNV-1a of the first `n` scans (range bits and hits) and poses of `apartment easy`, seed 1,
+    /// the base walking a fixed path.
+    fn apartment_scan_digest(cfg: SimConfig, n: usize) -> u64 {
+        let w = World::builtin("apartment", Scenario::Easy).unwrap();
+        let mut sim = Sim::new(w, cfg, 1);
+        let p = sim.pose();
+        sim.set_path(&[[p[0] + 1.0, p[1]], [p[0] + 1.0, p[1] + 1.0]], Some(1.0));
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        let mut eat = |bytes: &[u8]| {
+            for &b in bytes {
+                h ^= b as u64;
+                h = h.wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        for _ in 0..n {
+            let s = sim.scan();
+            for r in &s.ranges_m {
+                eat(&r.to_bits().to_le_bytes());
+            }
+            for k in &s.hits {
+                eat(&[*k as u8]);
+            }
+            for v in sim.pose() {
+                eat(&v.to_bits().to_le_bytes());
+            }
+            sim.step(0.2);
+        }
+        h
+    }
+
+    /// Computed from the simulator before LiDAR profiles, materials, mounts and drift existed
+    /// (commit 831efe1): the ideal profile must keep giving today's scans bit for bit.
+    const IDEAL_APARTMENT_DIGEST: u64 = 0x31e1_b627_12f8_3d90;
+
+    #[test]
+    fn the_ideal_sensor_gives_the_scans_of_before_bit_for_bit() {
+        assert_eq!(apartment_scan_digest(SimConfig::default(), 40), IDEAL_APARTMENT_DIGEST);
+    }
 }
