@@ -1418,8 +1418,12 @@ rect = { center = [8.0, 3.0], size = [0.5, 0.35] }
     /// FNV-1a of the first `n` scans (range bits and hits) and poses of `apartment easy`, seed 1,
     /// the base walking a fixed path.
     fn apartment_scan_digest(cfg: SimConfig, n: usize) -> u64 {
+        apartment_scan_digest_seeded(cfg, n, 1)
+    }
+
+    fn apartment_scan_digest_seeded(cfg: SimConfig, n: usize, seed: u64) -> u64 {
         let w = World::builtin("apartment", Scenario::Easy).unwrap();
-        let mut sim = Sim::new(w, cfg, 1);
+        let mut sim = Sim::new(w, cfg, seed);
         let p = sim.pose();
         sim.set_path(&[[p[0] + 1.0, p[1]], [p[0] + 1.0, p[1] + 1.0]], Some(1.0));
         let mut h = 0xcbf2_9ce4_8422_2325u64;
@@ -1452,5 +1456,287 @@ rect = { center = [8.0, 3.0], size = [0.5, 0.35] }
     #[test]
     fn the_ideal_sensor_gives_the_scans_of_before_bit_for_bit() {
         assert_eq!(apartment_scan_digest(SimConfig::default(), 40), IDEAL_APARTMENT_DIGEST);
+    }
+
+    /// A 40 × 40 m empty square room, the robot at its centre facing +x, plus `extra`.
+    fn big_room(extra: &str) -> World {
+        let text = format!(
+            r#"name = "big"
+time_limit_s = 60
+[start]
+position = [20.0, 20.0]
+[[walls]]
+points = [[0, 0], [40, 0], [40, 40], [0, 40]]
+closed = true
+[[targets]]
+rect = {{ center = [2.0, 2.0], size = [0.5, 0.35] }}
+{extra}"#
+        );
+        World::from_toml_str(&text, "big.toml").unwrap()
+    }
+
+    #[test]
+    fn each_profile_has_its_beams_field_of_view_and_range() {
+        let deg = PI / 180.0;
+        // (profile, beams, field of view, range_min, range_max)
+        let want = [
+            (LidarModel::Ideal, 897, 2.0 * PI, 0.1, 30.0),
+            (LidarModel::RplidarA2, 800, 2.0 * PI, 0.15, 12.0),
+            (LidarModel::RplidarA3, 1600, 2.0 * PI, 0.2, 25.0),
+            (LidarModel::HokuyoUtm30lx, 1081, 270.0 * deg, 0.1, 30.0),
+            (LidarModel::Vlp16, 897, 2.0 * PI, 0.3, 100.0),
+        ];
+        for (model, beams, fov, min, max) in want {
+            let cfg = SimConfig::default().with_lidar(model);
+            let mut sim = Sim::new(walled_world(8.0), cfg, 1);
+            let s = sim.scan();
+            assert_eq!(s.ranges_m.len(), beams, "{model:?}");
+            assert_eq!(s.hits.len(), beams, "{model:?}");
+            // 360° scanners: beams · increment = 2π; the Hokuyo: (beams − 1) · increment = 270°.
+            let span = if fov < 2.0 * PI { (beams - 1) as f64 } else { beams as f64 } * s.angle_increment;
+            assert!((span - fov).abs() < 1e-9, "{model:?}: {span} rad");
+            assert!((s.angle_min + fov / 2.0).abs() < 1e-9, "{model:?}: centred on the laser's x axis");
+            assert_eq!((s.range_min_m, s.range_max_m), (min, max), "{model:?}");
+            for (r, h) in s.ranges_m.iter().zip(&s.hits) {
+                assert_eq!(!r.is_finite(), *h == HitKind::None, "{model:?}");
+                assert!(!r.is_finite() || (*r as f64 >= min && *r as f64 <= max), "{model:?}: {r}");
+            }
+            assert_eq!(LidarModel::from_name(model.as_str()), Some(model));
+        }
+        // The Hokuyo sees nothing behind it: its beams stop at ±135°.
+        let cfg = SimConfig::default().with_lidar(LidarModel::HokuyoUtm30lx);
+        assert!((cfg.angle_min_rad + cfg.angle_increment_rad * 1080.0 - 135.0 * deg).abs() < 1e-9);
+    }
+
+    /// Share of the beams of `n` scans hitting a wall at distance `d` (rotated so the wall's
+    /// incidence is `incidence_deg`) that return nothing, on `model` and a wall of `material`.
+    fn no_return_rate(model: LidarModel, material: &str, d: f64, incidence_deg: f64, n: usize) -> f64 {
+        // A wall 8 m long centred `d` ahead of the robot, turned by the incidence angle.
+        let (s, c) = (incidence_deg.to_radians().sin(), incidence_deg.to_radians().cos());
+        let (cx, cy) = (20.0 + d, 20.0);
+        let (a, b) = ([cx - 4.0 * s, cy + 4.0 * c], [cx + 4.0 * s, cy - 4.0 * c]);
+        let extra = format!("[[walls]]\npoints = [[{}, {}], [{}, {}]]\nmaterial = \"{material}\"\n", a[0], a[1], b[0], b[1]);
+        let cfg = SimConfig { dropout_prob: 0.0, ..SimConfig::default().with_lidar(model) };
+        let mut sim = Sim::new(big_room(&extra), cfg, 7);
+        let (mut none, mut total) = (0usize, 0usize);
+        for _ in 0..n {
+            let scan = sim.scan();
+            for (i, r) in scan.ranges_m.iter().enumerate() {
+                let a = scan.angle_min + i as f64 * scan.angle_increment;
+                // Only the beams within ±2° of the wall's centre: all at about the same range.
+                if a.abs() < 2f64.to_radians() {
+                    total += 1;
+                    none += (*r == f32::INFINITY) as usize;
+                }
+            }
+        }
+        assert!(total > 0);
+        none as f64 / total as f64
+    }
+
+    #[test]
+    fn no_returns_grow_with_range_incidence_and_darkness() {
+        use LidarModel::RplidarA3;
+        // The A3's datasheet: 25 m on white, 10 m on black. A painted wall (ρ 0.5) at normal
+        // incidence returns half the time at 25 · √(0.5 / 0.9) = 18.6 m.
+        let near = no_return_rate(RplidarA3, "default", 5.0, 0.0, 20);
+        let mid = no_return_rate(RplidarA3, "default", 17.0, 0.0, 20);
+        let far = no_return_rate(RplidarA3, "default", 19.5, 0.0, 20);
+        assert!(near < 0.005, "{near}");
+        assert!(near < mid && mid < far && far > 0.5, "{near} {mid} {far}");
+        // Incidence: at 70° the same wall at 10 m returns much less often than head-on.
+        let head_on = no_return_rate(RplidarA3, "default", 10.0, 0.0, 20);
+        let oblique = no_return_rate(RplidarA3, "default", 10.0, 70.0, 20);
+        assert!(head_on < 0.03 && oblique > 0.3, "{head_on} {oblique}");
+        // Dark: at 8 m a dark wall loses beams a painted one returns.
+        let painted = no_return_rate(RplidarA3, "default", 8.0, 0.0, 20);
+        let dark = no_return_rate(RplidarA3, "dark", 8.0, 0.0, 20);
+        assert!(painted < 0.01 && dark > 0.3, "{painted} {dark}");
+        assert!(no_return_rate(RplidarA3, "dark", 4.0, 0.0, 20) < dark, "dark surfaces too lose more beams farther away");
+        // The ideal sensor returns from every surface.
+        assert_eq!(no_return_rate(LidarModel::Ideal, "dark", 19.5, 70.0, 5), 0.0);
+    }
+
+    #[test]
+    fn glass_lets_most_beams_through_to_what_is_behind_it() {
+        // A pane 3 m ahead, a wall 8 m ahead; beams at 30° off the pane's normal.
+        let extra = "[[walls]]\npoints = [[23, 10], [23, 30]]\nmaterial = \"glass\"\n[[walls]]\npoints = [[28, 5], [28, 35]]\n";
+        let cfg = SimConfig { dropout_prob: 0.0, ..SimConfig::default().with_lidar(LidarModel::HokuyoUtm30lx) };
+        let mut sim = Sim::new(big_room(extra), cfg, 3);
+        let (mut behind, mut pane, mut nothing, mut total) = (0, 0, 0, 0);
+        for _ in 0..10 {
+            let s = sim.scan();
+            for (i, r) in s.ranges_m.iter().enumerate() {
+                let a = s.angle_min + i as f64 * s.angle_increment;
+                if (a.abs() - 30f64.to_radians()).abs() < 1f64.to_radians() {
+                    total += 1;
+                    let pane_range = 3.0 / a.cos();
+                    if !r.is_finite() {
+                        nothing += 1;
+                    } else if (*r as f64 - pane_range).abs() < 0.2 {
+                        pane += 1;
+                    } else if (*r as f64 - 8.0 / a.cos()).abs() < 0.2 {
+                        assert_eq!(s.hits[i], HitKind::Wall, "the wall behind the pane");
+                        behind += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(pane, 0, "no return off the pane itself at 30°");
+        assert!(behind as f64 > 0.8 * total as f64, "{behind} of {total} through");
+        assert!(nothing > 0, "some beams are lost in the glass");
+        // Head-on the pane itself returns.
+        let mut sim = Sim::new(big_room(extra), cfg_hokuyo_clean(), 3);
+        let s = sim.scan();
+        let i = ((0.0 - s.angle_min) / s.angle_increment).round() as usize;
+        assert!((s.ranges_m[i] - 3.0).abs() < 0.1, "{}", s.ranges_m[i]);
+        // The ideal sensor sees glass as a wall.
+        let mut sim = Sim::new(big_room(extra), SimConfig { dropout_prob: 0.0, ..SimConfig::default() }, 3);
+        let s = sim.scan();
+        let i = ((0.0 - s.angle_min) / s.angle_increment).round() as usize;
+        assert!((s.ranges_m[i] - 3.0).abs() < 0.1);
+    }
+
+    fn cfg_hokuyo_clean() -> SimConfig {
+        SimConfig { dropout_prob: 0.0, angular_jitter_rad: 0.0, ..SimConfig::default().with_lidar(LidarModel::HokuyoUtm30lx) }
+    }
+
+    #[test]
+    fn mixed_pixels_fall_between_foreground_and_background() {
+        // A 0.4 m post 3 m ahead of a wall 20 m ahead: its edges are depth edges.
+        let extra = "[[obstacles]]\nkind = \"furniture\"\ncircle = { center = [23.0, 20.0], radius = 0.2 }\n";
+        let cfg = SimConfig { range_noise_std_m: 0.0, range_noise_per_m: 0.0, ..cfg_hokuyo_clean() };
+        let (mut mixed, mut scans) = (0, 0);
+        let mut sim = Sim::new(big_room(extra), cfg.clone(), 11);
+        for _ in 0..50 {
+            let s = sim.scan();
+            scans += 1;
+            for (r, h) in s.ranges_m.iter().zip(&s.hits) {
+                let r = *r as f64;
+                if r > 3.2 && r < 19.5 {
+                    mixed += 1;
+                    assert_ne!(*h, HitKind::None);
+                }
+            }
+        }
+        assert!(mixed > 0, "mixed pixels at the post's edges over {scans} scans");
+        // Without divergence there are none.
+        let mut sim = Sim::new(big_room(extra), SimConfig { beam_divergence_rad: 0.0, ..cfg }, 11);
+        for _ in 0..50 {
+            assert!(sim.scan().ranges_m.iter().all(|r| !(*r > 3.2 && *r < 19.5)));
+        }
+    }
+
+    #[test]
+    fn a_mounted_laser_sees_a_known_wall_where_it_is_once_its_pose_is_composed() {
+        // The robot at (20, 20) facing +y; the laser 0.3 m ahead, 0.1 m left, turned −90°: it
+        // faces +x, where the room's wall is at x = 40, 19.7 m from the laser... (x = 20 − 0.1).
+        let mut w = big_room("");
+        w.start.pose[2] = PI / 2.0;
+        let cfg = SimConfig { mount: [0.3, 0.1, -PI / 2.0], dropout_prob: 0.0, range_noise_std_m: 0.0, ..SimConfig::default() };
+        let mut sim = Sim::new(w, cfg, 1);
+        let lp = sim.laser_pose();
+        assert!((lp[0] - 19.9).abs() < 1e-12 && (lp[1] - 20.3).abs() < 1e-12 && lp[2].abs() < 1e-12, "{lp:?}");
+        assert_eq!(sim.controller_pose(), lp, "no drift: the odometry frame is the world");
+        let s = sim.scan();
+        let i = ((0.0 - s.angle_min) / s.angle_increment).round() as usize;
+        let a = s.angle_min + i as f64 * s.angle_increment;
+        assert!((s.ranges_m[i] as f64 - 20.1 / a.cos()).abs() < 1e-4, "{}", s.ranges_m[i]);
+        // Every return, placed by the laser pose, lies on the room's walls.
+        for (i, r) in s.ranges_m.iter().enumerate() {
+            if s.hits[i] != HitKind::Wall {
+                assert_eq!(s.hits[i], HitKind::Target, "only the suitcase in the room");
+                continue;
+            }
+            let a = lp[2] + s.angle_min + i as f64 * s.angle_increment;
+            let (x, y) = (lp[0] + *r as f64 * a.cos(), lp[1] + *r as f64 * a.sin());
+            let to_wall = x.min(40.0 - x).min(y).min(40.0 - y).abs();
+            assert!(to_wall < 1e-3, "beam {i} at ({x}, {y})");
+        }
+    }
+
+    #[test]
+    fn a_goal_in_the_controllers_frame_brings_the_laser_there() {
+        // Mount and drift: the base follows the goal in the odometry frame, so the laser's
+        // odometry pose ends at the goal (within the base's tolerance).
+        let cfg = SimConfig { mount: [0.2, 0.0, 0.3], odom_slip_per_m: 0.05, odom_heading_drift_per_rad: 0.05, ..SimConfig::default() };
+        let mut sim = Sim::new(big_room(""), cfg, 4);
+        let goal = [25.0, 23.0];
+        sim.set_goal_path(&[[22.0, 21.0], goal], Some(1.0));
+        let mut status = BaseStatus::Moving;
+        for _ in 0..600 {
+            status = sim.step(0.1);
+            if status == BaseStatus::Arrived {
+                break;
+            }
+        }
+        assert_eq!(status, BaseStatus::Arrived);
+        let q = sim.controller_pose();
+        assert!(dist([q[0], q[1]], goal) < 0.25, "{q:?}");
+        assert!(wrap_angle(q[2] - 1.0).abs() < 0.01, "{q:?}");
+        // And the true laser is elsewhere: the odometry drifted.
+        let t = sim.laser_pose();
+        assert!(dist([t[0], t[1]], goal) > 0.05, "{t:?}");
+    }
+
+    /// The odometry's position error after driving `metres` straight ahead, then turning
+    /// `turn` radians in place.
+    fn drift_after(cfg: SimConfig, metres: f64, turn: f64) -> (f64, f64) {
+        let mut sim = Sim::new(big_room(""), cfg, 9);
+        sim.set_path(&[[20.0 + metres, 20.0]], Some(turn));
+        for _ in 0..1000 {
+            if sim.step(0.1) == BaseStatus::Arrived {
+                break;
+            }
+        }
+        let (p, o) = (sim.pose(), sim.odom_pose());
+        (dist([p[0], p[1]], [o[0], o[1]]), wrap_angle(p[2] - o[2]).abs())
+    }
+
+    #[test]
+    fn odometry_is_exact_without_drift_and_drifts_more_the_farther_it_goes() {
+        let exact = SimConfig::default();
+        assert_eq!(drift_after(exact.clone(), 10.0, 3.0), (0.0, 0.0));
+        let cfg = SimConfig { odom_slip_per_m: 0.02, odom_heading_drift_per_rad: 0.01, ..exact };
+        let (two, six, twelve) = (drift_after(cfg.clone(), 2.0, 0.0), drift_after(cfg.clone(), 6.0, 0.0), drift_after(cfg.clone(), 12.0, 0.0));
+        assert!(two.0 > 0.0 && two.0 < six.0 && six.0 < twelve.0, "{two:?} {six:?} {twelve:?}");
+        // 2 % of the distance, the sign and size (0.5–1.5×) from the seed.
+        assert!((0.01 * 12.0..=0.03 * 12.0).contains(&twelve.0), "{twelve:?}");
+        assert_eq!(twelve.1, 0.0, "no turn, no heading drift");
+        // 1 % of the turns: more turning, more heading error.
+        let (_, small) = drift_after(cfg.clone(), 2.0, 1.0);
+        let (_, large) = drift_after(cfg.clone(), 2.0, 3.0);
+        assert!(small > 0.0 && small < large && large <= 0.015 * 3.0 + 1e-9, "{small} {large}");
+    }
+
+    #[test]
+    fn realistic_scans_are_deterministic_per_seed() {
+        let cfg = SimConfig { mount: [0.1, 0.0, 0.0], odom_slip_per_m: 0.02, odom_heading_drift_per_rad: 0.01, ..SimConfig::default() };
+        for model in LidarModel::ALL {
+            let cfg = cfg.clone().with_lidar(model);
+            let (a, b, c) = (
+                apartment_scan_digest(cfg.clone(), 10),
+                apartment_scan_digest(cfg.clone(), 10),
+                apartment_scan_digest_seeded(cfg.clone(), 10, 2),
+            );
+            assert_eq!(a, b, "{model:?}");
+            assert_ne!(a, c, "{model:?}: another seed, other scans");
+        }
+    }
+
+    #[test]
+    fn world_files_name_materials_and_refuse_unknown_ones() {
+        let w = room_world("m", "[[walls]]\npoints = [[5, 0], [5, 4]]\nmaterial = \"glass\"\n[[obstacles]]\nkind = \"furniture\"\nmaterial = \"dark\"\ncircle = { center = [8.0, 2.0], radius = 0.3 }\n[[targets]]\nrect = { center = [3.0, 3.0], size = [0.5, 0.35] }\n");
+        assert_eq!(w.wall_material(4), Material::Glass);
+        assert_eq!(w.wall_material(0), Material::Default);
+        assert_eq!(w.obstacles[0].material, Material::Dark);
+        let back = World::from_toml_str(&w.to_toml_string(), "back.toml").unwrap();
+        assert_eq!(back, w, "materials survive a round trip");
+        let bad = "name = \"b\"\ntime_limit_s = 60\n[start]\nposition = [2.0, 2.0]\n[[walls]]\npoints = [[0, 0], [10, 0], [10, 4], [0, 4]]\nclosed = true\nmaterial = \"chrome\"\n[[targets]]\nrect = { center = [3.0, 3.0], size = [0.5, 0.35] }\n";
+        let e = World::from_toml_str(bad, "bad.toml").unwrap_err().to_string();
+        assert_eq!(e, "bad.toml:8: unknown material \"chrome\" in `material`, expected one of `default`, `dark`, `glass`");
+        let bad = bad.replace("material = \"chrome\"", "material = 3");
+        let e = World::from_toml_str(&bad, "bad.toml").unwrap_err().to_string();
+        assert!(e.starts_with("bad.toml:8:") && e.contains("string"), "{e}");
     }
 }
