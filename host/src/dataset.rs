@@ -546,9 +546,11 @@ pub fn episode_seed(world_seed: u64, episode: u32) -> u64 {
     mix(mix(world_seed) ^ (episode as u64).wrapping_mul(0xD6E8_FEB8_6659_FD93))
 }
 
-/// The simulator settings used for the dataset: `lives search`'s robot.
+/// The simulator settings used for the dataset: the clean robot the shipped classifier was
+/// trained on (`lives search`'s robot before the LiDAR profiles; the labeller takes the base's
+/// true pose as the laser's, so no mount and no drift here).
 pub fn sim_config() -> SimConfig {
-    crate::search::default_sim()
+    crate::search::ideal_sim()
 }
 
 /// A world with its reachable free cells (for starts and random waypoints).
@@ -675,7 +677,7 @@ fn drive_episode(
         let mut handed_over = false;
         if let Some((c, planner)) = ctrl.as_mut() {
             let use_labels = matches!(planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
-            let encoded = encode_sim_scan(&scan, &cfg);
+            let encoded = encode_sim_scan(&scan);
             let inputs = Inputs {
                 pose: Pose2::from_f64(p[0], p[1], p[2]),
                 scan: Some(encoded.input(use_labels)),

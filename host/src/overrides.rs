@@ -5,7 +5,7 @@
 //! viewpoint snap radius, a camera that sees nothing) is refused here, naming its range, instead of
 //! stopping the search.
 
-use crate::sim::SimConfig;
+use crate::sim::{LidarModel, SimConfig};
 use firmware::config::Weight;
 use firmware::{BinaryAngle, Config};
 
@@ -40,6 +40,18 @@ pub const NAMES: &[(&str, &str)] = &[
 /// Settings `--sim` accepts: the simulated base, LiDAR and camera, with their units. The
 /// defaults are [`crate::search::SearchSpec::new`]'s (`lives params` prints them).
 pub const SIM_NAMES: &[(&str, &str)] = &[
+    (
+        "lidar",
+        "LiDAR profile: ideal, rplidar-a2, rplidar-a3, hokuyo-utm30lx or vlp16 (docs/sim-sensors.md); sets beams, field of view, range, noise, no-returns; give it before other LiDAR settings",
+    ),
+    ("white_range_m", "no-return model: range at which a white target at normal incidence returns half the time, metres, in [0, 200] (0: every surface returns, glass included)"),
+    ("angular_jitter_deg", "standard deviation of each firing's direction around its nominal one, degrees, in [0, 1]"),
+    ("beam_divergence_mrad", "full beam divergence for mixed pixels at depth edges, milliradians, in [0, 50] (0: none)"),
+    ("mount_x_m", "the laser's position on the base, metres ahead of its centre, in [-1, 1]"),
+    ("mount_y_m", "the laser's position on the base, metres left of its centre, in [-1, 1]"),
+    ("mount_yaw_deg", "the laser's rotation on the base, degrees, in [-180, 180]"),
+    ("odom_slip_per_m", "odometry's scale error, metres per metre driven, in [0, 0.5]; the seed picks sign and size within ±50 %"),
+    ("odom_heading_drift_per_rad", "odometry's heading error, radians per radian turned, in [0, 0.5]; the seed picks sign and size within ±50 %"),
     ("speed_mps", "the base's top speed, m/s, in (0, 5]"),
     ("turn_rate_rps", "the base's top turn rate, rad/s, in (0, 10]"),
     ("range_noise_std_m", "standard deviation of the LiDAR's Gaussian range noise, metres, in [0, 1]"),
@@ -93,7 +105,24 @@ pub fn apply_sim(sim: &mut SimConfig, cfg: &mut Config, assignment: &str) -> Res
 }
 
 fn set_sim(sim: &mut SimConfig, cfg: &mut Config, name: &str, v: &str) -> Result<(), String> {
+    let deg = std::f64::consts::PI / 180.0;
     match name {
+        "lidar" => {
+            let model = LidarModel::from_name(v).ok_or_else(|| {
+                let names: Vec<&str> = LidarModel::ALL.iter().map(|m| m.as_str()).collect();
+                format!("`{name}`: unknown LiDAR profile `{v}`, expected one of {}", names.join(", "))
+            })?;
+            *sim = sim.clone().with_lidar(model);
+            *cfg = crate::search::controller_model(cfg, sim);
+        }
+        "white_range_m" => sim.white_range_m = in_range(name, v, 0.0, 200.0, false)?,
+        "angular_jitter_deg" => sim.angular_jitter_rad = in_range(name, v, 0.0, 1.0, false)? * deg,
+        "beam_divergence_mrad" => sim.beam_divergence_rad = in_range(name, v, 0.0, 50.0, false)? / 1000.0,
+        "mount_x_m" => sim.mount[0] = in_range(name, v, -1.0, 1.0, false)?,
+        "mount_y_m" => sim.mount[1] = in_range(name, v, -1.0, 1.0, false)?,
+        "mount_yaw_deg" => sim.mount[2] = in_range(name, v, -180.0, 180.0, false)? * deg,
+        "odom_slip_per_m" => sim.odom_slip_per_m = in_range(name, v, 0.0, 0.5, false)?,
+        "odom_heading_drift_per_rad" => sim.odom_heading_drift_per_rad = in_range(name, v, 0.0, 0.5, false)?,
         "speed_mps" => sim.speed_mps = in_range(name, v, 0.0, 5.0, true)?,
         "turn_rate_rps" => sim.turn_rate_rps = in_range(name, v, 0.0, 10.0, true)?,
         "range_noise_std_m" => sim.range_noise_std_m = in_range(name, v, 0.0, 1.0, false)?,
@@ -208,7 +237,17 @@ pub fn get(cfg: &Config, name: &str) -> Option<String> {
 /// The value of `--sim` setting `name` in `sim`, in the units `--sim` takes (`None` for an
 /// unknown name).
 pub fn get_sim(sim: &SimConfig, name: &str) -> Option<String> {
+    let r6 = |x: f64| format!("{}", (x * 1e6).round() / 1e6 + 0.0);
     Some(match name {
+        "lidar" => sim.lidar.as_str().to_string(),
+        "white_range_m" => sim.white_range_m.to_string(),
+        "angular_jitter_deg" => r6(sim.angular_jitter_rad.to_degrees()),
+        "beam_divergence_mrad" => r6(sim.beam_divergence_rad * 1000.0),
+        "mount_x_m" => sim.mount[0].to_string(),
+        "mount_y_m" => sim.mount[1].to_string(),
+        "mount_yaw_deg" => r6(sim.mount[2].to_degrees()),
+        "odom_slip_per_m" => sim.odom_slip_per_m.to_string(),
+        "odom_heading_drift_per_rad" => sim.odom_heading_drift_per_rad.to_string(),
         "speed_mps" => sim.speed_mps.to_string(),
         "turn_rate_rps" => sim.turn_rate_rps.to_string(),
         "range_noise_std_m" => sim.range_noise_std_m.to_string(),
@@ -358,6 +397,26 @@ mod tests {
     }
 
     #[test]
+    fn a_lidar_profile_sets_the_scanner_and_the_controllers_range_model() {
+        let (mut sim, mut c) = (crate::search::default_sim(), Config::DEFAULT);
+        apply_sim(&mut sim, &mut c, "lidar=rplidar-a2").unwrap();
+        assert_eq!((sim.beams, sim.lidar_min_range_m, sim.lidar_max_range_m), (800, 0.15, 12.0));
+        assert_eq!(c.lidar_max_range_m, fixed_point::Meters::from_num(12), "the controller's LiDAR model follows");
+        assert_eq!(sim.mount, crate::search::default_sim().mount, "the mount and odometry are the robot's, not the scanner's");
+        apply_sim(&mut sim, &mut c, "lidar=vlp16").unwrap();
+        assert_eq!(sim.lidar_max_range_m, 100.0);
+        assert_eq!(c.lidar_max_range_m, Config::DEFAULT.lidar_max_range_m, "a 100 m scanner is modelled out to the default 30 m");
+        apply_sim(&mut sim, &mut c, "lidar=ideal").unwrap();
+        for s in ["mount_x_m=0", "odom_slip_per_m=0", "odom_heading_drift_per_rad=0"] {
+            apply_sim(&mut sim, &mut c, s).unwrap();
+        }
+        assert_eq!(sim, crate::search::ideal_sim(), "ideal and no drift is the robot of before the profiles");
+        apply_sim(&mut sim, &mut c, "mount_yaw_deg=-90").unwrap();
+        assert!((sim.mount[2] + std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        assert_eq!(get_sim(&sim, "mount_yaw_deg").as_deref(), Some("-90"));
+    }
+
+    #[test]
     fn sim_settings_apply_to_the_robot_and_its_model_and_reject_bad() {
         let (mut sim, mut c) = (SimConfig::default(), Config::DEFAULT);
         apply_sim(&mut sim, &mut c, "speed_mps=0.25").unwrap();
@@ -389,14 +448,32 @@ mod tests {
             "detect_min_visible_fraction=0",
             "robot_radius_m=2",
             "beams=16",
+            "lidar=rplidar",
+            "lidar=",
+            "white_range_m=-1",
+            "mount_x_m=2",
+            "mount_yaw_deg=NaN",
+            "odom_slip_per_m=0.6",
+            "odom_heading_drift_per_rad=-0.1",
+            "angular_jitter_deg=5",
+            "beam_divergence_mrad=100",
         ] {
             let e = apply_sim(&mut sim, &mut c, bad).unwrap_err();
             assert!(e.contains(bad.split('=').next().unwrap()) || e.contains("name=value"), "{bad}: {e}");
         }
         assert_eq!((sim, c), before, "a rejected setting changes nothing");
+        let e = apply_sim(&mut SimConfig::default(), &mut Config::DEFAULT, "lidar=rplidar").unwrap_err();
+        assert_eq!(
+            e,
+            "`lidar`: unknown LiDAR profile `rplidar`, expected one of ideal, rplidar-a2, rplidar-a3, hokuyo-utm30lx, vlp16"
+        );
         let (mut sim, mut c) = (SimConfig::default(), Config::DEFAULT);
         for (name, _) in SIM_NAMES {
-            let value = if *name == "camera_fov_deg" || *name == "lidar_max_range_m" { "45" } else { "0.5" };
+            let value = match *name {
+                "camera_fov_deg" | "lidar_max_range_m" | "white_range_m" => "45",
+                "lidar" => "hokuyo-utm30lx",
+                _ => "0.5",
+            };
             apply_sim(&mut sim, &mut c, &format!("{name}={value}")).unwrap_or_else(|e| panic!("{name}: {e}"));
         }
     }

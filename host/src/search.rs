@@ -5,8 +5,8 @@
 //! which then moves for one period in four 50 ms steps. Nothing reads a wall clock, so the same
 //! world, planner and seed give the same run bit for bit.
 
-use crate::sim::{BaseStatus, HitKind, Scan, Scenario, Sim, SimConfig, World};
 use crate::range::{encode_range, EncodedScan, RangeLimits};
+use crate::sim::{BaseStatus, HitKind, LidarModel, Scan, Scenario, Sim, SimConfig, World};
 use firmware::planner::Viewpoint;
 use firmware::scan::{BeamLabel, BeamScan};
 use firmware::{BinaryAngle, Command, Config, Controller, Detection, Inputs, Mode, PlannerKind, Pose2};
@@ -130,8 +130,8 @@ impl SearchSpec {
             scenario: Some(scenario),
             planner,
             seed,
+            controller: controller_model(&Config::DEFAULT, &sim),
             sim,
-            controller: Config::DEFAULT,
             trace: false,
             trace_candidates: 0,
             model: None,
@@ -144,16 +144,51 @@ impl SearchSpec {
     }
 }
 
-/// The simulated robot a search uses unless `--sim` changes it: [`SimConfig::default`] with a
-/// 0.25 m body (the controller keeps `robot_radius_m` 0.35 m of clearance around it).
+/// The simulated robot a search uses unless `--sim` changes it: the paper's Spot with its
+/// Velodyne VLP-16 cut to the scan plane (the `vlp16` profile), mounted 0.10 m ahead of the
+/// body's centre (within the 0.10 m of clearance the controller keeps beyond the body), with
+/// moderately drifting odometry (2 % of the distance, 1 % of the turns; the seed picks the signs
+/// and sizes within ±50 %), and a 0.25 m body (the controller keeps `robot_radius_m` 0.35 m of
+/// clearance around it). `docs/sim-sensors.md` says why.
 pub fn default_sim() -> SimConfig {
+    SimConfig {
+        mount: [0.10, 0.0, 0.0],
+        odom_slip_per_m: 0.02,
+        odom_heading_drift_per_rad: 0.01,
+        ..ideal_sim().with_lidar(LidarModel::Vlp16)
+    }
+}
+
+/// The simulated robot of before the LiDAR profiles: the clean `ideal` sensor at the body's
+/// centre, exact odometry, a 0.25 m body (`--sim lidar=ideal --sim mount_x_m=0
+/// --sim odom_slip_per_m=0 --sim odom_heading_drift_per_rad=0`).
+pub fn ideal_sim() -> SimConfig {
     SimConfig { robot_radius_m: 0.25, ..SimConfig::default() }
+}
+
+/// The controller's model of the simulated LiDAR's range: the scanner's `range_max`, but no
+/// farther than the controller's default (30 m: a 100 m VLP-16 still inserts and clears only
+/// 30 m out, as before).
+pub fn controller_model(base: &Config, sim: &SimConfig) -> Config {
+    let cap = Config::DEFAULT.lidar_max_range_m.to_num::<f64>();
+    match fixed_point::meters_from_f64(sim.lidar_max_range_m.min(cap)) {
+        Some(m) => Config { lidar_max_range_m: m, ..*base },
+        None => *base,
+    }
 }
 
 /// The simulated robot's settings, in a result only when `--sim` changed them from
 /// [`default_sim`] (so that a result says what robot it was measured on).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SimSettings {
+    /// The LiDAR profile.
+    pub lidar: String,
+    /// The laser's pose on the base: x, y (metres), yaw (degrees).
+    pub mount: [f64; 3],
+    /// Odometry's scale error per metre driven.
+    pub odom_slip_per_m: f64,
+    /// Odometry's heading error per radian turned.
+    pub odom_heading_drift_per_rad: f64,
     /// The base's top speed.
     pub speed_mps: f64,
     /// The base's top turn rate.
@@ -178,6 +213,10 @@ impl SimSettings {
     /// `Some` when `sim` differs from [`default_sim`].
     pub fn changed(sim: &SimConfig) -> Option<Self> {
         (*sim != default_sim()).then(|| SimSettings {
+            lidar: sim.lidar.as_str().to_string(),
+            mount: [sim.mount[0], sim.mount[1], round3(sim.mount[2].to_degrees())],
+            odom_slip_per_m: sim.odom_slip_per_m,
+            odom_heading_drift_per_rad: sim.odom_heading_drift_per_rad,
             speed_mps: sim.speed_mps,
             turn_rate_rps: sim.turn_rate_rps,
             range_noise_std_m: sim.range_noise_std_m,
@@ -413,11 +452,11 @@ pub fn sim_limits(cfg: &SimConfig) -> RangeLimits {
     RangeLimits::new(cfg.lidar_min_range_m, cfg.lidar_max_range_m)
 }
 
-/// One simulated scan in the core's encoding (the host/core boundary, [`crate::range`]), with the
-/// ground-truth label of every beam.
-pub fn encode_sim_scan(scan: &Scan, cfg: &SimConfig) -> EncodedScan {
+/// One simulated scan in the core's encoding (the host/core boundary, [`crate::range`]) with its
+/// scanner's own limits, and the ground-truth label of every beam.
+pub fn encode_sim_scan(scan: &Scan) -> EncodedScan {
     let fallback = BinaryAngle::from_fraction(1, scan.ranges_m.len().max(1) as i64);
-    let limits = sim_limits(cfg);
+    let limits = RangeLimits::new(scan.range_min_m, scan.range_max_m);
     let (range_min_mm, range_max_mm) = limits.mm();
     EncodedScan {
         angle_min: BinaryAngle::from_radians(scan.angle_min).unwrap_or(BinaryAngle::HALF),
@@ -590,13 +629,16 @@ fn run_with(
     let tick_s = TICK_US as f64 / 1e6;
     loop {
         let now_us = ticks as u64 * TICK_US;
+        // The true pose (trajectory, scoring) and the one the controller is given: the laser's,
+        // in the drifting odometry frame, as a robot's odometry and `tf` give it.
         let p = sim.pose();
+        let q = sim.controller_pose();
         let scan = sim.scan();
         tally.scan(now_us, &scan);
-        let encoded = encode_sim_scan(&scan, &spec.sim);
+        let encoded = encode_sim_scan(&scan);
         let detection = sim.detect().map(|_| Detection { position: None });
         let inputs = Inputs {
-            pose: Pose2::from_f64(p[0], p[1], p[2]),
+            pose: Pose2::from_f64(q[0], q[1], q[2]),
             scan: Some(encoded.input(use_labels)),
             detection,
             command: (ticks == 0).then_some(Command::Start),
@@ -650,9 +692,10 @@ fn run_with(
                 }
             }
             let path: Vec<[f64; 2]> = g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect();
-            sim.set_path(&path, Some(g.pose.theta.to_radians()));
+            // In the controller's frame: the base follows it in the odometry frame.
+            sim.set_goal_path(&path, Some(g.pose.theta.to_radians()));
         }
-        sim.set_gaze(out.status.gaze.map(|h| h.to_radians()));
+        sim.set_goal_gaze(out.status.gaze.map(|h| h.to_radians()));
         let moved = step_base(&mut sim, tick_s);
         tally.step(p, sim.pose(), tick_s);
         base_blocked = moved.blocked;
@@ -775,7 +818,14 @@ mod tests {
                 ranges_m[i] = r;
                 hits[i] = HitKind::Target;
             }
-            Scan { angle_min: -std::f64::consts::PI, angle_increment: std::f64::consts::TAU / 20.0, ranges_m, hits }
+            Scan {
+                angle_min: -std::f64::consts::PI,
+                angle_increment: std::f64::consts::TAU / 20.0,
+                range_min_m: 0.1,
+                range_max_m: 30.0,
+                ranges_m,
+                hits,
+            }
         };
         let mut t = RunTally::new(4.0);
         t.scan(0, &scan(&[5.0, 5.0]));
@@ -786,5 +836,56 @@ mod tests {
         assert_eq!(t.target_in_camera_reach_s(), Some(0.4), "three beams within 4 m");
         t.scan(600_000, &scan(&[1.0, 1.0, 1.0]));
         assert_eq!((t.lidar_saw_target_s(), t.target_in_camera_reach_s()), (Some(0.2), Some(0.4)), "the first times stay");
+    }
+}
+
+#[cfg(test)]
+mod ideal_sensor_digest {
+    use super::*;
+
+    /// FNV-1a over bytes.
+    fn fnv(h: &mut u64, bytes: &[u8]) {
+        for &b in bytes {
+            *h ^= b as u64;
+            *h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+
+    /// The digest of what the controller was given (pose, ranges, labels) over the first `n`
+    /// ticks of `apartment easy`, seed 1, lives-gt, on `sim`.
+    pub(super) fn digest(sim: SimConfig, n: u64) -> u64 {
+        let w = World::builtin("apartment", Scenario::Easy).unwrap();
+        let mut spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, 1);
+        spec.sim = sim;
+        spec.world.time_limit_s = n as f64 * TICK_US as f64 / 1e6;
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        let mut observe = |v: &TickView<'_>| {
+            let p = v.inputs.pose.unwrap_or_default();
+            fnv(&mut h, &p.x.to_bits().to_le_bytes());
+            fnv(&mut h, &p.y.to_bits().to_le_bytes());
+            fnv(&mut h, &p.theta.0.to_le_bytes());
+            if let Some(s) = &v.inputs.scan {
+                for r in s.ranges_mm {
+                    fnv(&mut h, &r.to_le_bytes());
+                }
+                for l in s.labels.unwrap_or(&[]) {
+                    fnv(&mut h, &[*l as u8]);
+                }
+            }
+        };
+        try_run_observed(&spec, |_| {}, &mut observe).unwrap();
+        h
+    }
+
+    /// What the controller was given over the first 150 ticks before the simulator had LiDAR
+    /// profiles, materials, mounts and odometry drift (computed at commit 831efe1 with that
+    /// day's default robot: the clean 897-beam sensor, a 0.25 m body).
+    const BEFORE_PROFILES: u64 = 0x9430_73f3_517c_f956;
+
+    #[test]
+    fn the_ideal_sensor_without_drift_gives_the_controller_what_it_was_given_before() {
+        assert_eq!(digest(ideal_sim(), 150), BEFORE_PROFILES);
+        // The default robot is another sensor: it must not give the same.
+        assert_ne!(digest(default_sim(), 150), BEFORE_PROFILES);
     }
 }

@@ -267,7 +267,7 @@ fn try_generate(seed: u64, attempt: u64, furnish: bool, density: f64) -> Option<
                     };
                     let shape = Shape::Rect { center, size, yaw: 0.0 };
                     if inside(shape.aabb(), r, 0.04) && fits(&shape, &walls, &obstacles, &zones, 0.0) {
-                        obstacles.push(Obstacle { shape, kind: HitKind::Furniture, label: label.to_string() });
+                        obstacles.push(Obstacle { shape, kind: HitKind::Furniture, label: label.to_string(), material: Default::default() });
                         break;
                     }
                 }
@@ -277,7 +277,7 @@ fn try_generate(seed: u64, attempt: u64, furnish: bool, density: f64) -> Option<
                 let c = [(r[0] + r[2]) / 2.0, (r[1] + r[3]) / 2.0];
                 let shape = Shape::Rect { center: c, size: [1.4, 0.8], yaw: 0.0 };
                 if fits(&shape, &walls, &obstacles, &zones, 0.8) {
-                    obstacles.push(Obstacle { shape, kind: HitKind::Furniture, label: "table".into() });
+                    obstacles.push(Obstacle { shape, kind: HitKind::Furniture, label: "table".into(), material: Default::default() });
                 }
             }
         }
@@ -313,7 +313,7 @@ fn try_generate(seed: u64, attempt: u64, furnish: bool, density: f64) -> Option<
                         }
                     }
                     if inside(shape.aabb(), r, 0.05) && fits(&shape, &walls, &obstacles, &zones, 0.15) {
-                        obstacles.push(Obstacle { shape, kind: HitKind::Clutter, label: label.to_string() });
+                        obstacles.push(Obstacle { shape, kind: HitKind::Clutter, label: label.to_string(), material: Default::default() });
                         break;
                     }
                 }
@@ -335,6 +335,7 @@ fn try_generate(seed: u64, attempt: u64, furnish: bool, density: f64) -> Option<
     // A partial world to run the checks on.
     let mut world = World {
         name: format!("random-{seed}"),
+        wall_materials: vec![Default::default(); walls.len()],
         walls,
         obstacles,
         targets: Vec::new(),

@@ -5,7 +5,7 @@
 //! only looks at the items in the cells it touches. People move, so they are not in the scene;
 //! the simulator tests them separately.
 
-use super::{HitKind, Shape, P2};
+use super::{HitKind, Material, Shape, P2};
 
 /// Owner id of wall segments (obstacles own their index, targets `TARGET_OWNER_BASE + index`).
 pub const WALL_OWNER: u32 = u32::MAX;
@@ -347,6 +347,7 @@ struct Seg {
     b: P2,
     kind: HitKind,
     owner: u32,
+    material: Material,
 }
 
 #[derive(Clone, Debug)]
@@ -355,6 +356,7 @@ struct Circ {
     r: f64,
     kind: HitKind,
     owner: u32,
+    material: Material,
 }
 
 /// Largest grid side, in cells.
@@ -371,6 +373,33 @@ pub struct RayHit {
     pub t: f64,
     pub kind: HitKind,
     pub owner: u32,
+    /// What the surface is made of.
+    pub material: Material,
+    /// The surface's unit normal at the hit (either side): `|d · normal|` is the cosine of the
+    /// angle of incidence.
+    pub normal: P2,
+}
+
+/// How to find a surface's normal once the hit point is known.
+#[derive(Clone, Copy)]
+enum Normal {
+    Segment(P2, P2),
+    Circle(P2),
+}
+
+impl Normal {
+    fn at(self, p: P2) -> P2 {
+        let v = match self {
+            Normal::Segment(a, b) => [a[1] - b[1], b[0] - a[0]],
+            Normal::Circle(c) => sub(p, c),
+        };
+        let n = norm(v);
+        if n > 0.0 {
+            [v[0] / n, v[1] / n]
+        } else {
+            [1.0, 0.0]
+        }
+    }
 }
 
 /// Static geometry with a uniform-grid broad phase.
@@ -402,20 +431,30 @@ impl SceneBuilder {
     }
 
     pub fn wall(&mut self, a: P2, b: P2) {
-        self.segs.push(Seg { a, b, kind: HitKind::Wall, owner: WALL_OWNER });
+        self.wall_of(a, b, Material::Default);
+    }
+
+    /// A wall segment of `material`.
+    pub fn wall_of(&mut self, a: P2, b: P2, material: Material) {
+        self.segs.push(Seg { a, b, kind: HitKind::Wall, owner: WALL_OWNER, material });
     }
 
     /// A solid shape: its outline for rays, its interior for collisions.
     pub fn shape(&mut self, shape: &Shape, kind: HitKind, owner: u32) {
+        self.shape_of(shape, kind, owner, Material::Default);
+    }
+
+    /// A solid shape whose outline is of `material`.
+    pub fn shape_of(&mut self, shape: &Shape, kind: HitKind, owner: u32, material: Material) {
         match shape {
             Shape::Circle { center, radius } => {
-                self.circs.push(Circ { c: *center, r: *radius, kind, owner });
+                self.circs.push(Circ { c: *center, r: *radius, kind, owner, material });
             }
             _ => {
                 let v = shape.vertices().unwrap_or_default();
                 let m = v.len();
                 for i in 0..m {
-                    self.segs.push(Seg { a: v[i], b: v[(i + 1) % m], kind, owner });
+                    self.segs.push(Seg { a: v[i], b: v[(i + 1) % m], kind, owner, material });
                 }
                 if m >= 3 {
                     self.polys.push(v);
@@ -529,6 +568,12 @@ impl Scene {
     /// The first item a ray from `o` along unit `d` meets within `max_t`, ignoring items owned
     /// by `ignore_owner`.
     pub fn raycast(&self, o: P2, d: P2, max_t: f64, ignore_owner: u32) -> Option<RayHit> {
+        self.raycast_beyond(o, d, f64::NEG_INFINITY, max_t, ignore_owner)
+    }
+
+    /// [`Scene::raycast`] counting only hits farther than `min_t` (a beam that went through a
+    /// pane of glass at `min_t` goes on).
+    pub fn raycast_beyond(&self, o: P2, d: P2, min_t: f64, max_t: f64, ignore_owner: u32) -> Option<RayHit> {
         if max_t.is_nan() || max_t <= 0.0 || !o[0].is_finite() || !o[1].is_finite() {
             return None;
         }
@@ -570,14 +615,14 @@ impl Scene {
         loop {
             for &item in self.cell_items(cx as usize, cy as usize) {
                 let idx = (item & INDEX_MASK) as usize;
-                let (t, kind, owner) = match item >> TAG_SHIFT {
+                let (t, kind, owner, material, normal) = match item >> TAG_SHIFT {
                     TAG_SEG => {
                         let s = &self.segs[idx];
                         if s.owner == ignore_owner {
                             continue;
                         }
                         match ray_segment(o, d, s.a, s.b) {
-                            Some(t) => (t, s.kind, s.owner),
+                            Some(t) => (t, s.kind, s.owner, s.material, Normal::Segment(s.a, s.b)),
                             None => continue,
                         }
                     }
@@ -587,14 +632,14 @@ impl Scene {
                             continue;
                         }
                         match ray_circle(o, d, c.c, c.r) {
-                            Some(t) => (t, c.kind, c.owner),
+                            Some(t) => (t, c.kind, c.owner, c.material, Normal::Circle(c.c)),
                             None => continue,
                         }
                     }
                     _ => continue,
                 };
-                if t <= max_t && best.is_none_or(|b| t < b.t) {
-                    best = Some(RayHit { t, kind, owner });
+                if t > min_t && t <= max_t && best.is_none_or(|b| t < b.t) {
+                    best = Some(RayHit { t, kind, owner, material, normal: normal.at(add(o, scale(d, t))) });
                 }
             }
             let t_exit = t_max_x.min(t_max_y);

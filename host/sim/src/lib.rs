@@ -30,7 +30,7 @@ pub mod world;
 use std::fmt;
 use std::str::FromStr;
 
-pub use simulator::{BaseStatus, Scan, Sim, SimConfig};
+pub use simulator::{BaseStatus, LidarModel, Scan, Sim, SimConfig};
 pub use world::{Obstacle, Person, Start, Target, World, WorldError};
 
 /// The bytes of the file at `path` if it holds at most `max`; `Ok(None)` if it holds more, found
@@ -102,6 +102,51 @@ impl FromStr for Scenario {
             "easy" => Ok(Scenario::Easy),
             "hard" => Ok(Scenario::Hard),
             _ => Err(ParseScenarioError(s.to_string())),
+        }
+    }
+}
+
+/// What a wall's or an obstacle's surface is made of, for the LiDAR (`material = "…"` in world
+/// files; see `docs/world-format.md` and `docs/sim-sensors.md`). The camera and the base ignore it;
+/// the `ideal` LiDAR profile ignores it too (every surface returns).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Material {
+    /// Painted walls, wood, fabric: a diffuse surface of reflectance [`Material::reflectance`].
+    #[default]
+    Default,
+    /// Dark, matt surfaces (black furniture, dark carpet on a wall): little light comes back.
+    Dark,
+    /// Windows, glass doors and partitions: the beam mostly passes through, returning from what
+    /// lies behind or not at all; only near normal incidence does the pane itself return.
+    Glass,
+}
+
+impl Material {
+    /// Every material, in the order the docs list them.
+    pub const ALL: [Material; 3] = [Material::Default, Material::Dark, Material::Glass];
+
+    /// The name world files use.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Material::Default => "default",
+            Material::Dark => "dark",
+            Material::Glass => "glass",
+        }
+    }
+
+    /// The material of a world file's name (exact, lower case).
+    pub fn from_name(name: &str) -> Option<Material> {
+        Material::ALL.into_iter().find(|m| m.as_str() == name)
+    }
+
+    /// Diffuse reflectance at the LiDAR's near-infrared wavelength (0–1), for the no-return
+    /// model: 0.5 for painted walls, 0.08 for dark surfaces (the datasheets' "black" target is
+    /// about 0.1). Glass returns by its own rule, not by reflectance.
+    pub fn reflectance(self) -> f64 {
+        match self {
+            Material::Default => 0.5,
+            Material::Dark => 0.08,
+            Material::Glass => 0.0,
         }
     }
 }

@@ -15,7 +15,7 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use super::geometry::{dist, polygon_area};
-use super::{HitKind, Scenario, Shape, P2};
+use super::{HitKind, Material, Scenario, Shape, P2};
 
 /// Every coordinate of a world must lie in `[0, WORLD_LIMIT_M]` in x and y (the controller's
 /// occupancy grid is 51.2 m square, anchored at the origin).
@@ -43,6 +43,8 @@ pub struct Obstacle {
     pub kind: HitKind,
     /// Free text for people reading the file or a plot ("bed", "box"); may be empty.
     pub label: String,
+    /// What its outline is made of, for the LiDAR.
+    pub material: Material,
 }
 
 /// An object to be found. The simulator places it at one of [`Target::positions`], picked by
@@ -94,6 +96,9 @@ pub struct World {
     pub name: String,
     /// Wall segments (the file's polylines expanded).
     pub walls: Vec<[P2; 2]>,
+    /// The material of each wall segment, in the order of `walls` (a segment past its end is
+    /// [`Material::Default`]; see [`World::wall_material`]).
+    pub wall_materials: Vec<Material>,
     pub obstacles: Vec<Obstacle>,
     pub targets: Vec<Target>,
     pub people: Vec<Person>,
@@ -219,6 +224,7 @@ struct RawWall {
     points: Vec<Xy>,
     #[serde(default)]
     closed: bool,
+    material: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -249,6 +255,7 @@ struct RawCircle {
 struct RawObstacle {
     kind: RawKind,
     label: Option<String>,
+    material: Option<Spanned<String>>,
     rect: Option<Spanned<RawRect>>,
     circle: Option<Spanned<RawCircle>>,
     polygon: Option<Spanned<Vec<Xy>>>,
@@ -292,6 +299,15 @@ struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
+    /// A `material = "…"` key: one of [`Material::ALL`]'s names, [`Material::Default`] if absent.
+    fn material(&self, m: Option<Spanned<String>>) -> Result<Material, WorldError> {
+        let Some(m) = m else { return Ok(Material::Default) };
+        Material::from_name(m.get_ref()).ok_or_else(|| {
+            let names: Vec<String> = Material::ALL.iter().map(|m| format!("`{}`", m.as_str())).collect();
+            self.invalid(&m.span(), format!("unknown material {:?} in `material`, expected one of {}", m.get_ref(), names.join(", ")))
+        })
+    }
+
     fn invalid(&self, span: &Range<usize>, message: String) -> WorldError {
         WorldError::Invalid { file: self.file.to_string(), line: line_of(self.text, span.start), message }
     }
@@ -439,9 +455,11 @@ impl World {
         let start = Start { pose: [position[0], position[1], yaw], jitter_m, jitter_yaw_rad };
 
         let mut walls: Vec<[P2; 2]> = Vec::new();
+        let mut wall_materials = Vec::new();
         for w in raw.walls {
             let span = w.span();
             let w = w.into_inner();
+            let material = ctx.material(w.material)?;
             let (points, closed): (Vec<P2>, bool) = (w.points.iter().map(|q| q.0).collect(), w.closed);
             if points.len() < 2 {
                 return Err(ctx.invalid(&span, format!("a wall needs at least 2 points, got {}", points.len())));
@@ -461,6 +479,7 @@ impl World {
                     return Err(ctx.invalid(&span, format!("wall segment from {a:?} to {b:?} has zero length")));
                 }
                 walls.push([a, b]);
+                wall_materials.push(material);
             }
         }
 
@@ -469,13 +488,14 @@ impl World {
         for o in raw.obstacles {
             let span = o.span();
             let o = o.into_inner();
+            let material = ctx.material(o.material)?;
             let shape = ctx.shape(&span, o.rect, o.circle, o.polygon)?;
             ctx.shape_in_area(&span, "obstacle corner", &shape)?;
             let kind = match o.kind {
                 RawKind::Furniture => HitKind::Furniture,
                 RawKind::Clutter => HitKind::Clutter,
             };
-            obstacles.push(Obstacle { shape, kind, label: o.label.unwrap_or_default() });
+            obstacles.push(Obstacle { shape, kind, label: o.label.unwrap_or_default(), material });
             obstacle_spans.push(span);
         }
 
@@ -530,7 +550,7 @@ impl World {
             people_spans.push(span);
         }
 
-        let mut world = World { name, walls, obstacles, targets, people, start, time_limit_s, bounds: [[0.0; 2]; 2] };
+        let mut world = World { name, walls, wall_materials, obstacles, targets, people, start, time_limit_s, bounds: [[0.0; 2]; 2] };
         world.bounds = world.compute_bounds();
 
         // Cross checks: targets clear of walls and obstacles; start clear; people clear.
@@ -675,6 +695,12 @@ impl World {
         self.disc_clash(p, r, false).is_none()
     }
 
+    /// The material of wall segment `i` ([`Material::Default`] past the end of
+    /// [`World::wall_materials`]).
+    pub fn wall_material(&self, i: usize) -> Material {
+        self.wall_materials.get(i).copied().unwrap_or_default()
+    }
+
     /// The world as a complete, standalone TOML file that [`World::from_toml_str`] reads back to
     /// an equal world (walls are re-chained into polylines; angles are written in radians).
     pub fn to_toml_string(&self) -> String {
@@ -695,7 +721,8 @@ impl World {
         while i < self.walls.len() {
             let mut points = vec![self.walls[i][0], self.walls[i][1]];
             let mut j = i + 1;
-            while j < self.walls.len() && self.walls[j][0] == *points.last().expect("non-empty") {
+            let material = self.wall_material(i);
+            while j < self.walls.len() && self.walls[j][0] == *points.last().expect("non-empty") && self.wall_material(j) == material {
                 points.push(self.walls[j][1]);
                 j += 1;
             }
@@ -708,6 +735,9 @@ impl World {
             if closed {
                 s.push_str("closed = true\n");
             }
+            if material != Material::Default {
+                s.push_str(&format!("material = \"{}\"\n", material.as_str()));
+            }
             i = j;
         }
         for o in &self.obstacles {
@@ -716,6 +746,9 @@ impl World {
             s.push_str(&format!("kind = \"{kind}\"\n"));
             if !o.label.is_empty() {
                 s.push_str(&format!("label = {}\n", toml_str(&o.label)));
+            }
+            if o.material != Material::Default {
+                s.push_str(&format!("material = \"{}\"\n", o.material.as_str()));
             }
             s.push_str(&shape_toml(&o.shape));
         }

@@ -707,7 +707,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
                     CoreToHost::Status(s) => {
                         classifier_check.observe(&s)?;
                         need_start = s.mode == WireMode::Idle;
-                        b.sim.set_gaze(s.gaze.map(|h| BinaryAngle(h).to_radians()));
+                        b.sim.set_goal_gaze(s.gaze.map(|h| BinaryAngle(h).to_radians()));
                         match s.mode {
                             WireMode::TargetFound => {
                                 outcome = "found";
@@ -740,10 +740,11 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
             }
         }
         let now_us = if realtime { (b.sim.time_s() * 1e6).round() as u64 } else { ticks as u64 * TICK_US };
-        let p = b.sim.pose();
+        // The controller is given the laser's pose in the odometry frame (`Sim::controller_pose`).
+        let p = b.sim.controller_pose();
         let scan = b.sim.scan();
         tally.scan(now_us, &scan);
-        let encoded = encode_sim_scan(&scan, &spec.sim);
+        let encoded = encode_sim_scan(&scan);
         let detected = b.sim.detect().is_some();
         let scan_msg = match ScanMsg::from_scan_input(now_us, &encoded.input(use_labels)) {
             Ok(m) => m,
@@ -886,7 +887,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
             }
         }
         // Where the camera looks while walking (as the in-process loop does).
-        b.sim.set_gaze(status.gaze.map(|h| BinaryAngle(h).to_radians()));
+        b.sim.set_goal_gaze(status.gaze.map(|h| BinaryAngle(h).to_radians()));
         let before = b.sim.pose();
         let moved = step_base(&mut b.sim, TICK_US as f64 / 1e6);
         tally.step(before, b.sim.pose(), TICK_US as f64 / 1e6);

@@ -67,7 +67,8 @@ impl Base for Sim {
         Sim::pose(self)
     }
     fn set_path(&mut self, path: &[[f64; 2]], final_yaw: Option<f64>) {
-        Sim::set_path(self, path, final_yaw)
+        // The node's goals are in its frame: the laser's, in the (drifting) odometry frame.
+        Sim::set_goal_path(self, path, final_yaw)
     }
     fn stop_base(&mut self) {
         Sim::stop_base(self)
