@@ -418,7 +418,7 @@ fn mount(rotation: [f64; 4]) -> Vec<u8> {
 
 fn odometry(i: u32) -> Vec<u8> {
     cdr::encode_odometry(&Odometry {
-        header: Header { stamp: Time { sec: 10, nanosec: i }, frame_id: "odom".into() },
+        header: Header { stamp: Time { sec: 10 + i as i32 / 5, nanosec: (i % 5) * 200_000_000 }, frame_id: "odom".into() },
         child_frame_id: "base_link".into(),
         pose: Transform::planar(1.0, 2.0, 0.0),
     })
