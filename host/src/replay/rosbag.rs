@@ -11,11 +11,14 @@
 //!    before, plus the error.
 //! 2. [`scans_from_messages`] decodes them (CDR, [`super::cdr`]; a message that does not decode
 //!    is skipped and counted, the messages around it are used), sorts them by the bag's receive
-//!    time, and replays the frame tree: `tf_static` transforms apply to the whole bag,
-//!    `tf` transforms and odometry (`header.frame_id` → `child_frame_id`) update their edge as
-//!    they arrive. Each scan's pose is the laser frame's pose in the root of its frame tree
-//!    (`map` or `odom`), from the latest transforms received before the scan (no interpolation),
-//!    projected to the plane: x, y and the yaw of the laser's x axis. A laser mounted upside down
+//!    time, and builds the frame tree: `tf_static` transforms apply to the whole bag, `tf`
+//!    transforms and odometry (`header.frame_id` → `child_frame_id`) are samples of their edge at
+//!    their header stamps. Each scan's pose is the laser frame's pose in the root of its frame
+//!    tree (`map` or `odom`) at the scan's header stamp, the moving edges interpolated to it
+//!    (translation linear, rotation shortest arc), projected to the plane: x, y and the yaw of
+//!    the laser's x axis. Scans with no odometry at or before their stamp, or none within
+//!    [`MAX_POSE_AGE_NS`], are rejected by name, as are transforms that jump, loop or go back in
+//!    time. A laser mounted upside down
 //!    (its z axis pointing down) sees the world mirrored: its beam angles are negated.
 //!
 //! Ranges follow REP 117 and the `LaserScan` definition: NaN (invalid) and −inf (too close) are
