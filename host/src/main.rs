@@ -431,6 +431,9 @@ enum Cmd {
     /// Replay a recorded log through the controller (no base to move): CARMEN logs (FLASER,
     /// ROBOTLASER1, ODOM; plain or gzip) and ROS 2 bags (MCAP or sqlite3) (docs/replay.md).
     Replay(host::replay::ReplayArgs),
+    /// Write a ROS 2 MCAP bag from a CARMEN log as a robot records one: LaserScan with +inf
+    /// readings, odometry starting a few scans late, a rotated laser mount (host::export_bag).
+    ExportBag(host::export_bag::ExportBagArgs),
     /// List the built-in worlds, or print one as a world file.
     Worlds {
         /// Print this built-in world (or `random`) as TOML.
@@ -1300,6 +1303,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             Ok(ExitCode::SUCCESS)
         }
         Cmd::Replay(args) => host::replay::run_command(&args),
+        Cmd::ExportBag(args) => host::export_bag::run_command(&args),
         Cmd::Params => {
             let w = host::overrides::NAMES.iter().chain(host::overrides::SIM_NAMES).map(|n| n.0.len()).max().unwrap_or(0);
             say!("The controller (`--set NAME=VALUE` on search, eval, replay, bridge; a value outside the core's");
