@@ -47,6 +47,9 @@ pub const MATCH_HALF_CELL: Meters = Meters::from_bits(3277);
 pub const MATCH_MIN_POINTS: usize = 30;
 /// The least score, in thousandths of the most the points could score, to accept a match.
 pub const MATCH_MIN_SCORE_PER_MILLE: u32 = 300;
+/// The controller matches no scan until this many are in the map (the first scans would be
+/// matched against an empty or nearly empty grid).
+pub const MATCH_WARMUP_SCANS: u32 = 3;
 /// A point's score in an occupied cell.
 pub const HIT_SCORE: u32 = 4;
 /// A point's score next to an occupied cell (4-neighbourhood).

@@ -35,7 +35,8 @@ use serde::{Deserialize, Serialize};
 /// * v4: the configuration carries `nonmap_drop_vacated`.
 /// * v5: `ErrorCode::ConfigInvalid`: a configuration outside the core's ranges is refused, naming
 ///   the field; `Command(Reset)` is applied on arrival (a new search, lockstep time from 0).
-pub const PROTOCOL_VERSION: u16 = 5;
+/// * v6: the configuration carries `scan_matching` (after `budgets`).
+pub const PROTOCOL_VERSION: u16 = 6;
 
 /// Most beams one scan carries, whole ([`ScanMsg`]) or in segments ([`ScanSegmentMsg`]): a 360°
 /// scan at 0.33° (1091 beams) fits. Larger scans are refused ([`WireError::TooManyBeams`]).
@@ -623,12 +624,14 @@ pub struct ConfigMsg {
     pub watchdog_us: u64,
     /// [`Config::budgets`].
     pub budgets: BudgetsMsg,
+    /// [`Config::scan_matching`] (v6).
+    pub scan_matching: bool,
 }
 
 impl ConfigMsg {
     /// The fields' names ([`Config`]'s), in wire order: [`ErrorCode::ConfigInvalid`] names a
     /// field by its index here.
-    pub const FIELDS: [&'static str; 37] = [
+    pub const FIELDS: [&'static str; 38] = [
         "planner",
         "origin_x_m",
         "origin_y_m",
@@ -666,6 +669,7 @@ impl ConfigMsg {
         "viewpoint_snap_radius_m",
         "watchdog_us",
         "budgets",
+        "scan_matching",
     ];
 
     /// The index of the field called `name` in [`ConfigMsg::FIELDS`].
@@ -720,6 +724,7 @@ impl ConfigMsg {
                 plan_ops: b.plan_ops,
                 classify_macs: b.classify_macs,
             },
+            scan_matching: c.scan_matching,
         }
     }
 
@@ -772,6 +777,7 @@ impl ConfigMsg {
                 plan_ops: b.plan_ops,
                 classify_macs: b.classify_macs,
             },
+            scan_matching: self.scan_matching,
         }
     }
 }
@@ -1282,6 +1288,7 @@ mod tests {
             camera_fov: BinaryAngle::from_degrees(60),
             w_nonmap_per_point: Config::weight_milli(-2_500),
             look_around_here: true,
+            scan_matching: true,
             ..Config::DEFAULT
         };
         c2.budgets.plan_ops = 1;
