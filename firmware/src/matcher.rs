@@ -317,8 +317,21 @@ mod tests {
         GridGeometry { origin_x: Meters::ZERO, origin_y: Meters::ZERO }
     }
 
-    fn m(v: f64) -> Meters {
-        fixed_point::meters_from_f64(v).unwrap()
+    /// Millimetres as metres.
+    fn mm(v: i64) -> Meters {
+        Meters::from_bits(((v << 16) / 1000) as i32)
+    }
+
+    /// A pose from millimetres and tenths of a degree.
+    fn pose(x_mm: i64, y_mm: i64, deci_deg: i64) -> Pose2 {
+        Pose2::new(mm(x_mm), mm(y_mm), BinaryAngle::from_fraction(deci_deg, 3600))
+    }
+
+    /// `got` is within `tol` of `want` in x and y, and `deg_tenths` tenths of a degree in θ.
+    fn near(got: &Pose2, want: &Pose2, tol: Meters, deg_tenths: i64) -> bool {
+        (got.x - want.x).abs() <= tol
+            && (got.y - want.y).abs() <= tol
+            && (got.theta - want.theta).unsigned_abs() <= BinaryAngle::from_fraction(deg_tenths, 3600).0 as u32
     }
 
     /// An empty grid.
@@ -357,77 +370,76 @@ mod tests {
     }
 
     /// The scan a sensor at `pose` sees in `room`: each beam of the core's grid marched in
-    /// 1 cm steps until it enters an occupied cell (at most 10 m), as millimetres. (Test code
-    /// on the host: `f64` trigonometry from `std`.)
-    fn cast(room: &Room, pose: (f64, f64, f64)) -> BeamScan {
+    /// 1 cm steps until it enters an occupied cell (at most 10 m), as millimetres.
+    fn cast(room: &Room, pose: &Pose2) -> BeamScan {
+        let g = geom();
         let mut s = BeamScan::new();
         for b in 0..BEAMS {
-            let a = pose.2 + beam_angle(b).to_radians();
-            let (si, c) = a.sin_cos();
+            let a = pose.theta + beam_angle(b);
             let mut hit = None;
-            for step in 1..1000 {
-                let d = step as f64 * 0.01;
-                let (x, y) = (pose.0 + d * c, pose.1 + d * si);
-                if room.occupied((x * 10.0).floor() as i32, (y * 10.0).floor() as i32) {
-                    hit = Some(d);
+            for step in 1..1000i64 {
+                let (cx, cy) = g.cell_of(pose.x + mul_unit(mm(10 * step), cos(a)), pose.y + mul_unit(mm(10 * step), sin(a)));
+                if room.occupied(cx, cy) {
+                    hit = Some(10 * step);
                     break;
                 }
             }
-            s.ranges_mm[b] = hit.map_or(RANGE_NO_RETURN, |d| (d * 1000.0) as u16);
+            s.ranges_mm[b] = hit.map_or(RANGE_NO_RETURN, |d| d as u16);
         }
         s
-    }
-
-    fn pose(x: f64, y: f64, deg: f64) -> Pose2 {
-        Pose2::from_f64(x, y, deg.to_radians()).unwrap()
     }
 
     #[test]
     fn recovers_a_pose_offset_by_20_cm_and_3_degrees() {
         let r = room();
-        let truth = (13.0, 12.5, 20f64.to_radians());
-        let scan = cast(&r, truth);
-        let mut mm = ScanMatcher::new();
-        for (ox, oy, odeg) in [(0.2, 0.0, 3.0), (0.0, -0.2, -3.0), (0.14, 0.14, 3.0), (-0.2, 0.1, -2.0)] {
-            let predicted = pose(truth.0 + ox, truth.1 + oy, truth.2.to_degrees() + odeg);
-            let got = mm.match_scan(&r, &geom(), &predicted, &scan, m(10.0)).unwrap();
-            let (x, y, th) = got.pose.to_f64();
-            let dth = (th - truth.2).to_degrees();
-            assert!((x - truth.0).abs() <= 0.1 && (y - truth.1).abs() <= 0.1 && dth.abs() <= 1.0, "offset ({ox}, {oy}, {odeg}°): got ({x}, {y}, {}°) score {}‰", th.to_degrees(), got.score_per_mille);
+        let truth = pose(13_000, 12_500, 200);
+        let scan = cast(&r, &truth);
+        let range = mm(10_000);
+        let mut mm_ = ScanMatcher::new();
+        for (ox, oy, odeg) in [(200, 0, 30), (0, -200, -30), (140, 140, 30), (-200, 100, -20)] {
+            let predicted = pose(13_000 + ox, 12_500 + oy, 200 + odeg);
+            let got = mm_.match_scan(&r, &geom(), &predicted, &scan, range).unwrap();
+            // Within a cell (0.1 m) and 1°.
+            assert!(near(&got.pose, &truth, mm(100), 10), "offset ({ox} mm, {oy} mm, {odeg}/10°): {got:?}");
             assert!(got.score_per_mille >= 800, "{got:?}");
-            assert!(mm.stats.last_work <= MATCH_WORST_CASE_WORK && mm.stats.last_work > 0);
+            assert!(mm_.stats.last_work <= MATCH_WORST_CASE_WORK && mm_.stats.last_work > 0);
         }
-        // At the true pose it stays there.
-        let got = mm.match_scan(&r, &geom(), &pose(truth.0, truth.1, truth.2.to_degrees()), &scan, m(10.0)).unwrap();
-        let (x, y, th) = got.pose.to_f64();
-        assert!((x - truth.0).abs() <= 0.05 && (y - truth.1).abs() <= 0.05 && (th - truth.2).to_degrees().abs() <= 0.25);
-        assert_eq!(mm.stats.matched, 5);
+        // At the true pose it stays within half a cell and an eighth of a degree.
+        let got = mm_.match_scan(&r, &geom(), &truth, &scan, range).unwrap();
+        assert!(near(&got.pose, &truth, mm(50), 2), "{got:?}");
+        assert_eq!(mm_.stats.matched, 5);
+        // The same inputs give the same bits.
+        let again = ScanMatcher::new().match_scan(&r, &geom(), &pose(13_200, 12_500, 230), &scan, range).unwrap();
+        let first = ScanMatcher::new().match_scan(&r, &geom(), &pose(13_200, 12_500, 230), &scan, range).unwrap();
+        assert_eq!(again, first);
     }
 
     #[test]
     fn no_structure_no_correction() {
+        let range = mm(10_000);
         // An empty map: the scan (cast in a room) scores nothing anywhere; refused.
         let r = room();
-        let scan = cast(&r, (13.0, 12.5, 0.0));
-        let mut mm = ScanMatcher::new();
-        assert_eq!(mm.match_scan(&empty(), &geom(), &pose(13.0, 12.5, 0.0), &scan, m(10.0)), Err(MatchRefusal::LowScore(0)));
-        assert_eq!(mm.stats.low_score, 1);
+        let at = pose(13_000, 12_500, 0);
+        let scan = cast(&r, &at);
+        let mut m = ScanMatcher::new();
+        assert_eq!(m.match_scan(&empty(), &geom(), &at, &scan, range), Err(MatchRefusal::LowScore(0)));
+        assert_eq!(m.stats.low_score, 1);
         // Too few returns: refused before any work.
         let mut sparse = BeamScan::new();
         for b in (0..BEAMS).step_by(40) {
             sparse.ranges_mm[b] = 2000;
         }
-        assert_eq!(mm.match_scan(&r, &geom(), &pose(13.0, 12.5, 0.0), &sparse, m(10.0)), Err(MatchRefusal::TooFewPoints(23)));
-        assert_eq!(mm.stats.last_work, 0);
+        assert_eq!(m.match_scan(&r, &geom(), &at, &sparse, range), Err(MatchRefusal::TooFewPoints(23)));
+        assert_eq!((m.stats.last_work, m.stats.too_few_points), (0, 1));
         // A corridor along x: the walls fix y and θ; x is free, so the prediction's x stands.
         let c = corridor();
-        let truth = (25.0, 11.0, 0.0);
-        let scan = cast(&c, truth);
-        for ox in [-0.2, 0.0, 0.2] {
-            let got = mm.match_scan(&c, &geom(), &pose(truth.0 + ox, 11.15, 2.0), &scan, m(10.0)).unwrap();
-            let (x, y, th) = got.pose.to_f64();
-            assert!((x - (truth.0 + ox)).abs() < 1e-3, "x moved along the corridor: {x} for {}", truth.0 + ox);
-            assert!((y - truth.1).abs() <= 0.1 && th.to_degrees().abs() <= 1.0, "({x}, {y}, {}°)", th.to_degrees());
+        let truth = pose(25_000, 11_000, 0);
+        let scan = cast(&c, &truth);
+        for ox in [-200, 0, 200] {
+            let predicted = pose(25_000 + ox, 11_150, 20);
+            let got = m.match_scan(&c, &geom(), &predicted, &scan, range).unwrap();
+            assert_eq!(got.pose.x, predicted.x, "x moved along the corridor: {got:?}");
+            assert!(near(&got.pose, &pose(25_000 + ox, 11_000, 0), mm(100), 10), "{got:?}");
         }
     }
 
@@ -438,9 +450,9 @@ mod tests {
         let r = room();
         let mut full = BeamScan::new();
         full.ranges_mm = [1500; BEAMS];
-        let mut mm = ScanMatcher::new();
-        let _ = mm.match_scan(&r, &geom(), &pose(13.0, 12.5, 0.0), &full, m(10.0));
-        assert_eq!(mm.n, MATCH_MAX_POINTS);
-        assert_eq!(mm.stats.last_work, MATCH_WORST_CASE_WORK);
+        let mut m = ScanMatcher::new();
+        let _ = m.match_scan(&r, &geom(), &pose(13_000, 12_500, 0), &full, mm(10_000));
+        assert_eq!(m.n, MATCH_MAX_POINTS);
+        assert_eq!(m.stats.last_work, MATCH_WORST_CASE_WORK);
     }
 }
