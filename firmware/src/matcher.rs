@@ -16,8 +16,8 @@
 //!    quarter-step rotations (26 candidates), each point placed anew.
 //! 4. **Choice.** A candidate's value is its score less a penalty for moving away from the
 //!    prediction: `8192·score − n·(32·(hx² + hy²) + q²)` with `hx, hy` the offset in half cells
-//!    and `q` in eighths of a degree (a whole-cell offset costs 1/64 of a hit per point, 4° of
-//!    rotation 1/8 of one). The prediction is the first candidate and a candidate replaces the
+//!    and `q` in eighths of a degree (a one-cell offset costs 1/256 of a hit per point, a 3-cell
+//!    one 1/28, 4° of rotation 1/32, 6° 1/14). The prediction is the first candidate and a candidate replaces the
 //!    best only if strictly better, in a fixed order: ties keep the one nearer the prediction,
 //!    the same on every target. The penalty also keeps a featureless direction (a corridor's
 //!    length, an empty map) at the prediction.
@@ -35,8 +35,8 @@ use fixed_point::{cos, mul_unit, sin, BinaryAngle, Meters, Pose2};
 
 /// The coarse search's translations: ±3 cells (±0.3 m) in x and in y around the prediction.
 pub const MATCH_WINDOW_CELLS: i32 = 3;
-/// The coarse search's headings: ±8 steps of [`MATCH_ANGLE_STEP`] (±4°) around the prediction.
-pub const MATCH_ANGLE_STEPS: i32 = 8;
+/// The coarse search's headings: ±12 steps of [`MATCH_ANGLE_STEP`] (±6°) around the prediction.
+pub const MATCH_ANGLE_STEPS: i32 = 12;
 /// The coarse search's heading step: 0.5°.
 pub const MATCH_ANGLE_STEP: BinaryAngle = BinaryAngle::from_fraction(1, 720);
 /// The fine search's heading step: an eighth of a degree (a quarter of [`MATCH_ANGLE_STEP`]).
@@ -445,7 +445,7 @@ mod tests {
 
     #[test]
     fn worst_case_work_is_bounded() {
-        assert_eq!(MATCH_WORST_CASE_WORK, MATCH_MAX_POINTS as u32 * (17 * 49 + 26));
+        assert_eq!(MATCH_WORST_CASE_WORK, MATCH_MAX_POINTS as u32 * (25 * 49 + 26));
         // A full scan of close returns: the points are capped.
         let r = room();
         let mut full = BeamScan::new();
