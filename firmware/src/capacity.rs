@@ -46,3 +46,7 @@ pub const MAX_INFLATION_OFFSETS: usize = (2 * MAX_ROBOT_RADIUS_CELLS + 1) * (2 *
 pub const BLOCK_CELLS: usize = 8;
 /// Blocks per grid side.
 pub const BLOCKS: usize = GRID_CELLS / BLOCK_CELLS;
+
+/// Most scan points the scan matcher places per candidate pose (`crate::matcher`): a scan's
+/// returns are subsampled to this many.
+pub const MATCH_MAX_POINTS: usize = 160;

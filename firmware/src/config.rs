@@ -197,6 +197,11 @@ pub struct Config {
     pub watchdog_us: u64,
     /// Per-stage work budgets.
     pub budgets: StageBudgets,
+    /// Correct the odometry's drift by matching each scan against the LiDAR grid
+    /// ([`crate::matcher`]): the pose the maps are drawn at is `map_from_odom ∘ pose`, and each
+    /// accepted match updates `map_from_odom` ([`crate::Controller::map_from_odom`]). Default
+    /// false until measured on more logs (docs/replay.md, "Scan matching").
+    pub scan_matching: bool,
 }
 
 const fn m(millimetres: i32) -> Meters {
@@ -292,6 +297,7 @@ impl Config {
         blacklist_radius_m: m(500),
         viewpoint_snap_radius_m: m(1_000),
         watchdog_us: 1_000_000,
+        scan_matching: false,
         budgets: StageBudgets {
             lidar_cells: 400_000,
             visual_cells: 40_000,

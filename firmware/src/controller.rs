@@ -17,6 +17,7 @@ use crate::classifier::{Classifier, ClassifierConfig, LabelFeedback, ModelError,
 use crate::config::{Config, ConfigError};
 use crate::frontier::FrontierSet;
 use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
+use crate::matcher::{ScanMatcher, MATCH_WARMUP_SCANS};
 use crate::nonmap::NonMapStore;
 use crate::planner::{Goal, Planner, Site};
 use crate::scan::{BeamScan, ScanError, ScanInput};
@@ -187,9 +188,16 @@ pub struct Controller {
     /// The map-free scan classifier: labels scans that arrive without labels (once a model is
     /// installed with [`Controller::set_model`]).
     pub classifier: Classifier<'static>,
+    /// The scan-to-map matcher ([`Config::scan_matching`]) and its counters.
+    pub matcher: ScanMatcher,
     beams: BeamScan,
     mode: Mode,
+    /// The pose the maps are drawn at: the input pose corrected by `map_from_odom`.
     pose: Option<Pose2>,
+    /// The last input pose (the odometry's, in its own frame).
+    odom_pose: Option<Pose2>,
+    /// The correction from the odometry's frame to the map's ([`Config::scan_matching`]).
+    map_from_odom: Pose2,
     last_pose_us: Option<u64>,
     last_scan_us: Option<u64>,
     last_plan_us: Option<u64>,
@@ -214,9 +222,12 @@ impl Controller {
             frontiers: FrontierSet::new(),
             planner: Planner::new(),
             classifier: Classifier::new(ClassifierConfig { feedback: LabelFeedback::Raw }),
+            matcher: ScanMatcher::new(),
             beams: BeamScan::new(),
             mode: Mode::Idle,
             pose: None,
+            odom_pose: None,
+            map_from_odom: Pose2::IDENTITY,
             last_pose_us: None,
             last_scan_us: None,
             last_plan_us: None,
@@ -254,9 +265,17 @@ impl Controller {
         self.mode
     }
 
-    /// The last accepted pose.
+    /// The last accepted pose, in the map's frame: with [`Config::scan_matching`], the input
+    /// (odometry) pose corrected by [`Controller::map_from_odom`] and by the last scan's match.
     pub fn pose(&self) -> Option<Pose2> {
         self.pose
+    }
+
+    /// The correction from the odometry's frame (the input poses') to the map's (the maps',
+    /// the goals' and [`Controller::pose`]'s): identity without [`Config::scan_matching`]. A
+    /// goal `g` in the odometry's frame is `map_from_odom().inverse().compose(&g)`.
+    pub fn map_from_odom(&self) -> Pose2 {
+        self.map_from_odom
     }
 
     /// The goal being pursued.
@@ -313,6 +332,9 @@ impl Controller {
         self.planner.clear();
         self.mode = Mode::Idle;
         self.pose = None;
+        self.odom_pose = None;
+        self.map_from_odom = Pose2::IDENTITY;
+        self.matcher.reset();
         self.last_pose_us = None;
         self.last_scan_us = None;
         self.last_plan_us = None;
@@ -354,17 +376,19 @@ impl Controller {
             _ => {}
         }
 
-        if let Some(p) = inputs.pose {
+        if let Some(odom) = inputs.pose {
+            let p = if self.cfg.scan_matching { self.map_from_odom.compose(&odom) } else { odom };
             let (cx, cy) = self.lidar.geom.cell_of(p.x, p.y);
             if crate::grid::PackedGrid::in_bounds(cx, cy) {
                 self.pose = Some(p);
+                self.odom_pose = Some(odom);
                 self.last_pose_us = Some(now_us);
             } else {
                 self.status.poses_rejected += 1;
             }
         }
 
-        if let (Some(scan), Some(pose)) = (inputs.scan, self.pose) {
+        if let (Some(scan), Some(predicted)) = (inputs.scan, self.pose) {
             // The robot's own body: readings below the configured minimum are invalid too.
             let body_mm = (self.cfg.lidar_min_range_m.to_bits() as i64 * 1000 >> 16).clamp(0, u16::MAX as i64) as u16;
             let scan = ScanInput { range_min_mm: scan.range_min_mm.max(body_mm), ..scan };
@@ -372,6 +396,7 @@ impl Controller {
                 Ok(_) => {
                     self.last_scan_us = Some(now_us);
                     self.status.scans += 1;
+                    let pose = self.match_scan(&predicted);
                     if scan.labels.is_none() {
                         // No labels from upstream: the int8 network labels the scan (every beam
                         // stays unlabelled until a model is installed).
@@ -463,6 +488,29 @@ impl Controller {
         self.status.mode = Some(self.mode);
         let exploring = self.mode == Mode::Exploring;
         Outputs { goal: if exploring { self.goal.clone() } else { None }, new_goal, stop: !exploring, status: self.status }
+    }
+
+    /// With [`Config::scan_matching`], once [`MATCH_WARMUP_SCANS`] scans are in the map: matches
+    /// the new scan (in `self.beams`) taken at `predicted` against the LiDAR grid and, if the
+    /// match is accepted, moves the pose there and updates `map_from_odom`. Returns the pose to
+    /// draw the scan at.
+    fn match_scan(&mut self, predicted: &Pose2) -> Pose2 {
+        let Some(odom) = self.odom_pose.filter(|_| self.cfg.scan_matching && self.status.scans > MATCH_WARMUP_SCANS) else {
+            return *predicted;
+        };
+        let geom = self.lidar.geom;
+        match self.matcher.match_scan(&self.lidar, &geom, predicted, &self.beams, self.cfg.lidar_max_range_m) {
+            Ok(m) => {
+                let (cx, cy) = geom.cell_of(m.pose.x, m.pose.y);
+                if !crate::grid::PackedGrid::in_bounds(cx, cy) {
+                    return *predicted;
+                }
+                self.map_from_odom = m.pose.compose(&odom.inverse());
+                self.pose = Some(m.pose);
+                m.pose
+            }
+            Err(_) => *predicted,
+        }
     }
 
     /// Plans when due; returns true if a different goal was chosen.

@@ -30,6 +30,7 @@ pub mod config;
 pub mod controller;
 pub mod frontier;
 pub mod grid;
+pub mod matcher;
 pub mod mcu;
 pub mod node;
 pub mod nonmap;

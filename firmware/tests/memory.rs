@@ -16,6 +16,7 @@ fn static_memory_matches_the_documented_budget() {
         ("Planner", size_of::<Planner>()),
         ("BeamScan", size_of::<BeamScan>()),
         ("Classifier", size_of::<firmware::classifier::Classifier<'static>>()),
+        ("ScanMatcher", size_of::<firmware::matcher::ScanMatcher>()),
         ("Controller", size_of::<Controller>()),
     ];
     for (name, bytes) in sizes {

@@ -167,6 +167,7 @@ fn random_config(rng: &mut Rng) -> Config {
         nonmap_pool_radius_m: length(rng, MIN_NONMAP_POOL_RADIUS_M, MAX_NONMAP_RADIUS_M),
         nonmap_wall_clearance_m: length(rng, Meters::ZERO, MAX_NONMAP_RADIUS_M),
         nonmap_drop_vacated: rng.below(2) == 0,
+        scan_matching: rng.below(2) == 0,
         // Plan every tick half the time.
         replan_interval_us: if rng.below(2) == 0 { 0 } else { rng.next() >> rng.below(64) },
         switch_margin: weight(rng),

@@ -435,6 +435,9 @@ enum Cmd {
     /// (a replayed log against its own poses or another log; a simulated search against the true
     /// world), and pose errors on ground-truth relations (docs/mapcheck.md).
     Mapcheck(host::mapcheck::MapcheckArgs),
+    /// Write a ROS 2 MCAP bag from a CARMEN log as a robot records one: LaserScan with +inf
+    /// readings, odometry starting a few scans late, a rotated laser mount (host::export_bag).
+    ExportBag(host::export_bag::ExportBagArgs),
     /// List the built-in worlds, or print one as a world file.
     Worlds {
         /// Print this built-in world (or `random`) as TOML.
@@ -1307,6 +1310,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Mapcheck(args) => host::mapcheck::run_command(&args, |world, scenario, planner, seed| {
             load_spec(&RunArgs { world: world.to_string(), scenario, planner, seed })
         }),
+        Cmd::ExportBag(args) => host::export_bag::run_command(&args),
         Cmd::Params => {
             let w = host::overrides::NAMES.iter().chain(host::overrides::SIM_NAMES).map(|n| n.0.len()).max().unwrap_or(0);
             say!("The controller (`--set NAME=VALUE` on search, eval, replay, bridge; a value outside the core's");

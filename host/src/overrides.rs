@@ -29,6 +29,7 @@ pub const NAMES: &[(&str, &str)] = &[
     ("look_around_here", "true/false: score turning in place at the robot's cell"),
     ("gaze", "true/false: look while walking (camera faces the best heading, not the travel direction)"),
     ("gaze_min_gain", "least view utility worth turning the camera for while walking"),
+    ("scan_matching", "true/false: correct odometry drift by matching each scan against the LiDAR grid"),
     ("nonmap_viewpoints", "true/false: viewpoints aimed at non-map clusters (lives)"),
     ("nonmap_standoff_m", "distance of a non-map viewpoint from its cluster, metres"),
     ("nonmap_pool_radius_m", "pooling radius of non-map points, metres"),
@@ -223,6 +224,7 @@ pub fn get(cfg: &Config, name: &str) -> Option<String> {
         "nonmap_view_cap" => cfg.nonmap_view_cap.to_string(),
         "look_around_here" => cfg.look_around_here.to_string(),
         "gaze" => cfg.gaze.to_string(),
+        "scan_matching" => cfg.scan_matching.to_string(),
         "gaze_min_gain" => cfg.gaze_min_gain.to_string(),
         "nonmap_viewpoints" => cfg.nonmap_viewpoints.to_string(),
         "nonmap_standoff_m" => m(cfg.nonmap_standoff_m),
@@ -289,6 +291,7 @@ fn set(cfg: &mut Config, name: &str, v: &str) -> Result<(), String> {
         "nonmap_view_cap" => cfg.nonmap_view_cap = v.parse().map_err(|_| format!("`{name}`: `{v}` is not a count (0-65535)"))?,
         "look_around_here" => cfg.look_around_here = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
         "gaze" => cfg.gaze = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
+        "scan_matching" => cfg.scan_matching = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
         "gaze_min_gain" => cfg.gaze_min_gain = weight(name, v)?,
         "nonmap_viewpoints" => cfg.nonmap_viewpoints = v.parse().map_err(|_| format!("`{name}`: expected true or false"))?,
         "nonmap_standoff_m" => cfg.nonmap_standoff_m = meters(name, v)?,
@@ -322,7 +325,7 @@ mod tests {
         }
         for (name, _) in NAMES {
             let value = match *name {
-                "nonmap_viewpoints" | "look_around_here" | "gaze" | "nonmap_drop_vacated" => "true",
+                "nonmap_viewpoints" | "look_around_here" | "gaze" | "nonmap_drop_vacated" | "scan_matching" => "true",
                 "min_frontier_cells" | "nonmap_block_cap" | "nonmap_view_cap" | "unseen_unknown_eighths" => "5",
                 "camera_fov_deg" => "90",
                 _ => "1",

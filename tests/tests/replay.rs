@@ -418,7 +418,7 @@ fn mount(rotation: [f64; 4]) -> Vec<u8> {
 
 fn odometry(i: u32) -> Vec<u8> {
     cdr::encode_odometry(&Odometry {
-        header: Header { stamp: Time { sec: 10, nanosec: i }, frame_id: "odom".into() },
+        header: Header { stamp: Time { sec: 10 + i as i32 / 5, nanosec: (i % 5) * 200_000_000 }, frame_id: "odom".into() },
         child_frame_id: "base_link".into(),
         pose: Transform::planar(1.0, 2.0, 0.0),
     })
@@ -750,4 +750,87 @@ fn a_truncated_sqlite3_bag_names_the_row_and_keeps_the_scans_before() {
     let n = r.scans_read as i64;
     assert!(matches!(*after_row, Some(row) if row == 1 + 2 * n || row == 2 + 2 * n), "{after_row:?} after {n} scans");
     assert!(r.error.as_deref().unwrap().contains("long-cut.db3: sqlite error after messages row"));
+}
+
+/// A bag as a real robot records one, with what goes wrong on one: the scanner starts 3 scans
+/// before the odometry, the robot drives +x at 1 m/s, one odometry message jumps 100 m, one is
+/// stamped before the one before it, a `tf` message would close a loop of frames, one scan is
+/// stamped backwards, and the odometry then stops for 2 s while the scanner runs on.
+#[test]
+fn bag_poses_are_interpolated_and_bad_poses_are_named_rejections() {
+    let stamp = |t_ns: u64| Time { sec: (t_ns / 1_000_000_000) as i32, nanosec: (t_ns % 1_000_000_000) as u32 };
+    let odom_at = |t_ns: u64, x: f64| {
+        cdr::encode_odometry(&Odometry {
+            header: Header { stamp: stamp(t_ns), frame_id: "odom".into() },
+            child_frame_id: "base_link".into(),
+            pose: Transform::planar(x, 2.0, 0.0),
+        })
+    };
+    let scan_at = |t_ns: u64| {
+        let mut s = laser_scan(0, "laser");
+        s.header.stamp = stamp(t_ns);
+        cdr::encode_laser_scan(&s)
+    };
+    let base = 10_000_000_000u64;
+    let mut m = vec![("/tf_static", "tf2_msgs/msg/TFMessage", base, mount(YAW_90))];
+    // Scans every 100 ms from `base`, stamped 30 ms after each odometry message of 100 ms steps
+    // that starts 3 scans later; received 5 ms after their stamp.
+    for i in 0..40u64 {
+        let t_scan = base + i * 100_000_000 + 30_000_000;
+        let t_odom = base + i * 100_000_000;
+        let x = 1.0 + (t_odom - base) as f64 / 1e9;
+        if (3..30).contains(&i) {
+            let x = if i == 10 { x + 100.0 } else { x };
+            m.push(("/odom", "nav_msgs/msg/Odometry", t_odom + 1_000_000, odom_at(t_odom, x)));
+        }
+        if i == 12 {
+            // Stamped before the message before it (i = 11): refused.
+            m.push(("/odom", "nav_msgs/msg/Odometry", t_odom + 2_000_000, odom_at(t_odom - 150_000_000, x)));
+        }
+        if i == 15 {
+            let tf = cdr::encode_tf_message(&[TransformStamped {
+                header: Header { stamp: stamp(t_odom), frame_id: "laser".into() },
+                child_frame_id: "odom".into(),
+                transform: Transform::IDENTITY,
+            }]);
+            m.push(("/tf", "tf2_msgs/msg/TFMessage", t_odom + 3_000_000, tf));
+        }
+        // Scan 20 is stamped 150 ms early, before scan 19.
+        let stamped = if i == 20 { t_scan - 150_000_000 } else { t_scan };
+        m.push(("/scan", "sensor_msgs/msg/LaserScan", t_scan + 5_000_000, scan_at(stamped)));
+    }
+    let path = tmp("bad-poses.mcap");
+    write_mcap(&path, &m, 4096);
+    let log = replay::read_log(&path).unwrap();
+    assert_eq!((log.no_odometry_yet, log.scan_stamp_backwards), (3, 1), "{:?}", log.warnings);
+    // The odometry's last sample is stamped 30 ms before scan 29; scans 30–33 are within 0.5 s
+    // of it, 34–39 are not.
+    assert_eq!(log.stale_pose, 6, "{:?}", log.warnings);
+    let t = log.transforms_rejected;
+    assert_eq!((t.odometry_jump, t.stamp_backwards, t.tf_loop, t.invalid), (1, 1, 1, 0), "{t:?}");
+    // Interpolated to the scan's stamp (30 ms after the odometry's, between two samples 0.1 m
+    // apart): x = base + mount, the mount turned the laser to +y and put it 0.5 m ahead.
+    for s in &log.scans {
+        let i = ((s.t_s * 1e9).round() as u64 - 5_000_000 - base) / 100_000_000;
+        if (3..29).contains(&i) && i != 20 {
+            let want_x = 1.0 + i as f64 * 0.1 + 0.03 + 0.5;
+            assert!((s.pose[0] - want_x).abs() < 1e-9, "scan {i}: {:?} wants x {want_x}", s.pose);
+            assert!((s.pose[1] - 2.2).abs() < 1e-9 && (s.pose[2] - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
+        }
+    }
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let r = &run.report;
+    assert_eq!(
+        r.rejected,
+        replay::Rejected { no_odometry_yet: 3, stale_pose: 6, stamp_backwards: 1, ..Default::default() },
+        "{:?}",
+        r.warnings
+    );
+    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (40, 30, 10));
+    assert_eq!(r.transforms_rejected, t);
+    assert!(r.warnings.iter().any(|w| w.contains("before the first odometry")), "{:?}", r.warnings);
+    assert!(r.warnings.iter().any(|w| w.contains("1 odometry_jump") && w.contains("1 tf_loop")), "{:?}", r.warnings);
+    // Nothing was drawn at the mount offset from the origin (where the first scans would have
+    // been put), nor 100 m away.
+    assert!(r.trajectory_bounds[0][0] >= 1.8 && r.trajectory_bounds[1][0] < 4.5, "{:?}", r.trajectory_bounds);
 }

@@ -37,7 +37,8 @@ use serde::{Deserialize, Serialize};
 ///   the field; `Command(Reset)` is applied on arrival (a new search, lockstep time from 0).
 /// * v6: scans and scan segments carry their sensor's `range_min_mm` and `range_max_mm` (REP 117:
 ///   a reading at or beyond `range_max` is "no return" and clears no farther than it);
-///   `WireScanError::BadRangeLimits`.
+///   `WireScanError::BadRangeLimits`. The configuration carries
+///   `scan_matching` (after `budgets`).
 pub const PROTOCOL_VERSION: u16 = 6;
 
 /// Most beams one scan carries, whole ([`ScanMsg`]) or in segments ([`ScanSegmentMsg`]): a 360°
@@ -663,12 +664,14 @@ pub struct ConfigMsg {
     pub watchdog_us: u64,
     /// [`Config::budgets`].
     pub budgets: BudgetsMsg,
+    /// [`Config::scan_matching`] (v6).
+    pub scan_matching: bool,
 }
 
 impl ConfigMsg {
     /// The fields' names ([`Config`]'s), in wire order: [`ErrorCode::ConfigInvalid`] names a
     /// field by its index here.
-    pub const FIELDS: [&'static str; 37] = [
+    pub const FIELDS: [&'static str; 38] = [
         "planner",
         "origin_x_m",
         "origin_y_m",
@@ -706,6 +709,7 @@ impl ConfigMsg {
         "viewpoint_snap_radius_m",
         "watchdog_us",
         "budgets",
+        "scan_matching",
     ];
 
     /// The index of the field called `name` in [`ConfigMsg::FIELDS`].
@@ -760,6 +764,7 @@ impl ConfigMsg {
                 plan_ops: b.plan_ops,
                 classify_macs: b.classify_macs,
             },
+            scan_matching: c.scan_matching,
         }
     }
 
@@ -812,6 +817,7 @@ impl ConfigMsg {
                 plan_ops: b.plan_ops,
                 classify_macs: b.classify_macs,
             },
+            scan_matching: self.scan_matching,
         }
     }
 }
@@ -1334,6 +1340,7 @@ mod tests {
             camera_fov: BinaryAngle::from_degrees(60),
             w_nonmap_per_point: Config::weight_milli(-2_500),
             look_around_here: true,
+            scan_matching: true,
             ..Config::DEFAULT
         };
         c2.budgets.plan_ops = 1;

@@ -357,6 +357,14 @@ pub struct LogData {
     pub odometry: usize,
     /// Scans that could not be given a pose (bag frames not connected).
     pub no_pose: usize,
+    /// Bag scans stamped before the first odometry.
+    pub no_odometry_yet: usize,
+    /// Bag scans whose nearest odometry is more than [`rosbag::MAX_POSE_AGE_NS`] away.
+    pub stale_pose: usize,
+    /// Bag scans stamped before the scan before them.
+    pub scan_stamp_backwards: usize,
+    /// Bag transforms rejected (the scans are placed without them).
+    pub transforms_rejected: rosbag::RejectedTransforms,
     /// Time span of everything time-stamped that was read, seconds.
     pub span_s: Option<(f64, f64)>,
     /// Topics or line types used.
@@ -397,6 +405,10 @@ fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
         scans: Vec::new(),
         odometry: 0,
         no_pose: 0,
+        no_odometry_yet: 0,
+        stale_pose: 0,
+        scan_stamp_backwards: 0,
+        transforms_rejected: rosbag::RejectedTransforms::default(),
         span_s: None,
         sources: Vec::new(),
         warnings: Vec::new(),
@@ -485,6 +497,10 @@ fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -> LogData {
         scans: scans.scans,
         odometry: scans.odometry,
         no_pose: scans.no_pose,
+        no_odometry_yet: scans.no_odometry_yet,
+        stale_pose: scans.stale_pose,
+        scan_stamp_backwards: scans.scan_stamp_backwards,
+        transforms_rejected: scans.transforms_rejected,
         span_s: contents.span_ns.map(|(a, b)| (a as f64 / 1e9, b as f64 / 1e9)),
         sources: contents.topics.iter().map(|(t, ty)| format!("{t} ({ty})")).collect(),
         warnings,
@@ -547,6 +563,14 @@ pub fn read_log(path: &Path) -> Result<LogData, ReplayError> {
                 a.scans.extend(part.scans);
                 a.odometry += part.odometry;
                 a.no_pose += part.no_pose;
+                a.no_odometry_yet += part.no_odometry_yet;
+                a.stale_pose += part.stale_pose;
+                a.scan_stamp_backwards += part.scan_stamp_backwards;
+                let (t, p) = (&mut a.transforms_rejected, part.transforms_rejected);
+                t.odometry_jump += p.odometry_jump;
+                t.tf_loop += p.tf_loop;
+                t.stamp_backwards += p.stamp_backwards;
+                t.invalid += p.invalid;
                 if let Some((lo, hi)) = part.span_s {
                     widen(&mut a.span_s, lo);
                     widen(&mut a.span_s, hi);
@@ -642,6 +666,13 @@ pub struct Rejected {
     /// The laser's pose strays far from the rest of the trajectory ([`place_grid`]): it did not
     /// place the grid.
     pub stray_pose: u32,
+    /// A bag scan stamped before the first odometry message (the scanner started first): never
+    /// placed at the frame tree's origin.
+    pub no_odometry_yet: u32,
+    /// A bag scan whose nearest odometry is more than [`rosbag::MAX_POSE_AGE_NS`] from its stamp.
+    pub stale_pose: u32,
+    /// A bag scan stamped before the scan before it.
+    pub stamp_backwards: u32,
 }
 
 /// Bad records skipped, for the report.
@@ -681,6 +712,9 @@ pub struct ReplayReport {
     pub rejected: Rejected,
     /// Bad records skipped (reading went on after each).
     pub skipped_records: SkippedRecords,
+    /// Bag transforms (odometry, `tf`) rejected: a jump, a loop of frames, a stamp going
+    /// backwards; the scans are placed with the others.
+    pub transforms_rejected: rosbag::RejectedTransforms,
     /// Odometry messages read.
     pub odometry: u32,
     /// Time span of the log (everything time-stamped that was read), seconds.
@@ -890,7 +924,13 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     // in steps of 10 000 s) cannot drive the controller's clock: replay one scan per tick instead.
     let distinct = 1 + log.scans.windows(2).filter(|w| w[1].t_s != w[0].t_s).count();
     let synthetic_time = log.scans.len() > 1 && 2 * distinct < log.scans.len();
-    let mut rejected = Rejected { no_pose: log.no_pose as u32, ..Rejected::default() };
+    let mut rejected = Rejected {
+        no_pose: log.no_pose as u32,
+        no_odometry_yet: log.no_odometry_yet as u32,
+        stale_pose: log.stale_pose as u32,
+        stamp_backwards: log.scan_stamp_backwards as u32,
+        ..Rejected::default()
+    };
     let mut goals = Vec::new();
     let mut trajectory = Vec::new();
     let mut poses = Vec::new();
@@ -1020,8 +1060,15 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             bounds[1][1] - bounds[0][1]
         ));
     }
-    let scans_read = log.scans.len() as u32 + log.no_pose as u32;
-    let scans_rejected = rejected.outside_grid + rejected.no_pose + rejected.controller + rejected.stray_pose;
+    let unplaced = log.no_pose + log.no_odometry_yet + log.stale_pose + log.scan_stamp_backwards;
+    let scans_read = log.scans.len() as u32 + unplaced as u32;
+    let scans_rejected = rejected.outside_grid
+        + rejected.no_pose
+        + rejected.controller
+        + rejected.stray_pose
+        + rejected.no_odometry_yet
+        + rejected.stale_pose
+        + rejected.stamp_backwards;
     let report = ReplayReport {
         file: log.file.display().to_string(),
         format: log.format,
@@ -1031,6 +1078,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         scans_rejected,
         rejected,
         skipped_records: SkippedRecords::of(&log.bad_records),
+        transforms_rejected: log.transforms_rejected,
         odometry: log.odometry as u32,
         duration_s: round3(duration_s),
         wall_s: round3(wall_s),

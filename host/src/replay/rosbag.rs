@@ -11,11 +11,14 @@
 //!    before, plus the error.
 //! 2. [`scans_from_messages`] decodes them (CDR, [`super::cdr`]; a message that does not decode
 //!    is skipped and counted, the messages around it are used), sorts them by the bag's receive
-//!    time, and replays the frame tree: `tf_static` transforms apply to the whole bag,
-//!    `tf` transforms and odometry (`header.frame_id` → `child_frame_id`) update their edge as
-//!    they arrive. Each scan's pose is the laser frame's pose in the root of its frame tree
-//!    (`map` or `odom`), from the latest transforms received before the scan (no interpolation),
-//!    projected to the plane: x, y and the yaw of the laser's x axis. A laser mounted upside down
+//!    time, and builds the frame tree: `tf_static` transforms apply to the whole bag, `tf`
+//!    transforms and odometry (`header.frame_id` → `child_frame_id`) are samples of their edge at
+//!    their header stamps. Each scan's pose is the laser frame's pose in the root of its frame
+//!    tree (`map` or `odom`) at the scan's header stamp, the moving edges interpolated to it
+//!    (translation linear, rotation shortest arc), projected to the plane: x, y and the yaw of
+//!    the laser's x axis. Scans with no odometry at or before their stamp, or none within
+//!    [`MAX_POSE_AGE_NS`], are rejected by name, as are transforms that jump, loop or go back in
+//!    time. A laser mounted upside down
 //!    (its z axis pointing down) sees the world mirrored: its beam angles are negated.
 //!
 //! Ranges follow REP 117 and the `LaserScan` definition: NaN (invalid) and −inf (too close) are
@@ -469,10 +472,60 @@ impl Iso {
     }
 }
 
-/// The frame tree: child → (parent, pose of the child in the parent).
+/// A scan is placed only if the odometry (the moving edge of its frame chain nearest the laser,
+/// e.g. `odom` → `base_link`) has a sample at most this long before its stamp, or brackets the
+/// stamp with a sample this close: 0.5 s. Odometry is published at 20–100 Hz; a gap of half a
+/// second means the robot's motion during it is unknown.
+pub const MAX_POSE_AGE_NS: u64 = 500_000_000;
+
+/// A moving edge (odometry or `tf`) whose translation moves more than this between consecutive
+/// samples, plus [`MAX_SPEED_M_S`] times the time between them, has jumped (a corrupt message,
+/// an odometry reset): the sample is rejected (`odometry_jump`), the edge keeps its history.
+pub const MAX_JUMP_M: f64 = 1.0;
+
+/// The fastest a robot's frame is assumed to move, m/s (with [`MAX_JUMP_M`]).
+pub const MAX_SPEED_M_S: f64 = 10.0;
+
+/// One edge of the frame tree: its parent, and the child's pose in it over time (one sample for
+/// a `tf_static` edge).
+#[derive(Clone, Debug)]
+struct Edge {
+    parent: String,
+    /// From `tf_static`: holds at every time.
+    fixed: bool,
+    /// `(stamp ns, pose)`, stamps non-decreasing.
+    samples: Vec<(u64, Iso)>,
+}
+
+/// Why a moving transform was not taken.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum EdgeReject {
+    /// Not finite, a zero quaternion, or a frame its own parent.
+    Invalid,
+    /// It would close a cycle in the frame tree.
+    Loop,
+    /// Its stamp is before the edge's previous one.
+    Backwards,
+    /// Its translation jumped ([`MAX_JUMP_M`], [`MAX_SPEED_M_S`]).
+    Jump,
+}
+
+/// Why a scan could not be placed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum PoseError {
+    /// Its frame is in no tree with a root (or a cycle).
+    NoPose,
+    /// The odometry has no sample at or before the scan's stamp.
+    NoOdometryYet,
+    /// The odometry's nearest sample is more than [`MAX_POSE_AGE_NS`] from the stamp.
+    Stale,
+}
+
+/// The frame tree: child → edge. Moving edges keep every sample, so a scan is placed with the
+/// transforms interpolated to its own stamp.
 #[derive(Default)]
 struct FrameTree {
-    edges: HashMap<String, (String, Iso)>,
+    edges: HashMap<String, Edge>,
 }
 
 /// Frame names without the ROS 1 leading slash.
@@ -480,33 +533,135 @@ fn frame(name: &str) -> String {
     name.trim_start_matches('/').to_string()
 }
 
+/// Shortest-arc spherical interpolation between unit quaternions (for a planar pose: yaw
+/// interpolated the short way round), `s` in [0, 1].
+fn slerp(a: [f64; 4], b: [f64; 4], s: f64) -> [f64; 4] {
+    let mut d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+    let mut b = b;
+    if d < 0.0 {
+        d = -d;
+        b = b.map(|v| -v);
+    }
+    let (wa, wb) = if d > 0.9995 {
+        (1.0 - s, s)
+    } else {
+        let th = d.min(1.0).acos();
+        let sn = th.sin();
+        (((1.0 - s) * th).sin() / sn, (s * th).sin() / sn)
+    };
+    let q = [0, 1, 2, 3].map(|i| wa * a[i] + wb * b[i]);
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    q.map(|v| v / n)
+}
+
+/// `a` and `b` interpolated at `s` in [0, 1]: translation linear, rotation shortest arc.
+fn interpolate(a: &Iso, b: &Iso, s: f64) -> Iso {
+    Iso { t: [0, 1, 2].map(|i| a.t[i] + (b.t[i] - a.t[i]) * s), q: slerp(a.q, b.q, s) }
+}
+
 impl FrameTree {
-    fn set(&mut self, parent: &str, child: &str, t: &Transform) -> bool {
-        match Iso::from(t) {
-            Some(iso) if frame(parent) != frame(child) => {
-                self.edges.insert(frame(child), (frame(parent), iso));
-                true
+    /// Would `parent` → `child` close a cycle (is `child` an ancestor of `parent`, or `parent`)?
+    fn closes_loop(&self, parent: &str, child: &str) -> bool {
+        let mut cur = parent.to_string();
+        for _ in 0..=64 {
+            if cur == child {
+                return true;
             }
-            _ => false,
+            match self.edges.get(&cur) {
+                None => return false,
+                Some(e) => cur = e.parent.clone(),
+            }
         }
+        true
     }
 
-    /// The pose of `f` in the root of its tree, the root's name and the number of edges walked;
-    /// `None` on a cycle.
-    fn resolve(&self, f: &str) -> Option<(Iso, String, usize)> {
+    /// A `tf_static` edge: holds at every time, replaces what the edge was.
+    fn set_static(&mut self, parent: &str, child: &str, t: &Transform) -> Result<(), EdgeReject> {
+        let (parent, child) = (frame(parent), frame(child));
+        let iso = Iso::from(t).filter(|_| parent != child).ok_or(EdgeReject::Invalid)?;
+        if self.closes_loop(&parent, &child) {
+            return Err(EdgeReject::Loop);
+        }
+        self.edges.insert(child, Edge { parent, fixed: true, samples: vec![(0, iso)] });
+        Ok(())
+    }
+
+    /// A moving edge's sample at `t_ns` (odometry or `tf`). A new parent for the child starts a
+    /// new history.
+    fn push(&mut self, parent: &str, child: &str, t_ns: u64, t: &Transform) -> Result<(), EdgeReject> {
+        let (parent, child) = (frame(parent), frame(child));
+        let iso = Iso::from(t).filter(|_| parent != child).ok_or(EdgeReject::Invalid)?;
+        let same_parent = self.edges.get(&child).is_some_and(|e| e.parent == parent);
+        if !same_parent && self.closes_loop(&parent, &child) {
+            return Err(EdgeReject::Loop);
+        }
+        if let Some(e) = self.edges.get_mut(&child).filter(|e| e.parent == parent && !e.fixed) {
+            let &(t0, last) = e.samples.last().expect("an edge has a sample");
+            if t_ns < t0 {
+                return Err(EdgeReject::Backwards);
+            }
+            let moved = ((iso.t[0] - last.t[0]).powi(2) + (iso.t[1] - last.t[1]).powi(2) + (iso.t[2] - last.t[2]).powi(2)).sqrt();
+            if moved > MAX_JUMP_M + MAX_SPEED_M_S * (t_ns - t0) as f64 / 1e9 {
+                return Err(EdgeReject::Jump);
+            }
+            e.samples.push((t_ns, iso));
+        } else {
+            self.edges.insert(child, Edge { parent, fixed: false, samples: vec![(t_ns, iso)] });
+        }
+        Ok(())
+    }
+
+    /// The pose of `f` in the root of its tree at time `t_ns`, the root's name and the number of
+    /// edges walked. Moving edges are interpolated to `t_ns` between the samples around it. The
+    /// first moving edge from `f` up (the odometry) must have a sample at or before `t_ns`
+    /// ([`PoseError::NoOdometryYet`]) and one within [`MAX_POSE_AGE_NS`] of it
+    /// ([`PoseError::Stale`]); edges above it (e.g. `map` → `odom`, published slowly) hold their
+    /// nearest sample outside the span of their samples.
+    fn resolve_at(&self, f: &str, t_ns: u64) -> Result<(Iso, String, usize), PoseError> {
         let mut pose = Iso::IDENTITY;
         let mut cur = frame(f);
+        let mut odometry_seen = false;
         for depth in 0..=64 {
-            match self.edges.get(&cur) {
-                None => return Some((pose, cur, depth)),
-                Some((parent, e)) => {
-                    pose = e.compose(&pose);
-                    cur = parent.clone();
+            let Some(e) = self.edges.get(&cur) else { return Ok((pose, cur, depth)) };
+            let edge = if e.fixed {
+                e.samples[0].1
+            } else {
+                let k = e.samples.partition_point(|s| s.0 <= t_ns);
+                let before = k.checked_sub(1).map(|i| e.samples[i]);
+                let after = e.samples.get(k).copied();
+                if !odometry_seen {
+                    odometry_seen = true;
+                    let Some((tb, _)) = before else { return Err(PoseError::NoOdometryYet) };
+                    let age = after.map_or(t_ns - tb, |(ta, _)| (t_ns - tb).min(ta - t_ns));
+                    if age > MAX_POSE_AGE_NS {
+                        return Err(PoseError::Stale);
+                    }
                 }
-            }
+                match (before, after) {
+                    (Some((tb, a)), Some((ta, b))) => interpolate(&a, &b, (t_ns - tb) as f64 / (ta - tb) as f64),
+                    (Some((_, a)), None) | (None, Some((_, a))) => a,
+                    (None, None) => unreachable!("an edge has a sample"),
+                }
+            };
+            pose = edge.compose(&pose);
+            cur = e.parent.clone();
         }
-        None
+        Err(PoseError::NoPose)
     }
+}
+
+/// Moving transforms (odometry, `tf`) rejected, by reason: nothing else is lost with them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct RejectedTransforms {
+    /// The translation jumped ([`MAX_JUMP_M`] + [`MAX_SPEED_M_S`] × the time since the edge's
+    /// previous sample), e.g. odometry 100 m away from the message before.
+    pub odometry_jump: u32,
+    /// The transform would close a cycle of frames (`a` → `b` → `a`).
+    pub tf_loop: u32,
+    /// Its header stamp is before the previous one of the same edge.
+    pub stamp_backwards: u32,
+    /// Not finite, a zero quaternion, or a frame its own parent.
+    pub invalid: u32,
 }
 
 /// What the messages gave.
@@ -516,6 +671,14 @@ pub struct BagScans {
     pub scans: Vec<ScanRecord>,
     /// Scans whose frame could not be placed in a tree with a root.
     pub no_pose: usize,
+    /// Scans stamped before the first odometry sample (e.g. the scanner started first).
+    pub no_odometry_yet: usize,
+    /// Scans whose nearest odometry sample is more than [`MAX_POSE_AGE_NS`] away.
+    pub stale_pose: usize,
+    /// Scans whose header stamp is before the previous scan's on the same frame.
+    pub scan_stamp_backwards: usize,
+    /// Transforms rejected.
+    pub transforms_rejected: RejectedTransforms,
     /// Odometry messages.
     pub odometry: usize,
     /// Transforms received (tf and tf_static).
@@ -532,8 +695,21 @@ enum Decoded {
     Tf(Vec<cdr::TransformStamped>),
 }
 
-/// Decodes the messages (skipping and counting those that do not decode), replays the frame
-/// tree and returns every scan with the laser's pose.
+/// A header stamp in nanoseconds; `fallback` (the receive time) when the stamp is zero or
+/// negative (a bag whose publisher did not stamp).
+fn stamp_ns(h: &cdr::Header, fallback: u64) -> u64 {
+    let ns = h.stamp.sec as i64 * 1_000_000_000 + h.stamp.nanosec as i64;
+    if ns > 0 {
+        ns as u64
+    } else {
+        fallback
+    }
+}
+
+/// Decodes the messages (skipping and counting those that do not decode), builds the frame tree
+/// with every moving transform at its header stamp, and returns every scan with the laser's pose
+/// at the scan's header stamp (transforms interpolated to it; receive times where a message has
+/// no stamp).
 pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagScans {
     let mut out = BagScans::default();
     // Receive-time order (a stable sort keeps file order for equal stamps).
@@ -551,60 +727,109 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
         }
     }
     let mut tree = FrameTree::default();
-    let mut bad_transforms = 0usize;
+    let mut rej = RejectedTransforms::default();
+    let count = |r: Result<(), EdgeReject>, rej: &mut RejectedTransforms| match r {
+        Ok(()) => {}
+        Err(EdgeReject::Invalid) => rej.invalid += 1,
+        Err(EdgeReject::Loop) => rej.tf_loop += 1,
+        Err(EdgeReject::Backwards) => rej.stamp_backwards += 1,
+        Err(EdgeReject::Jump) => rej.odometry_jump += 1,
+    };
     // tf_static describes the robot's fixed geometry: it holds for the whole bag.
     for (m, d) in &decoded {
         if let (MsgType::TfStatic, Decoded::Tf(ts)) = (m.kind, d) {
             for t in ts {
                 out.transforms += 1;
-                bad_transforms += !tree.set(&t.header.frame_id, &t.child_frame_id, &t.transform) as usize;
+                count(tree.set_static(&t.header.frame_id, &t.child_frame_id, &t.transform), &mut rej);
             }
         }
     }
+    // Every moving transform, at its stamp (a scan is placed with samples before and after it).
     let mut odom_child: Option<String> = None;
-    let mut assumed: Vec<String> = Vec::new();
-    for (m, d) in decoded {
+    for (m, d) in &decoded {
         match d {
             Decoded::Tf(ts) if m.kind == MsgType::Tf => {
-                for t in &ts {
+                for t in ts {
                     out.transforms += 1;
-                    bad_transforms += !tree.set(&t.header.frame_id, &t.child_frame_id, &t.transform) as usize;
+                    count(tree.push(&t.header.frame_id, &t.child_frame_id, stamp_ns(&t.header, m.t_ns), &t.transform), &mut rej);
                 }
             }
-            Decoded::Tf(_) => {}
             Decoded::Odom(o) => {
                 out.odometry += 1;
-                if tree.set(&o.header.frame_id, &o.child_frame_id, &o.pose) {
+                let r = tree.push(&o.header.frame_id, &o.child_frame_id, stamp_ns(&o.header, m.t_ns), &o.pose);
+                if r.is_ok() && odom_child.is_none() {
                     odom_child = Some(frame(&o.child_frame_id));
-                } else {
-                    bad_transforms += 1;
                 }
+                count(r, &mut rej);
             }
-            Decoded::Scan(s) => {
-                let laser = frame(&s.header.frame_id);
-                let mut placed = tree.resolve(&laser);
-                if let (Some((_, _, 0)), Some(child)) = (&placed, &odom_child) {
-                    // The laser's frame is in no transform: assume it sits at the odometry's body
-                    // frame (say so once).
-                    if !assumed.contains(&laser) {
-                        out.warnings.push(format!(
-                            "no transform places laser frame `{laser}` (topic {}): assumed mounted at `{child}` with no offset",
-                            m.topic
-                        ));
-                        assumed.push(laser.clone());
-                    }
-                    placed = tree.resolve(child);
+            _ => {}
+        }
+    }
+    let mut assumed: Vec<String> = Vec::new();
+    let mut last_stamp: HashMap<String, u64> = HashMap::new();
+    let mut first_unplaced: Vec<String> = Vec::new();
+    for (m, d) in decoded {
+        let Decoded::Scan(s) = d else { continue };
+        let laser = frame(&s.header.frame_id);
+        let t = stamp_ns(&s.header, m.t_ns);
+        if last_stamp.get(&laser).is_some_and(|&prev| t < prev) {
+            out.scan_stamp_backwards += 1;
+            continue;
+        }
+        last_stamp.insert(laser.clone(), t);
+        let mut target = laser.clone();
+        if !tree.edges.contains_key(&laser) {
+            if let Some(child) = &odom_child {
+                // The laser's frame is in no transform: assume it sits at the odometry's body
+                // frame (say so once).
+                if !assumed.contains(&laser) {
+                    out.warnings.push(format!(
+                        "no transform places laser frame `{laser}` (topic {}): assumed mounted at `{child}` with no offset",
+                        m.topic
+                    ));
+                    assumed.push(laser.clone());
                 }
-                match placed {
-                    Some((pose, _root, depth)) if depth > 0 => out.scans.push(scan_record(&s, &pose, m.t_ns, m.at)),
-                    _ => out.no_pose += 1,
+                target = child.clone();
+            }
+        }
+        match tree.resolve_at(&target, t) {
+            Ok((pose, _root, depth)) if depth > 0 => out.scans.push(scan_record(&s, &pose, m.t_ns, m.at)),
+            Ok(_) | Err(PoseError::NoPose) => out.no_pose += 1,
+            Err(e) => {
+                if first_unplaced.len() < 3 {
+                    first_unplaced.push(format!("{} ({} s)", m.at, t as f64 / 1e9));
+                }
+                match e {
+                    PoseError::NoOdometryYet => out.no_odometry_yet += 1,
+                    _ => out.stale_pose += 1,
                 }
             }
         }
     }
-    if bad_transforms > 0 {
-        out.warnings.push(format!("{bad_transforms} transforms ignored (not finite, zero quaternion, or a frame its own parent)"));
+    if out.no_odometry_yet + out.stale_pose > 0 {
+        out.warnings.push(format!(
+            "{} scans stamped before the first odometry and {} whose nearest odometry is more than {} s from their stamp \
+             were not used (not placed at the frame tree's origin): first at {}",
+            out.no_odometry_yet,
+            out.stale_pose,
+            MAX_POSE_AGE_NS as f64 / 1e9,
+            first_unplaced.join(", ")
+        ));
     }
+    if out.scan_stamp_backwards > 0 {
+        out.warnings.push(format!("{} scans stamped before the scan before them were not used", out.scan_stamp_backwards));
+    }
+    if rej.invalid > 0 {
+        out.warnings.push(format!("{} transforms ignored (not finite, zero quaternion, or a frame its own parent)", rej.invalid));
+    }
+    if rej.odometry_jump + rej.tf_loop + rej.stamp_backwards > 0 {
+        out.warnings.push(format!(
+            "transforms rejected: {} odometry_jump (moved more than {MAX_JUMP_M} m + {MAX_SPEED_M_S} m/s since the sample before), \
+             {} tf_loop (would close a cycle of frames), {} stamp_backwards; the others were used",
+            rej.odometry_jump, rej.tf_loop, rej.stamp_backwards
+        ));
+    }
+    out.transforms_rejected = rej;
     out
 }
 
@@ -676,14 +901,42 @@ mod tests {
     #[test]
     fn frame_tree_resolves_chains_and_refuses_cycles() {
         let mut t = FrameTree::default();
-        assert!(t.set("odom", "/base_link", &Transform::planar(2.0, 0.0, 0.0)));
-        assert!(t.set("base_link", "laser", &Transform::planar(0.0, 1.0, 0.0)));
-        let (p, root, depth) = t.resolve("laser").unwrap();
+        assert_eq!(t.push("odom", "/base_link", 1_000, &Transform::planar(2.0, 0.0, 0.0)), Ok(()));
+        assert_eq!(t.set_static("base_link", "laser", &Transform::planar(0.0, 1.0, 0.0)), Ok(()));
+        let (p, root, depth) = t.resolve_at("laser", 1_000).unwrap();
         assert_eq!((root.as_str(), depth), ("odom", 2));
         assert!((p.t[0] - 2.0).abs() < 1e-12 && (p.t[1] - 1.0).abs() < 1e-12);
-        assert!(!t.set("a", "a", &Transform::IDENTITY), "a frame cannot be its own parent");
-        assert!(t.set("laser", "odom", &Transform::IDENTITY));
-        assert_eq!(t.resolve("laser"), None, "cycle");
+        assert_eq!(t.push("a", "a", 1_000, &Transform::IDENTITY), Err(EdgeReject::Invalid), "a frame cannot be its own parent");
+        assert_eq!(t.push("laser", "odom", 1_000, &Transform::IDENTITY), Err(EdgeReject::Loop));
+        assert_eq!(t.set_static("laser", "odom", &Transform::IDENTITY), Err(EdgeReject::Loop));
+        // The tree is as it was: the loop was refused, not half-applied.
+        assert_eq!(t.resolve_at("laser", 1_000).unwrap().1, "odom");
+    }
+
+    #[test]
+    fn moving_edges_interpolate_to_the_stamp_and_refuse_jumps_and_backward_stamps() {
+        let mut t = FrameTree::default();
+        let s = 1_000_000_000u64;
+        // 170° to −170°: the short way round is through 180°, not through 0°.
+        t.push("odom", "base", s, &Transform::planar(0.0, 0.0, 170f64.to_radians())).unwrap();
+        t.push("odom", "base", s + 100_000_000, &Transform::planar(0.5, 1.0, (-170f64).to_radians())).unwrap();
+        let (p, _, _) = t.resolve_at("base", s + 25_000_000).unwrap();
+        assert!((p.t[0] - 0.125).abs() < 1e-12 && (p.t[1] - 0.25).abs() < 1e-12, "{p:?}");
+        let x = p.rotate([1.0, 0.0, 0.0]);
+        assert!((x[1].atan2(x[0]).to_degrees() - 175.0).abs() < 1e-9, "{}", x[1].atan2(x[0]).to_degrees());
+        // Before the first sample: no odometry yet. After the last: held up to the age bound.
+        assert_eq!(t.resolve_at("base", s - 1), Err(PoseError::NoOdometryYet));
+        assert!(t.resolve_at("base", s + 100_000_000 + MAX_POSE_AGE_NS).is_ok());
+        assert_eq!(t.resolve_at("base", s + 100_000_001 + MAX_POSE_AGE_NS), Err(PoseError::Stale));
+        // A 100 m jump, and a stamp going backwards, are refused; the samples around them stay.
+        assert_eq!(t.push("odom", "base", s + 120_000_000, &Transform::planar(100.5, 1.0, 0.0)), Err(EdgeReject::Jump));
+        assert_eq!(t.push("odom", "base", s + 50_000_000, &Transform::planar(0.5, 1.0, 0.0)), Err(EdgeReject::Backwards));
+        t.push("odom", "base", s + 140_000_000, &Transform::planar(0.6, 1.0, 0.0)).unwrap();
+        assert_eq!(t.edges["base"].samples.len(), 3);
+        // A gap longer than the bound in the middle: a stamp in it is stale.
+        t.push("odom", "base", s + 2_000_000_000, &Transform::planar(2.0, 1.0, 0.0)).unwrap();
+        assert_eq!(t.resolve_at("base", s + 1_000_000_000), Err(PoseError::Stale));
+        assert!(t.resolve_at("base", s + 1_600_000_000).is_ok());
     }
 
     #[test]

@@ -1,0 +1,465 @@
+//! Scan-to-map matching: corrects the odometry's drift by finding the pose near the
+//! odometry-predicted one at which the scan's returns best fall on the LiDAR grid's occupied
+//! cells. A correlative matcher (Olson 2009, "Real-time correlative scan matching";
+//! Cartographer's real-time correlative matcher), in integer and fixed-point arithmetic only, so
+//! x86_64 and the Cortex-M find the same pose bit for bit.
+//!
+//! 1. **Points.** The scan's returns within the LiDAR range (no "no return", no invalid beam),
+//!    at most [`MATCH_MAX_POINTS`] of them spread evenly over the beams, as points in the
+//!    sensor frame ([`Meters`]).
+//! 2. **Coarse search.** For each of the `2·`[`MATCH_ANGLE_STEPS`]` + 1` headings around the
+//!    prediction, [`MATCH_ANGLE_STEP`] apart, the points are rotated once and put in cells; each
+//!    of the `(2·`[`MATCH_WINDOW_CELLS`]` + 1)²` translations is then a shift of those cells by
+//!    whole cells. A point scores [`HIT_SCORE`] in an occupied cell, [`NEAR_SCORE`] next to one
+//!    (one of its 4 neighbours: a return one cell off still counts), else 0.
+//! 3. **Fine search.** Around the best coarse candidate: half-cell translations and
+//!    quarter-step rotations (26 candidates), each point placed anew.
+//! 4. **Choice.** A candidate's value is its score less a penalty for moving away from the
+//!    prediction: `8192·score − n·(32·(hx² + hy²) + q²)` with `hx, hy` the offset in half cells
+//!    and `q` in eighths of a degree (a one-cell offset costs 1/256 of a hit per point, a 3-cell
+//!    one 1/28, 4° of rotation 1/32, 6° 1/14). The prediction is the first candidate and a candidate replaces the
+//!    best only if strictly better, in a fixed order: ties keep the one nearer the prediction,
+//!    the same on every target. The penalty also keeps a featureless direction (a corridor's
+//!    length, an empty map) at the prediction.
+//! 5. **Acceptance.** At least [`MATCH_MIN_POINTS`] points, and a best score of at least
+//!    [`MATCH_MIN_SCORE_PER_MILLE`] ‰ of the most the points could score (every point in an
+//!    occupied cell); otherwise the odometry's pose stands (counted by reason in [`MatchStats`]).
+//!
+//! Work per scan is bounded: at most [`MATCH_WORST_CASE_WORK`] point placements (each at most 5
+//! cell reads), counted in [`MatchStats::last_work`].
+
+use crate::capacity::{BEAMS, MATCH_MAX_POINTS};
+use crate::grid::{beam_angle, mm_to_meters, Cell, GridGeometry, LidarGrid};
+use crate::scan::{BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
+use fixed_point::{cos, mul_unit, sin, BinaryAngle, Meters, Pose2};
+
+/// The coarse search's translations: ±3 cells (±0.3 m) in x and in y around the prediction.
+pub const MATCH_WINDOW_CELLS: i32 = 3;
+/// The coarse search's headings: ±12 steps of [`MATCH_ANGLE_STEP`] (±6°) around the prediction.
+pub const MATCH_ANGLE_STEPS: i32 = 12;
+/// The coarse search's heading step: 0.5°.
+pub const MATCH_ANGLE_STEP: BinaryAngle = BinaryAngle::from_fraction(1, 720);
+/// The fine search's heading step: an eighth of a degree (a quarter of [`MATCH_ANGLE_STEP`]).
+pub const MATCH_FINE_ANGLE_STEP: BinaryAngle = BinaryAngle::from_fraction(1, 2880);
+/// The fine search's translation step: half a cell (0.05 m).
+pub const MATCH_HALF_CELL: Meters = Meters::from_bits(3277);
+/// Fewest points a scan must give to be matched.
+pub const MATCH_MIN_POINTS: usize = 30;
+/// The least score, in thousandths of the most the points could score, to accept a match.
+pub const MATCH_MIN_SCORE_PER_MILLE: u32 = 300;
+/// The controller matches no scan until this many are in the map (the first scans would be
+/// matched against an empty or nearly empty grid).
+pub const MATCH_WARMUP_SCANS: u32 = 3;
+/// A point's score in an occupied cell.
+pub const HIT_SCORE: u32 = 4;
+/// A point's score next to an occupied cell (4-neighbourhood).
+pub const NEAR_SCORE: u32 = 2;
+
+const COARSE_TRANSLATIONS: u32 = ((2 * MATCH_WINDOW_CELLS + 1) * (2 * MATCH_WINDOW_CELLS + 1)) as u32;
+const COARSE_HEADINGS: u32 = (2 * MATCH_ANGLE_STEPS + 1) as u32;
+const FINE_CANDIDATES: u32 = 26;
+
+/// Most point placements one scan's match can take: every point at every coarse and fine
+/// candidate (each placement reads at most 5 cells).
+pub const MATCH_WORST_CASE_WORK: u32 = MATCH_MAX_POINTS as u32 * (COARSE_HEADINGS * COARSE_TRANSLATIONS + FINE_CANDIDATES);
+
+/// What the matcher reads: whether a cell holds an obstacle. Out-of-bounds cells are not
+/// occupied.
+pub trait Occupancy {
+    /// Is cell `(x, y)` occupied?
+    fn occupied(&self, x: i32, y: i32) -> bool;
+}
+
+impl Occupancy for LidarGrid {
+    #[inline]
+    fn occupied(&self, x: i32, y: i32) -> bool {
+        self.get(x, y) == Cell::Occupied
+    }
+}
+
+/// Why a scan was not matched (the odometry's pose stands).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MatchRefusal {
+    /// Fewer than [`MATCH_MIN_POINTS`] returns.
+    TooFewPoints(u16),
+    /// The best score is below [`MATCH_MIN_SCORE_PER_MILLE`] (‰ of the most possible): too
+    /// little structure in the map where the scan looks (an empty map at the start).
+    LowScore(u16),
+}
+
+/// A match: the corrected pose and how well it fits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Match {
+    /// The corrected pose.
+    pub pose: Pose2,
+    /// Its score, ‰ of the most the points could score.
+    pub score_per_mille: u16,
+    /// Points matched.
+    pub points: u16,
+}
+
+/// Counters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MatchStats {
+    /// Scans matched (a correction accepted, possibly zero).
+    pub matched: u32,
+    /// Scans with fewer than [`MATCH_MIN_POINTS`] returns.
+    pub too_few_points: u32,
+    /// Scans whose best score was below [`MATCH_MIN_SCORE_PER_MILLE`].
+    pub low_score: u32,
+    /// Point placements of the last match (at most [`MATCH_WORST_CASE_WORK`]).
+    pub last_work: u32,
+    /// The last match's score, ‰.
+    pub last_score_per_mille: u16,
+}
+
+/// The scan matcher's working memory: the points of the scan being matched and their cells.
+#[derive(Clone)]
+pub struct ScanMatcher {
+    points: [(Meters, Meters); MATCH_MAX_POINTS],
+    cells: [(i32, i32); MATCH_MAX_POINTS],
+    n: usize,
+    /// Counters.
+    pub stats: MatchStats,
+}
+
+impl Default for ScanMatcher {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+#[inline]
+fn point_score(map: &impl Occupancy, x: i32, y: i32) -> u32 {
+    if map.occupied(x, y) {
+        HIT_SCORE
+    } else if map.occupied(x + 1, y) || map.occupied(x - 1, y) || map.occupied(x, y + 1) || map.occupied(x, y - 1) {
+        NEAR_SCORE
+    } else {
+        0
+    }
+}
+
+/// Point `(px, py)` of a frame at `(x, y)` whose heading has sine `s` and cosine `c`, in the
+/// parent frame: [`Pose2::transform_point`] with the sine and cosine computed once per heading.
+#[inline]
+fn place_point(x: Meters, y: Meters, s: fixed_point::Unit, c: fixed_point::Unit, px: Meters, py: Meters) -> (Meters, Meters) {
+    (x.saturating_add(mul_unit(px, c)).saturating_sub(mul_unit(py, s)), y.saturating_add(mul_unit(px, s)).saturating_add(mul_unit(py, c)))
+}
+
+/// A candidate's value: `8192·score − n·(32·(hx² + hy²) + q²)` (offsets in half cells and
+/// eighths of a degree).
+#[inline]
+fn value(score: u32, n: usize, hx: i32, hy: i32, q: i32) -> i64 {
+    8192 * score as i64 - n as i64 * (32 * (hx * hx + hy * hy) as i64 + (q * q) as i64)
+}
+
+impl ScanMatcher {
+    /// An empty matcher.
+    pub const fn new() -> Self {
+        Self { points: [(Meters::ZERO, Meters::ZERO); MATCH_MAX_POINTS], cells: [(0, 0); MATCH_MAX_POINTS], n: 0, stats: MatchStats {
+            matched: 0,
+            too_few_points: 0,
+            low_score: 0,
+            last_work: 0,
+            last_score_per_mille: 0,
+        } }
+    }
+
+    /// Forgets the counters.
+    pub fn reset(&mut self) {
+        self.n = 0;
+        self.stats = MatchStats::default();
+    }
+
+    /// Takes the returns of `scan` within `max_range` as sensor-frame points, subsampled to at
+    /// most [`MATCH_MAX_POINTS`].
+    fn take_points(&mut self, scan: &BeamScan, max_range: Meters) -> usize {
+        let usable = |r: u16| r != RANGE_INVALID && r != RANGE_NO_RETURN && mm_to_meters(r) < max_range;
+        let total = scan.ranges_mm.iter().filter(|&&r| usable(r)).count();
+        self.n = 0;
+        // Evenly spread: `min(total, MATCH_MAX_POINTS)` of the `total` returns (Bresenham).
+        let mut acc = 0usize;
+        for b in 0..BEAMS {
+            let r = scan.ranges_mm[b];
+            if !usable(r) {
+                continue;
+            }
+            acc += MATCH_MAX_POINTS;
+            if acc >= total && self.n < MATCH_MAX_POINTS {
+                acc -= total;
+                let a = beam_angle(b);
+                let len = mm_to_meters(r);
+                self.points[self.n] = (mul_unit(len, cos(a)), mul_unit(len, sin(a)));
+                self.n += 1;
+            }
+        }
+        self.n
+    }
+
+    /// The score of the points placed at `(x, y, theta)`, each point placed anew.
+    fn score_at(&self, map: &impl Occupancy, geom: &GridGeometry, x: Meters, y: Meters, theta: BinaryAngle) -> u32 {
+        let (sn, cs) = (sin(theta), cos(theta));
+        let mut s = 0;
+        for &(px, py) in &self.points[..self.n] {
+            let (wx, wy) = place_point(x, y, sn, cs, px, py);
+            let (cx, cy) = geom.cell_of(wx, wy);
+            s += point_score(map, cx, cy);
+        }
+        s
+    }
+
+    /// Matches `scan`, taken at `predicted` (the odometry's pose, corrected by the matches so
+    /// far), against `map`. Returns the corrected pose, or why the odometry's stands.
+    pub fn match_scan(
+        &mut self,
+        map: &impl Occupancy,
+        geom: &GridGeometry,
+        predicted: &Pose2,
+        scan: &BeamScan,
+        max_range: Meters,
+    ) -> Result<Match, MatchRefusal> {
+        let n = self.take_points(scan, max_range);
+        self.stats.last_work = 0;
+        if n < MATCH_MIN_POINTS {
+            self.stats.too_few_points += 1;
+            return Err(MatchRefusal::TooFewPoints(n as u16));
+        }
+        let mut work = 0u32;
+        // Coarse: (value, score, k, dx, dy); the prediction first.
+        let mut best: Option<(i64, u32, i32, i32, i32)> = None;
+        for step in 0..COARSE_HEADINGS as i32 {
+            // 0, −1, +1, −2, +2, …: nearer headings first.
+            let k = if step % 2 == 0 { step / 2 } else { -(step + 1) / 2 };
+            let theta = predicted.theta + BinaryAngle(MATCH_ANGLE_STEP.0.wrapping_mul(k));
+            let (sn, cs) = (sin(theta), cos(theta));
+            for i in 0..n {
+                let (wx, wy) = place_point(predicted.x, predicted.y, sn, cs, self.points[i].0, self.points[i].1);
+                self.cells[i] = geom.cell_of(wx, wy);
+            }
+            for ty in 0..(2 * MATCH_WINDOW_CELLS + 1) {
+                for tx in 0..(2 * MATCH_WINDOW_CELLS + 1) {
+                    let dx = if tx % 2 == 0 { tx / 2 } else { -(tx + 1) / 2 };
+                    let dy = if ty % 2 == 0 { ty / 2 } else { -(ty + 1) / 2 };
+                    let mut s = 0u32;
+                    for &(cx, cy) in &self.cells[..n] {
+                        s += point_score(map, cx.saturating_add(dx), cy.saturating_add(dy));
+                    }
+                    work += n as u32;
+                    let v = value(s, n, 2 * dx, 2 * dy, 4 * k);
+                    if best.is_none_or(|b| v > b.0) {
+                        best = Some((v, s, k, dx, dy));
+                    }
+                }
+            }
+        }
+        let (_, coarse_score, k, dx, dy) = best.expect("at least one candidate");
+        // Fine: half cells and eighth degrees around the coarse best.
+        let (hx0, hy0, q0) = (2 * dx, 2 * dy, 4 * k);
+        let mut fine = (value(coarse_score, n, hx0, hy0, q0), coarse_score, hx0, hy0, q0);
+        let place = |h: i32| Meters::from_bits(MATCH_HALF_CELL.to_bits().wrapping_mul(h));
+        for fq in [0, -1, 1] {
+            for fy in [0, -1, 1] {
+                for fx in [0, -1, 1] {
+                    if fx == 0 && fy == 0 && fq == 0 {
+                        continue;
+                    }
+                    let (hx, hy, q) = (hx0 + fx, hy0 + fy, q0 + 2 * fq);
+                    let theta = predicted.theta + BinaryAngle(MATCH_FINE_ANGLE_STEP.0.wrapping_mul(q));
+                    let s = self.score_at(map, geom, predicted.x.saturating_add(place(hx)), predicted.y.saturating_add(place(hy)), theta);
+                    work += n as u32;
+                    let v = value(s, n, hx, hy, q);
+                    if v > fine.0 {
+                        fine = (v, s, hx, hy, q);
+                    }
+                }
+            }
+        }
+        self.stats.last_work = work;
+        let (_, score, hx, hy, q) = fine;
+        let per_mille = (score as u64 * 1000 / (HIT_SCORE as u64 * n as u64)) as u16;
+        self.stats.last_score_per_mille = per_mille;
+        if (per_mille as u32) < MATCH_MIN_SCORE_PER_MILLE {
+            self.stats.low_score += 1;
+            return Err(MatchRefusal::LowScore(per_mille));
+        }
+        self.stats.matched += 1;
+        let pose = Pose2::new(
+            predicted.x.saturating_add(place(hx)),
+            predicted.y.saturating_add(place(hy)),
+            predicted.theta + BinaryAngle(MATCH_FINE_ANGLE_STEP.0.wrapping_mul(q)),
+        );
+        Ok(Match { pose, score_per_mille: per_mille, points: n as u16 })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::capacity::GRID_CELLS;
+    use crate::grid::Line;
+
+    extern crate std;
+    use std::vec::Vec;
+
+    /// A grid of occupied cells set by hand.
+    struct Room {
+        occ: Vec<bool>,
+    }
+
+    impl Occupancy for Room {
+        fn occupied(&self, x: i32, y: i32) -> bool {
+            let n = GRID_CELLS as i32;
+            (0..n).contains(&x) && (0..n).contains(&y) && self.occ[(y * n + x) as usize]
+        }
+    }
+
+    impl Room {
+        fn set(&mut self, x: i32, y: i32) {
+            self.occ[(y * GRID_CELLS as i32 + x) as usize] = true;
+        }
+    }
+
+    fn geom() -> GridGeometry {
+        GridGeometry { origin_x: Meters::ZERO, origin_y: Meters::ZERO }
+    }
+
+    /// Millimetres as metres.
+    fn mm(v: i64) -> Meters {
+        Meters::from_bits(((v << 16) / 1000) as i32)
+    }
+
+    /// A pose from millimetres and tenths of a degree.
+    fn pose(x_mm: i64, y_mm: i64, deci_deg: i64) -> Pose2 {
+        Pose2::new(mm(x_mm), mm(y_mm), BinaryAngle::from_fraction(deci_deg, 3600))
+    }
+
+    /// `got` is within `tol` of `want` in x and y, and `deg_tenths` tenths of a degree in θ.
+    fn near(got: &Pose2, want: &Pose2, tol: Meters, deg_tenths: i64) -> bool {
+        (got.x - want.x).abs() <= tol
+            && (got.y - want.y).abs() <= tol
+            && (got.theta - want.theta).unsigned_abs() <= BinaryAngle::from_fraction(deg_tenths, 3600).0 as u32
+    }
+
+    /// An empty grid.
+    fn empty() -> Room {
+        Room { occ: std::vec![false; GRID_CELLS * GRID_CELLS] }
+    }
+
+    /// An 8 m × 6 m room with its corner at (10, 10), a 1 m × 0.5 m pillar inside and a 1.5 m
+    /// wall stub: enough structure to fix x, y and θ.
+    fn room() -> Room {
+        let mut r = empty();
+        let mut wall = |x0: i32, y0: i32, x1: i32, y1: i32| {
+            for (x, y) in Line::new(x0, y0, x1, y1) {
+                r.set(x, y);
+            }
+        };
+        wall(100, 100, 180, 100);
+        wall(180, 100, 180, 160);
+        wall(180, 160, 100, 160);
+        wall(100, 160, 100, 100);
+        for y in 130..135 {
+            wall(150, y, 160, y);
+        }
+        wall(120, 100, 120, 115);
+        r
+    }
+
+    /// A 2 m-wide corridor along x, 40 m long: nothing fixes x.
+    fn corridor() -> Room {
+        let mut r = empty();
+        for x in 50..450 {
+            r.set(x, 100);
+            r.set(x, 120);
+        }
+        r
+    }
+
+    /// The scan a sensor at `pose` sees in `room`: each beam of the core's grid marched in
+    /// 1 cm steps until it enters an occupied cell (at most 10 m), as millimetres.
+    fn cast(room: &Room, pose: &Pose2) -> BeamScan {
+        let g = geom();
+        let mut s = BeamScan::new();
+        for b in 0..BEAMS {
+            let a = pose.theta + beam_angle(b);
+            let mut hit = None;
+            for step in 1..1000i64 {
+                let (cx, cy) = g.cell_of(pose.x + mul_unit(mm(10 * step), cos(a)), pose.y + mul_unit(mm(10 * step), sin(a)));
+                if room.occupied(cx, cy) {
+                    hit = Some(10 * step);
+                    break;
+                }
+            }
+            s.ranges_mm[b] = hit.map_or(RANGE_NO_RETURN, |d| d as u16);
+        }
+        s
+    }
+
+    #[test]
+    fn recovers_a_pose_offset_by_20_cm_and_3_degrees() {
+        let r = room();
+        let truth = pose(13_000, 12_500, 200);
+        let scan = cast(&r, &truth);
+        let range = mm(10_000);
+        let mut mm_ = ScanMatcher::new();
+        for (ox, oy, odeg) in [(200, 0, 30), (0, -200, -30), (140, 140, 30), (-200, 100, -20)] {
+            let predicted = pose(13_000 + ox, 12_500 + oy, 200 + odeg);
+            let got = mm_.match_scan(&r, &geom(), &predicted, &scan, range).unwrap();
+            // Within a cell (0.1 m) and 1°.
+            assert!(near(&got.pose, &truth, mm(100), 10), "offset ({ox} mm, {oy} mm, {odeg}/10°): {got:?}");
+            assert!(got.score_per_mille >= 800, "{got:?}");
+            assert!(mm_.stats.last_work <= MATCH_WORST_CASE_WORK && mm_.stats.last_work > 0);
+        }
+        // At the true pose it stays within half a cell and an eighth of a degree.
+        let got = mm_.match_scan(&r, &geom(), &truth, &scan, range).unwrap();
+        assert!(near(&got.pose, &truth, mm(50), 2), "{got:?}");
+        assert_eq!(mm_.stats.matched, 5);
+        // The same inputs give the same bits.
+        let again = ScanMatcher::new().match_scan(&r, &geom(), &pose(13_200, 12_500, 230), &scan, range).unwrap();
+        let first = ScanMatcher::new().match_scan(&r, &geom(), &pose(13_200, 12_500, 230), &scan, range).unwrap();
+        assert_eq!(again, first);
+    }
+
+    #[test]
+    fn no_structure_no_correction() {
+        let range = mm(10_000);
+        // An empty map: the scan (cast in a room) scores nothing anywhere; refused.
+        let r = room();
+        let at = pose(13_000, 12_500, 0);
+        let scan = cast(&r, &at);
+        let mut m = ScanMatcher::new();
+        assert_eq!(m.match_scan(&empty(), &geom(), &at, &scan, range), Err(MatchRefusal::LowScore(0)));
+        assert_eq!(m.stats.low_score, 1);
+        // Too few returns: refused before any work.
+        let mut sparse = BeamScan::new();
+        for b in (0..BEAMS).step_by(40) {
+            sparse.ranges_mm[b] = 2000;
+        }
+        assert_eq!(m.match_scan(&r, &geom(), &at, &sparse, range), Err(MatchRefusal::TooFewPoints(23)));
+        assert_eq!((m.stats.last_work, m.stats.too_few_points), (0, 1));
+        // A corridor along x: the walls fix y and θ; x is free, so the prediction's x stands.
+        let c = corridor();
+        let truth = pose(25_000, 11_000, 0);
+        let scan = cast(&c, &truth);
+        for ox in [-200, 0, 200] {
+            let predicted = pose(25_000 + ox, 11_150, 20);
+            let got = m.match_scan(&c, &geom(), &predicted, &scan, range).unwrap();
+            assert_eq!(got.pose.x, predicted.x, "x moved along the corridor: {got:?}");
+            assert!(near(&got.pose, &pose(25_000 + ox, 11_000, 0), mm(100), 10), "{got:?}");
+        }
+    }
+
+    #[test]
+    fn worst_case_work_is_bounded() {
+        assert_eq!(MATCH_WORST_CASE_WORK, MATCH_MAX_POINTS as u32 * (25 * 49 + 26));
+        // A full scan of close returns: the points are capped.
+        let r = room();
+        let mut full = BeamScan::new();
+        full.ranges_mm = [1500; BEAMS];
+        let mut m = ScanMatcher::new();
+        let _ = m.match_scan(&r, &geom(), &pose(13_000, 12_500, 0), &full, mm(10_000));
+        assert_eq!(m.n, MATCH_MAX_POINTS);
+        assert_eq!(m.stats.last_work, MATCH_WORST_CASE_WORK);
+    }
+}

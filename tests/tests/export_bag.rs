@@ -1,0 +1,82 @@
+//! `lives export-bag` (issue 27): the Intel CARMEN log written as a ROS 2 bag a real robot would
+//! record (12 m `range_max` with `+inf` readings, odometry starting 3 scans late, the laser
+//! mounted 0.1 m / 0.05 m off the base and turned 90°) replays into the CARMEN replay's map.
+
+use firmware::Cell;
+use host::export_bag::{self, ExportOptions};
+use host::replay::{self, ReplayOptions, ReplayRun};
+
+mod common;
+
+fn occupied(run: &ReplayRun) -> Vec<(i32, i32)> {
+    let n = firmware::capacity::GRID_CELLS as i32;
+    let mut v = Vec::new();
+    for y in 0..n {
+        for x in 0..n {
+            if run.controller.lidar.get(x, y) == Cell::Occupied {
+                v.push((x, y));
+            }
+        }
+    }
+    v
+}
+
+/// The share of `a`'s cells with an occupied cell of `b` within one cell (both grids share the
+/// origin: the same trajectory places them).
+fn overlap(a: &[(i32, i32)], b: &ReplayRun) -> f64 {
+    let hit = a
+        .iter()
+        .filter(|&&(x, y)| (-1..=1).any(|dy| (-1..=1).any(|dx| b.controller.lidar.get(x + dx, y + dy) == Cell::Occupied)))
+        .count();
+    hit as f64 / a.len() as f64
+}
+
+#[test]
+fn the_intel_log_exported_as_a_bag_replays_into_the_same_map() {
+    let log = common::root().join("tests/data/carmen/intel-corrected.log.gz");
+    let dir = std::env::temp_dir().join(format!("lives-export-bag-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bag = dir.join("intel.mcap");
+    let s = export_bag::export(&log, &bag, &ExportOptions::default()).unwrap();
+    assert_eq!((s.scans, s.odometry), (910, 907));
+    assert!(s.inf_readings > 0);
+    let carmen_log = replay::read_log(&log).unwrap();
+    let bag_log = replay::read_log(&bag).unwrap();
+    assert_eq!((bag_log.scans.len(), bag_log.no_odometry_yet), (907, 3));
+    // Each bag scan's laser pose is the log's (the mount undone and redone), each beam points
+    // where it did (the angles turned by the mount's yaw), and every reading at or beyond 12 m
+    // is +inf.
+    for (b, c) in bag_log.scans.iter().zip(&carmen_log.scans[3..]) {
+        assert!((b.pose[0] - c.pose[0]).abs() < 1e-6 && (b.pose[1] - c.pose[1]).abs() < 1e-6, "{:?} {:?}", b.pose, c.pose);
+        let world = |s: &replay::ScanRecord| s.pose[2] + s.angle_min;
+        let turn = (world(b) - world(c)).rem_euclid(std::f64::consts::TAU);
+        assert!(turn.min(std::f64::consts::TAU - turn) < 1e-6, "{} vs {}", world(b), world(c));
+        assert!((b.angle_increment - c.angle_increment).abs() < 1e-7);
+        for (rb, rc) in b.ranges_m.iter().zip(&c.ranges_m) {
+            match *rc {
+                r if r.is_nan() => assert!(rb.is_nan()),
+                r if r >= 12.0 => assert_eq!(*rb, f32::INFINITY),
+                r if r < 0.1 => assert!(rb.is_nan(), "below range_min: discarded"),
+                r => assert_eq!(*rb, r),
+            }
+        }
+    }
+    // The same range (CARMEN replay's 10 m) for both.
+    let opts = ReplayOptions { model: None, max_range_m: Some(replay::CARMEN_MAX_RANGE_M), ..ReplayOptions::default() };
+    let from_carmen = replay::replay(&log, &opts).unwrap();
+    let from_bag = replay::replay(&bag, &opts).unwrap();
+    let r = &from_bag.report;
+    assert_eq!(r.scans_used, from_carmen.report.scans_used - 3);
+    assert_eq!((r.rejected.no_odometry_yet, r.scans_rejected), (3, 3), "{:?}", r.rejected);
+    assert_eq!(r.grid_origin, from_carmen.report.grid_origin);
+    let (c_occ, b_occ) = (occupied(&from_carmen), occupied(&from_bag));
+    let (c_in_b, b_in_c) = (overlap(&c_occ, &from_bag), overlap(&b_occ, &from_carmen));
+    eprintln!(
+        "occupied cells: CARMEN {} bag {}; CARMEN's within a cell of the bag's {:.4}, the bag's of CARMEN's {:.4}",
+        c_occ.len(),
+        b_occ.len(),
+        c_in_b,
+        b_in_c
+    );
+    assert!(c_in_b >= 0.95 && b_in_c >= 0.95, "{c_in_b} {b_in_c}");
+}
