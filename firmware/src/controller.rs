@@ -487,7 +487,14 @@ impl Controller {
 
         self.status.mode = Some(self.mode);
         let exploring = self.mode == Mode::Exploring;
-        Outputs { goal: if exploring { self.goal.clone() } else { None }, new_goal, stop: !exploring, status: self.status }
+        // The goal goes out in the frame the poses come in (the odometry's): the base follows it
+        // there. Inside, the controller plans in its map frame (`Controller::goal`).
+        let goal = match (&self.goal, exploring) {
+            (Some(g), true) if self.map_from_odom != Pose2::default() => Some(g.transformed(&self.map_from_odom.inverse())),
+            (Some(g), true) => Some(g.clone()),
+            _ => None,
+        };
+        Outputs { goal, new_goal, stop: !exploring, status: self.status }
     }
 
     /// With [`Config::scan_matching`], once [`MATCH_WARMUP_SCANS`] scans are in the map: matches

@@ -150,6 +150,19 @@ pub struct Goal {
     pub path_length_m: Meters,
 }
 
+impl Goal {
+    /// The same goal in another frame: `t` maps this goal's frame into it (pose and waypoints;
+    /// the viewpoint's grid cell stays as it was).
+    pub fn transformed(&self, t: &Pose2) -> Goal {
+        let mut path = heapless::Vec::new();
+        for &(x, y) in self.path.iter() {
+            // Cannot fail: the same capacity.
+            let _ = path.push(t.transform_point(x, y));
+        }
+        Goal { pose: t.compose(&self.pose), viewpoint: self.viewpoint, path, path_length_m: self.path_length_m }
+    }
+}
+
 /// Counters of the last planning step.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PlanStats {
