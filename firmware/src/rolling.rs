@@ -15,17 +15,19 @@
 //! What leaves the window is forgotten (see `docs/architecture.md`, "Buildings larger than the
 //! grid", for why no coarse summary is kept).
 //!
-//! **Why the map must reach the edge.** A floor that fits the grid never shifts it: the
+//! **Why the map must reach the edge.** A floor that fits the grid should never shift it: the
 //! simulator centres its worlds (up to 45 m) in the grid, so a robot in a corner of the office
-//! world is 3.4 m from the grid's edge, and shifting there would throw away the far side of a
-//! building that fits. Only when the map is cut off by the edge, or the robot is about to leave
-//! the window, does it move.
+//! world is 3.4 m from the grid's edge, and a replayed log's trajectory is centred the same way
+//! (ACES: 45 × 40 m, 3.1 m from the edge). Shifting there throws away the far side of a building
+//! that fits. Only when the map is cut off by the edge, or the robot is about to leave the
+//! window, does it move.
 //!
 //! **Why 160 cells.** A shift must keep every packed format aligned (4 cells a byte, 2 a byte, 32
 //! a word, 8-cell frontier blocks) and move the origin by an exact number of Q16.16 bits, so
 //! that a world point falls in exactly the cell it fell in before, less the shift: 0.1 m is
 //! 6553.6 bits, 5 cells are exactly 32 768. The least common multiple of 32 and 5 is 160 cells,
-//! 16 m; after a shift the robot is within 8 m of the middle (≥ 17.6 m from every edge).
+//! 16 m; after a shift the robot is within 8 m of the middle (≥ 17.6 m from every edge), so it
+//! travels at least 14.6 m before the next one.
 //!
 //! **Work.** A shift writes each of the six cell arrays once (LiDAR ternary view and evidence,
 //! visual grid, wall mask, traversability mask, distance field: 6 × 512² cells, 832 KiB) plus
@@ -40,11 +42,14 @@ use crate::nonmap::NonMapStore;
 use crate::planner::{Goal, Planner};
 use fixed_point::{Meters, Pose2};
 
-/// A pose this close to an edge (cells; 8 m) moves the window, if the LiDAR map reaches that edge.
-pub const WINDOW_MARGIN_CELLS: i32 = 80;
-/// A pose this close to an edge (cells; 2 m) moves the window whatever the map holds: the robot
+/// A pose this close to an edge (cells; 3 m) moves the window, if the LiDAR map reaches that edge.
+/// Measured on the CARMEN logs (`docs/architecture.md`): 8 m moved the window 12 times in the
+/// ACES log, whose 45 × 40 m trajectory fits the grid, and forgot half its map; 3 m never moves
+/// it for a floor that fits, and the robot still sees at least 3 m ahead before a shift.
+pub const WINDOW_MARGIN_CELLS: i32 = 30;
+/// A pose this close to an edge (cells; 1 m) moves the window whatever the map holds: the robot
 /// must not leave it.
-pub const WINDOW_HARD_MARGIN_CELLS: i32 = 20;
+pub const WINDOW_HARD_MARGIN_CELLS: i32 = 10;
 /// The window moves by multiples of this (cells; 16 m): see the module's docs.
 pub const WINDOW_SHIFT_CELLS: i32 = 160;
 

@@ -84,7 +84,7 @@ fn the_window_follows_a_robot_down_an_80_m_corridor() {
     assert_eq!(status.poses_rejected, 0, "no pose fell outside the window");
     assert_eq!(status.scans, 801);
     assert_eq!(st.refused, 0);
-    // 80 m at one shift per 16 m once the robot is 8 m from the edge: x = 23.2, 39.2, 55.2, 71.2.
+    // 80 m at one shift per 16 m once the robot is 3 m from the edge: x = 28.2, 44.2, 60.2, 76.2.
     assert_eq!(st.shifts, 4, "{st:?}");
     assert_eq!(shift_ticks, 4);
     assert_eq!(st.moved_cells, (4 * WINDOW_SHIFT_CELLS, 0));
@@ -295,25 +295,29 @@ fn non_map_points_survive_a_shift_and_still_pool() {
     assert_eq!(nonmap.stats.pooled, 1);
 }
 
-/// A building that fits: a closed room whose walls stand 4 m inside the window's east edge. The
-/// robot walks to 5 m from that edge and the window stays (the map does not reach the edge);
-/// only a robot within 2 m of the edge moves it whatever the map holds.
+/// A building that fits: a closed room whose east wall stands 1.1 m inside the window's east edge.
+/// The robot walks to 2.5 m from that edge, within the 3 m margin, and the window stays (the map
+/// does not reach the edge); only a robot within 1 m of the edge moves it whatever the map holds.
 #[test]
 fn a_building_that_fits_never_moves_the_window() {
-    let world = vec![wall(30.0, 10.0, 47.2, 10.1), wall(30.0, 20.0, 47.2, 20.1), wall(30.0, 10.0, 30.1, 20.1), wall(47.1, 10.0, 47.2, 20.1)];
+    let world = vec![wall(30.0, 10.0, 50.1, 10.1), wall(30.0, 20.0, 50.1, 20.1), wall(30.0, 10.0, 30.1, 20.1), wall(50.0, 10.0, 50.1, 20.1)];
     let mut ctl = controller(Config::DEFAULT);
-    for i in 0..=150 {
-        let x = 31.0 + i as f64 * 0.1; // to 46 m: 5.2 m from the edge at 51.2 m
+    for i in 0..=177 {
+        let x = 31.0 + i as f64 * 0.1; // to 48.7 m: 2.5 m from the edge at 51.2 m
         let (ranges, labels) = scan_of(&world, (x, 15.0, 0.0), 720);
         ctl.tick(i * 100_000, &Inputs { pose: Some(pose(x, 15.0, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), ..Inputs::default() });
     }
     assert_eq!(ctl.lidar.window.shifts, 0);
     assert_eq!(ctl.lidar.geom, GridGeometry { origin_x: Meters::ZERO, origin_y: Meters::ZERO });
-    // A pose 1.9 m from the edge (no scan): the window moves, whatever the map.
-    ctl.tick(20_000_000, &Inputs { pose: Some(pose(49.3, 15.0, 0.0)), ..Inputs::default() });
+    assert_eq!(ctl.lidar.get(511, 150), Cell::Unknown, "the map does not reach the edge");
+    assert_eq!(ctl.lidar.get(500, 150), Cell::Occupied, "the east wall");
+    // A pose 0.9 m from the edge (no scan): the window moves, whatever the map.
+    ctl.tick(20_000_000, &Inputs { pose: Some(pose(50.3, 15.0, 0.0)), ..Inputs::default() });
     assert_eq!(ctl.lidar.window.shifts, 1);
-    assert_eq!(ctl.lidar.window.last_shift, (WINDOW_SHIFT_CELLS, 0));
-    assert_eq!(ctl.lidar.geom.origin_x, m(16.0));
+    // Cell 503 is 24.7 m east of the middle: two quanta (32 m) bring it nearest the middle.
+    assert_eq!(ctl.lidar.window.last_shift, (2 * WINDOW_SHIFT_CELLS, 0));
+    assert_eq!(ctl.lidar.geom.origin_x, m(32.0));
+    assert_eq!(ctl.lidar.geom.cell_of(m(50.3), m(15.0)), (183, 150));
 }
 
 /// Poses far outside the window — 30 000 m away, or past the fixed-point range the origin can
