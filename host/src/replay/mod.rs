@@ -1035,7 +1035,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         ));
     }
     let window = ctrl.lidar.window;
-    let final_origin = [ctrl.lidar.geom.origin_x.to_num::<f64>(), ctrl.lidar.geom.origin_y.to_num::<f64>()];
+    let final_origin = [round3(ctrl.lidar.geom.origin_x.to_num::<f64>()), round3(ctrl.lidar.geom.origin_y.to_num::<f64>())];
     if exceeds {
         warnings.push(format!(
             "the trajectory ({:.1} × {:.1} m) does not fit the controller's {size:.1} m grid: the grid started on the first \
