@@ -383,6 +383,18 @@ impl Controller {
                 self.pose = Some(p);
                 self.odom_pose = Some(odom);
                 self.last_pose_us = Some(now_us);
+                // Buildings larger than the grid: the window follows the robot (`crate::rolling`).
+                let maps = crate::rolling::Maps {
+                    lidar: &mut self.lidar,
+                    visual: &mut self.visual,
+                    nonmap: &mut self.nonmap,
+                    frontiers: &mut self.frontiers,
+                    planner: &mut self.planner,
+                    goal: &mut self.goal,
+                };
+                if crate::rolling::follow(maps, &p, self.cfg.nonmap_pool_radius_m) {
+                    self.last_plan_us = None;
+                }
             } else {
                 self.status.poses_rejected += 1;
             }

@@ -107,6 +107,23 @@ impl FrontierSet {
                 || grid.get(x, y - 1) == Cell::Unknown && PackedGrid::in_bounds(x, y - 1))
     }
 
+    /// Moves the window by `(sx, sy)` cells ([`crate::rolling::shift`]): the last step's
+    /// frontiers are translated (those leaving the window dropped) and the per-block counts move
+    /// by whole blocks. `sx` and `sy` must be multiples of [`BLOCK_CELLS`]. Returns the work
+    /// (entries touched) and the frontiers dropped.
+    pub(crate) fn shift(&mut self, sx: i32, sy: i32) -> (u32, u32) {
+        debug_assert!(sx % BLOCK_CELLS as i32 == 0 && sy % BLOCK_CELLS as i32 == 0);
+        let b = BLOCK_CELLS as i64;
+        crate::grid::shift_2d(&mut self.block_counts, BLOCKS, sx as i64 / b, sy as i64 / b, 0);
+        let n = self.frontiers.len();
+        self.frontiers.retain_mut(|f| {
+            f.centroid = (f.centroid.0 - sx, f.centroid.1 - sy);
+            f.anchor = (f.anchor.0 - sx, f.anchor.1 - sy);
+            PackedGrid::in_bounds(f.anchor.0, f.anchor.1) && PackedGrid::in_bounds(f.centroid.0, f.centroid.1)
+        });
+        ((BLOCKS * BLOCKS + n) as u32, (n - self.frontiers.len()) as u32)
+    }
+
     /// Recomputes the frontiers of both maps. Returns the work done (cells visited).
     pub fn compute(&mut self, lidar: &LidarGrid, visual: &VisualGrid, min_cells: u16) -> u32 {
         self.frontiers.clear();

@@ -108,6 +108,43 @@ impl PackedGrid {
     pub fn clear(&mut self) {
         self.bytes.fill(0);
     }
+
+    /// Moves the window by `(sx, sy)` cells: the new cell `(x, y)` is the old `(x + sx, y + sy)`,
+    /// cells with no old counterpart are unknown. `sx` must be a multiple of 4 (a byte).
+    pub(crate) fn shift(&mut self, sx: i32, sy: i32) {
+        debug_assert!(sx % 4 == 0);
+        shift_2d(&mut self.bytes, GRID_CELLS / 4, sx as i64 / 4, sy as i64, 0);
+    }
+}
+
+/// Moves a row-major 2-D array (rows of `row_len` elements) so that the new element `(i, r)` is
+/// the old `(i + di, r + dr)`; elements with no old counterpart become `fill`. Every element is
+/// written once (`copy_within` and `fill` over rows), so the work is the array's length whatever
+/// the shift; no allocation.
+pub(crate) fn shift_2d<T: Copy>(a: &mut [T], row_len: usize, di: i64, dr: i64, fill: T) {
+    let rows = (a.len() / row_len) as i64;
+    let rl = row_len as i64;
+    // Destination columns `lo..hi` have a source column in the row.
+    let lo = (-di).clamp(0, rl) as usize;
+    let hi = (rl - di).clamp(lo as i64, rl) as usize;
+    let row = |a: &mut [T], y: i64| {
+        let base = y as usize * row_len;
+        let src = y.saturating_add(dr);
+        if src < 0 || src >= rows || lo == hi {
+            a[base..base + row_len].fill(fill);
+            return;
+        }
+        let s0 = (src * rl + lo as i64 + di) as usize;
+        a.copy_within(s0..s0 + (hi - lo), base + lo);
+        a[base..base + lo].fill(fill);
+        a[base + hi..base + row_len].fill(fill);
+    };
+    // Rows are written in the order that reads every source row before it is overwritten.
+    if dr >= 0 {
+        (0..rows).for_each(|y| row(a, y));
+    } else {
+        (0..rows).rev().for_each(|y| row(a, y));
+    }
 }
 
 impl Default for PackedGrid {
@@ -156,6 +193,13 @@ impl BitGrid {
     /// The words, 32 cells each, row-major.
     pub fn words(&self) -> &[u32] {
         &self.bits
+    }
+
+    /// Moves the window by `(sx, sy)` cells (see [`PackedGrid::shift`]); new cells are `fill`.
+    /// `sx` must be a multiple of 32 (a word).
+    pub(crate) fn shift(&mut self, sx: i32, sy: i32, fill: bool) {
+        debug_assert!(sx % 32 == 0);
+        shift_2d(&mut self.bits, GRID_CELLS / 32, sx as i64 / 32, sy as i64, if fill { u32::MAX } else { 0 });
     }
 }
 
@@ -350,6 +394,13 @@ impl EvidenceGrid {
     pub fn clear(&mut self) {
         self.nibbles.fill(0);
     }
+
+    /// Moves the window by `(sx, sy)` cells (see [`PackedGrid::shift`]); new cells are never
+    /// observed. `sx` must be even.
+    pub(crate) fn shift(&mut self, sx: i32, sy: i32) {
+        debug_assert!(sx % 2 == 0);
+        shift_2d(&mut self.nibbles, GRID_CELLS / 2, sx as i64 / 2, sy as i64, 0);
+    }
 }
 
 impl Default for EvidenceGrid {
@@ -399,8 +450,14 @@ pub struct LidarGrid {
     pub grid: PackedGrid,
     /// The evidence.
     pub evidence: EvidenceGrid,
-    /// Where the grid is.
+    /// Where the grid is: placed by the configuration, then moved by the rolling window
+    /// ([`crate::rolling`]) when the robot nears an edge.
     pub geom: GridGeometry,
+    /// What the rolling window has done since the last [`LidarGrid::clear`].
+    pub window: crate::rolling::WindowStats,
+    /// Work of window shifts not yet reported: added to the next scan's [`IntegrateStats::work`]
+    /// (the LiDAR stage of the same tick whenever the pose comes with its scan).
+    pub(crate) pending_work: u32,
     hits: [(i32, i32); BEAMS],
     marks: BitGrid,
 }
@@ -408,7 +465,15 @@ pub struct LidarGrid {
 impl LidarGrid {
     /// An all-unknown grid at `geom`.
     pub const fn new(geom: GridGeometry) -> Self {
-        Self { grid: PackedGrid::new(), evidence: EvidenceGrid::new(), geom, hits: [(0, 0); BEAMS], marks: BitGrid::new() }
+        Self {
+            grid: PackedGrid::new(),
+            evidence: EvidenceGrid::new(),
+            geom,
+            window: crate::rolling::WindowStats::new(),
+            pending_work: 0,
+            hits: [(0, 0); BEAMS],
+            marks: BitGrid::new(),
+        }
     }
 
     /// The cell at `(x, y)`.
@@ -417,11 +482,23 @@ impl LidarGrid {
         self.grid.get(x, y)
     }
 
-    /// Forgets everything.
+    /// Forgets everything but where the window is (a new search starts where the robot is; a
+    /// new configured origin is set by [`crate::Controller::set_config`]).
     pub fn clear(&mut self) {
         self.grid.clear();
         self.evidence.clear();
         self.marks.clear();
+        self.window = crate::rolling::WindowStats::new();
+        self.pending_work = 0;
+    }
+
+    /// Moves the window by `(sx, sy)` cells: the cells, the evidence and the origin. `sx` must be
+    /// even (see [`crate::rolling::shift`], which moves everything else with it).
+    pub(crate) fn shift(&mut self, sx: i32, sy: i32, geom: GridGeometry) {
+        self.grid.shift(sx, sy);
+        self.evidence.shift(sx, sy);
+        self.marks.clear();
+        self.geom = geom;
     }
 
     #[inline]
@@ -494,6 +571,7 @@ impl LidarGrid {
         }
         st.hits = nhits as u32;
         st.work += nhits as u32;
+        st.work = st.work.saturating_add(core::mem::take(&mut self.pending_work));
         self.marks.clear();
         st
     }

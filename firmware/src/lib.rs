@@ -36,6 +36,7 @@ pub mod node;
 pub mod nonmap;
 pub mod planner;
 pub mod protocol;
+pub mod rolling;
 pub mod rrt;
 pub mod scan;
 

@@ -90,6 +90,32 @@ impl NonMapStore {
         self.stats = NonMapStats::default();
     }
 
+    /// Moves the window ([`crate::rolling::shift`]) by `(sx, sy)` cells to `geom`: the wall mask
+    /// moves with the cells, points now outside the window are dropped (counted in
+    /// [`NonMapStats::dropped_outside`]: nothing there can be looked at), and the pooling index,
+    /// whose cells count from the window's origin, is rebuilt. `sx` must be a multiple of 32.
+    /// Returns the work (cells and points touched).
+    pub(crate) fn shift(&mut self, sx: i32, sy: i32, geom: &GridGeometry, pool_radius: Meters) -> u32 {
+        self.walls.shift(sx, sy, false);
+        let work = crate::capacity::GRID_AREA as u32 + 2 * self.points.len() as u32;
+        self.index.clear();
+        let mut i = 0;
+        while i < self.points.len() {
+            let p = self.points[i];
+            let (cx, cy) = geom.cell_of(p.x, p.y);
+            let key = Self::key(Self::pool_cell(geom, p.x, p.y, pool_radius));
+            // Kept points are more than the pooling radius apart and a pooling cell's diagonal is
+            // shorter than that, so no two share a cell; the check only guards the invariant.
+            if crate::grid::PackedGrid::in_bounds(cx, cy) && !self.index.contains_key(&key) && self.index.insert(key, i as u16).is_ok() {
+                i += 1;
+            } else {
+                self.points.swap_remove(i);
+                self.stats.dropped_outside += 1;
+            }
+        }
+        work
+    }
+
     /// Pooling cell of a point: side = radius / 2, so a cell holds at most one kept point and a
     /// neighbour within the radius is within 2 cells.
     fn pool_cell(geom: &GridGeometry, x: Meters, y: Meters, radius: Meters) -> (i32, i32) {

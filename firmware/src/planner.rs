@@ -240,6 +240,37 @@ impl Planner {
         self.stats = PlanStats::default();
     }
 
+    /// Moves the window by `(sx, sy)` cells ([`crate::rolling::shift`]): the distance field and
+    /// traversability mask move with the cells (new cells unreachable and blocked), blacklist
+    /// entries, the last step's candidates and the `rrt` trees are translated, and whatever falls
+    /// outside the window is dropped (counted in the return's second value). Returns the work
+    /// (cells and entries touched) and the entries dropped.
+    pub(crate) fn shift(&mut self, sx: i32, sy: i32) -> (u32, u32) {
+        self.blocked.shift(sx, sy, true);
+        crate::grid::shift_2d(&mut self.dist, GRID_CELLS, sx as i64, sy as i64, UNREACHABLE);
+        let mut work = 2 * GRID_AREA as u32;
+        let mut dropped = 0;
+        let n = self.blacklist.len() + self.candidates.len();
+        self.blacklist.retain_mut(|c| {
+            *c = (c.0 - sx, c.1 - sy);
+            PackedGrid::in_bounds(c.0, c.1) || {
+                dropped += 1;
+                false
+            }
+        });
+        self.candidates.retain_mut(|v| {
+            v.cell = (v.cell.0 - sx, v.cell.1 - sy);
+            PackedGrid::in_bounds(v.cell.0, v.cell.1) || {
+                dropped += 1;
+                false
+            }
+        });
+        self.robot_cell = (self.robot_cell.0 - sx, self.robot_cell.1 - sy);
+        work += n as u32;
+        let (w, d) = self.rrt.shift(sx, sy);
+        (work + w, dropped + d)
+    }
+
     /// Path distance (units of 0.02 m) from the robot to `(x, y)` as of the last step.
     #[inline]
     pub fn distance(&self, x: i32, y: i32) -> u16 {

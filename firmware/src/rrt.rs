@@ -157,6 +157,31 @@ impl RrtExplorer {
         *self = Self::new();
     }
 
+    /// Moves the window by `(sx, sy)` cells ([`crate::rolling::shift`]): every node and point is
+    /// translated and those that fall outside the window are dropped (a tree is a set of nodes
+    /// with no parent links, so dropping nodes leaves a valid tree; an emptied tree is re-rooted
+    /// at the robot by the next [`RrtExplorer::grow`]). Returns the work (entries touched) and
+    /// the entries dropped.
+    pub(crate) fn shift(&mut self, sx: i32, sy: i32) -> (u32, u32) {
+        let inside = |x: i32, y: i32| (x as u32) < GRID_CELLS as u32 && (y as u32) < GRID_CELLS as u32;
+        let work = (self.global.nodes.len() + self.local.nodes.len() + self.points.len()) as u32;
+        let before = work;
+        let mv = |n: &mut (i16, i16)| {
+            let (x, y) = (n.0 as i32 - sx, n.1 as i32 - sy);
+            *n = (x as i16, y as i16);
+            inside(x, y)
+        };
+        self.global.nodes.retain_mut(mv);
+        self.local.nodes.retain_mut(mv);
+        self.points.retain_mut(|p| {
+            p.cell = (p.cell.0 - sx, p.cell.1 - sy);
+            inside(p.cell.0, p.cell.1)
+        });
+        self.stats.global_nodes = self.global.nodes.len() as u32;
+        let after = (self.global.nodes.len() + self.local.nodes.len() + self.points.len()) as u32;
+        (work, before - after)
+    }
+
     /// The frontier points kept (oldest first).
     pub fn points(&self) -> impl Iterator<Item = &RrtPoint> {
         self.points.iter()

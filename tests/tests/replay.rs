@@ -833,4 +833,29 @@ fn bag_poses_are_interpolated_and_bad_poses_are_named_rejections() {
     // Nothing was drawn at the mount offset from the origin (where the first scans would have
     // been put), nor 100 m away.
     assert!(r.trajectory_bounds[0][0] >= 1.8 && r.trajectory_bounds[1][0] < 4.5, "{:?}", r.trajectory_bounds);
+
+/// Buildings larger than the grid (issue 27, item 6): the CSAIL trajectories (43 × 58 m corrected,
+/// 51 × 43 m raw) do not fit the 51.2 m grid. The grid starts on the first pose and the core's
+/// rolling window follows the laser: every scan is used (7 of the raw log's and 27 of the
+/// corrected log's were rejected `outside_grid` with a fixed grid), and the final window holds
+/// the robot's last stretch of corridor.
+#[test]
+fn csail_logs_larger_than_the_grid_are_followed_by_the_window() {
+    for (name, scans) in [("csail-corrected.log.gz", 406), ("raw/mit-csail-raw.clf.gz", 1988)] {
+        let run = replay::replay(&carmen(name), &ReplayOptions::default()).unwrap();
+        let r = &run.report;
+        assert!(r.exceeds_grid, "{name}");
+        assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (scans, scans, 0), "{name}: {:?}", r.rejected);
+        assert!(r.window_shifts >= 1, "{name}");
+        assert_eq!(r.window_shifts, run.controller.lidar.window.shifts);
+        let g = run.controller.lidar.geom;
+        let round3 = |v: f64| (v * 1000.0).round() / 1000.0;
+        assert_eq!(r.final_grid_origin, [round3(g.origin_x.to_num::<f64>()), round3(g.origin_y.to_num::<f64>())]);
+        let first = run.poses[0].pose;
+        assert_eq!(r.grid_origin, replay::grid_origin([[first[0], first[1]]; 2]), "{name}: placed on the first pose");
+        // The robot's last cells are in the final window, and free: it drove there.
+        let p = run.trajectory[run.trajectory.len() - 1];
+        assert_eq!(cell_at(&run, p[0], p[1]), Cell::Free, "{name}");
+        assert!(r.warnings.iter().any(|w| w.contains("window moved")), "{name}: {:?}", r.warnings);
+    }
 }

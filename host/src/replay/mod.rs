@@ -18,7 +18,9 @@
 //!
 //! [`replay`] then makes a first pass over the poses to centre the controller's 51.2 m grid on the
 //! trajectory ([`place_grid`]: a few stray poses, such as one corrupt `x`, neither move it nor
-//! are used; it says if the trajectory does not fit), and ticks the controller once per scan
+//! are used); a trajectory that does not fit is started with the grid centred on its first pose
+//! and the core's rolling window ([`firmware::rolling`]) follows the laser from there. It ticks
+//! the controller once per scan
 //! at the log's own time stamps, with `Command::Start` on the first tick (and again whenever it
 //! reports `Exhausted`, at most once per replan interval, since new scans may open new frontiers),
 //! the embedded int8 classifier installed unless told otherwise. Each goal it chooses is recorded
@@ -657,7 +659,9 @@ pub struct GridCounts {
 /// Why scans were not used.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Rejected {
-    /// The laser's pose lies outside the 51.2 m grid.
+    /// The laser's pose lies outside the controller's 51.2 m window at that moment: it jumped
+    /// past the window's edge (the window follows a laser that moves on; see
+    /// [`firmware::rolling`]).
     pub outside_grid: u32,
     /// No pose (bag frames not connected) or a non-finite pose or angle.
     pub no_pose: u32,
@@ -737,14 +741,20 @@ pub struct ReplayReport {
     pub grid: GridCounts,
     /// Non-map points pooled at the end.
     pub nonmap_points: u32,
-    /// Lower-left corner of the grid, metres.
+    /// Lower-left corner of the grid where it was placed, metres (`Config.origin_x_m/origin_y_m`).
     pub grid_origin: [f64; 2],
+    /// Lower-left corner of the grid at the end, metres: where the rolling window had moved it
+    /// (the picture and the final grid counts are of this window).
+    pub final_grid_origin: [f64; 2],
+    /// Times the rolling window moved.
+    pub window_shifts: u32,
     /// Grid side, metres.
     pub grid_size_m: f64,
     /// Bounding box of the laser's trajectory `[[min x, min y], [max x, max y]]`, metres (without
     /// stray poses).
     pub trajectory_bounds: [[f64; 2]; 2],
-    /// The trajectory does not fit in the grid (scans outside it are not used).
+    /// The trajectory does not fit in the grid: the grid was placed on its first pose and the
+    /// rolling window followed the laser (what left the window is forgotten).
     pub exceeds_grid: bool,
     /// Assumptions and notes.
     pub warnings: Vec<String>,
@@ -889,13 +899,22 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             ReplayError::NoGoodScans { file: log.file, skipped: bad.total, first: Box::new(bad.first.remove(0)) }
         });
     };
-    let origin = grid_origin(bounds);
+    let centred = grid_origin(bounds);
+    let size = grid_size_m();
+    let exceeds = bounds[0][0] < centred[0]
+        || bounds[0][1] < centred[1]
+        || bounds[1][0] >= centred[0] + size
+        || bounds[1][1] >= centred[1] + size;
+    // A trajectory that does not fit: the grid starts centred on the first pose that placed it,
+    // and the core's rolling window follows the laser from there.
+    let first = log.scans.iter().zip(&stray).find(|(s, st)| !**st && s.pose[0].is_finite() && s.pose[1].is_finite());
+    let origin = match first {
+        Some((s, _)) if exceeds => grid_origin([[s.pose[0], s.pose[1]]; 2]),
+        _ => centred,
+    };
     let (Some(origin_x_m), Some(origin_y_m)) = (fixed_point::meters_from_f64(origin[0]), fixed_point::meters_from_f64(origin[1])) else {
         return Err(ReplayError::GridOrigin { file: log.file, origin });
     };
-    let size = grid_size_m();
-    let exceeds =
-        bounds[0][0] < origin[0] || bounds[0][1] < origin[1] || bounds[1][0] >= origin[0] + size || bounds[1][1] >= origin[1] + size;
     let carmen = matches!(log.format, LogFormat::Carmen | LogFormat::CarmenGzip);
     let max_range = match (opts.max_range_m, carmen) {
         (Some(m), _) => fixed_point::meters_from_f64(m).unwrap_or(opts.config.lidar_max_range_m),
@@ -918,7 +937,6 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         None => None,
     };
     let mut record_error: Option<String> = None;
-    let geom = ctrl.lidar.geom;
     let t0 = log.scans[0].t_s;
     // Time stamps that do not advance (the CSAIL log prints them with 6 significant digits, i.e.
     // in steps of 10 000 s) cannot drive the controller's clock: replay one scan per tick instead.
@@ -959,9 +977,11 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             rejected.no_pose += 1;
             continue;
         };
-        let (cx, cy) = geom.cell_of(pose.x, pose.y);
+        // The window where it is now (it moves when the laser nears an edge).
+        let (cx, cy) = ctrl.lidar.geom.cell_of(pose.x, pose.y);
         if !firmware::grid::PackedGrid::in_bounds(cx, cy) {
-            // The core would keep its last pose and draw this scan from there: skip it instead.
+            // A jump past the window's edge: the core would refuse the pose, keep its last one
+            // and draw this scan from there. Skip it instead.
             rejected.outside_grid += 1;
             continue;
         }
@@ -1053,11 +1073,19 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             if more > 0 { format!(" and {more} more") } else { String::new() }
         ));
     }
+    let window = ctrl.lidar.window;
+    let final_origin = [round3(ctrl.lidar.geom.origin_x.to_num::<f64>()), round3(ctrl.lidar.geom.origin_y.to_num::<f64>())];
     if exceeds {
         warnings.push(format!(
-            "the trajectory ({:.1} × {:.1} m) does not fit the controller's {size:.1} m grid: scans outside it are not used",
+            "the trajectory ({:.1} × {:.1} m) does not fit the controller's {size:.1} m grid: the grid started on the first \
+             pose and its window moved {} time{} to follow the laser, forgetting what it left; the final grid and picture \
+             show the window at the end, lower-left corner ({}, {})",
             bounds[1][0] - bounds[0][0],
-            bounds[1][1] - bounds[0][1]
+            bounds[1][1] - bounds[0][1],
+            window.shifts,
+            if window.shifts == 1 { "" } else { "s" },
+            compact(final_origin[0]),
+            compact(final_origin[1])
         ));
     }
     let unplaced = log.no_pose + log.no_odometry_yet + log.stale_pose + log.scan_stamp_backwards;
@@ -1091,6 +1119,8 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         grid,
         nonmap_points: ctrl.nonmap.points().len() as u32,
         grid_origin: origin,
+        final_grid_origin: final_origin,
+        window_shifts: window.shifts,
         grid_size_m: size,
         trajectory_bounds: bounds.map(|p| p.map(round3)),
         exceeds_grid: exceeds,
