@@ -104,6 +104,8 @@ pub enum Stage {
     Plan,
     /// Choosing where to look while walking ([`crate::Config::gaze`]).
     Gaze,
+    /// Matching the scan against the LiDAR grid ([`crate::Config::scan_matching`]).
+    Match,
 }
 
 /// Told when each stage of a tick begins and ends (the MCU times stages with it). It sees no
@@ -408,7 +410,9 @@ impl Controller {
                 Ok(_) => {
                     self.last_scan_us = Some(now_us);
                     self.status.scans += 1;
+                    obs.begin(Stage::Match);
                     let pose = self.match_scan(&predicted);
+                    obs.end(Stage::Match);
                     if scan.labels.is_none() {
                         // No labels from upstream: the int8 network labels the scan (every beam
                         // stays unlabelled until a model is installed).

@@ -39,7 +39,7 @@ const TRACE_TICKS: u32 = 150;
 /// Guest instructions per SysTick count under `-icount shift=0` (25 MHz, 1 ns per instruction).
 const INSTRUCTIONS_PER_COUNT: u64 = 40;
 /// The stages `mcu-trace` times, in its column order.
-const STAGES: [&str; 6] = ["classify", "lidar", "visual", "nonmap", "plan", "gaze"];
+const STAGES: [&str; 7] = ["classify", "lidar", "visual", "nonmap", "plan", "gaze", "match"];
 /// Stages every tick of the golden trace must have run at least once (the issue's five).
 const REQUIRED_STAGES: [&str; 5] = ["classify", "lidar", "visual", "nonmap", "plan"];
 const RERECORD: &str =
@@ -466,14 +466,17 @@ fn the_real_time_image_ticks_every_200_ms_on_systick() {
 
 #[test]
 #[ignore = "needs qemu-system-arm and the MCU images (scripts/test.sh)"]
-fn the_emulated_mcu_finds_the_target_over_its_uart() {
+fn the_emulated_mcu_searches_over_its_uart_exactly_as_the_host_node() {
     let (_q, pty) = start_on_pty("mcu-lockstep");
     // The apartment from the hallway's junction (the built-in `apartment easy` until
     // 2026-11-25): a search of 279 ticks and 5 goals, where the built-in one takes 40 ticks.
     let world = World::load(&Path::new(WORKSPACE).join("examples/worlds/apartment-easy-hallway-start.toml")).expect("the example world");
     // `lives` as deployed: the scans go without labels and the image's embedded geometric
-    // classifier labels them (seed 2: found in 55.6 s, 279 ticks, as `lives search --world
-    // examples/worlds/apartment-easy-hallway-start.toml --seed 2`).
+    // classifier labels them. Seed 2 found the target in 55.6 s on the clean sensor and the
+    // ternary grid; on the default robot since issue 27 (VLP-16 profile, odometry drift, the
+    // evidence grid and the scan matcher) it runs to the 120 s limit, as `lives search --world
+    // examples/worlds/apartment-easy-hallway-start.toml --seed 2` does: what this test checks is
+    // that the MCU over its UART makes the host node's decisions through a whole search.
     let mut spec = SearchSpec::new("apartment-easy-hallway-start", world, Scenario::Easy, PlannerChoice::Lives, 2);
     spec.scenario = None; // a world file, as `--world FILE` runs it
     spec.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
@@ -491,7 +494,7 @@ fn the_emulated_mcu_finds_the_target_over_its_uart() {
         "MCU over UART: {} in {} s sim, {} ticks, {:.1} s wall, {} retries",
         r.outcome, r.time_s, r.ticks, run.wall_s, run.stats.retries
     );
-    assert!(r.found, "the MCU did not find the target: {r:?}");
+    assert!(r.goals > 3 && r.path_m > 10.0 && r.ticks > 100, "the MCU's search went nowhere: {r:?}");
     assert_eq!(run.stats.rejected, 0, "damaged frames on a clean line");
     // The same run with the node on the host (same bridge code, in-memory line): the MCU made
     // exactly the host's decisions.
@@ -512,7 +515,7 @@ fn the_emulated_mcu_finds_the_target_over_its_uart() {
     });
     assert_eq!(run.goals, local.goals, "the MCU chose other goals than the host node");
     assert_eq!(r.ticks, local.result.ticks);
-    assert_eq!(r.outcome, local.result.outcome);
+    assert_eq!((r.outcome, r.found), (local.result.outcome, local.result.found));
     assert_eq!(r.labels, "int8-classifier", "the MCU labelled the scans with its embedded classifier");
 }
 

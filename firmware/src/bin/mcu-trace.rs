@@ -20,7 +20,7 @@ mod app {
     /// The fixture, in flash.
     static TRACE: &[u8] = include_bytes!("../../../tests/fixtures/golden.trace");
 
-    const STAGES: usize = 6;
+    const STAGES: usize = 7;
     const PAINT: u32 = 0x5AFE_C0DE;
 
     struct Times {
@@ -38,6 +38,7 @@ mod app {
             Stage::NonMap => 3,
             Stage::Plan => 4,
             Stage::Gaze => 5,
+            Stage::Match => 6,
         }
     }
 
@@ -106,7 +107,7 @@ mod app {
                 let total = now - last;
                 let s = TIMES.with(|t| core::mem::replace(&mut t.sum, [0; STAGES]));
                 hprintln!(
-                    "R {} {} {} {} {:08x} {} {} {} {} {} {} {}",
+                    "R {} {} {} {} {:08x} {} {} {} {} {} {} {} {}",
                     d.record,
                     d.t_us,
                     d.ticks,
@@ -118,7 +119,8 @@ mod app {
                     s[2],
                     s[3],
                     s[4],
-                    s[5]
+                    s[5],
+                    s[6]
                 );
                 // The printing is not part of the next record's time.
                 last = clock::now_counts();
