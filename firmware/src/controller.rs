@@ -378,6 +378,8 @@ impl Controller {
             _ => {}
         }
 
+        // A scan that comes with a refused pose is not drawn at the last good pose either.
+        let mut pose_refused = false;
         if let Some(odom) = inputs.pose {
             let p = if self.cfg.scan_matching { self.map_from_odom.compose(&odom) } else { odom };
             let (cx, cy) = self.lidar.geom.cell_of(p.x, p.y);
@@ -399,10 +401,11 @@ impl Controller {
                 }
             } else {
                 self.status.poses_rejected += 1;
+                pose_refused = true;
             }
         }
 
-        if let (Some(scan), Some(predicted)) = (inputs.scan, self.pose) {
+        if let (Some(scan), Some(predicted), false) = (inputs.scan, self.pose, pose_refused) {
             // The robot's own body: readings below the configured minimum are invalid too.
             let body_mm = (self.cfg.lidar_min_range_m.to_bits() as i64 * 1000 >> 16).clamp(0, u16::MAX as i64) as u16;
             let scan = ScanInput { range_min_mm: scan.range_min_mm.max(body_mm), ..scan };

@@ -28,7 +28,7 @@
 //!
 //! And the relations metric of Kümmerle et al. 2009 ([`relation_errors`]).
 
-use crate::replay::{self, ReplayOptions, ReplayReport, ScanRecord, TimedPose};
+use crate::replay::{self, ReplayReport, ScanRecord, TimedPose};
 use crate::search::{PlannerChoice, SearchResult, SearchSpec};
 use crate::sim::Scenario;
 use firmware::Cell;
@@ -778,17 +778,7 @@ pub fn run_command(
 /// Replays `file` and scores it (the bool: the log was clean).
 pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bool), String> {
     // The options exactly as `lives replay` takes them.
-    let model = crate::model::model_option(args.model.as_deref(), args.no_classifier)?;
-    let mut opts = ReplayOptions { model, ..ReplayOptions::default() };
-    for a in &args.set {
-        crate::overrides::apply(&mut opts.config, a)?;
-    }
-    if let Some(m) = args.max_range {
-        fixed_point::meters_from_f64(m)
-            .filter(|v| *v > opts.config.lidar_min_range_m && m <= 65.0)
-            .ok_or_else(|| format!("--max-range {}: expected metres above the minimum range and at most 65", replay::compact(m)))?;
-        opts.max_range_m = Some(m);
-    }
+    let opts = replay::options(args.model.as_deref(), args.no_classifier, &args.set, args.max_range)?;
     // Read every input file before the replay, so a bad one fails fast.
     let relations = args.relations.as_deref().map(|p| read_relations(p).map(|r| (p, r))).transpose()?;
     let align = args.align.as_deref().map(|p| read_poses(p).map(|r| (p, r))).transpose()?;

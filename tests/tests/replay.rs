@@ -384,7 +384,7 @@ fn time_stamps_that_do_not_advance_are_replaced_by_the_core_tick() {
 /// it sits at (1.5, 2.2) facing +y. Its scans: 21 beams from −0.1 rad in 0.01 rad steps; the
 /// middle beam (angle 0) sees a wall at 3 m, i.e. at (1.5, 5.2) in the world. Beams 0–4 have no
 /// return (+inf), beam 5 is NaN, beam 6 −inf (too close), beams 16–20 read 25 m, beyond
-/// `range_max` (20 m): discarded.
+/// `range_max` (20 m): "nothing within 20 m" (REP 117 as issue 27 reads it), like +inf.
 const SCANS: u32 = 30;
 const MOUNT: [f64; 3] = [0.5, 0.2, 0.3];
 
@@ -502,15 +502,20 @@ fn assert_mounted_scan(run: &ReplayRun) {
     assert!(between.contains(&Cell::Free) && !between.contains(&Cell::Occupied), "between laser and wall");
     assert!(!occupied_near(run, 1.0, 5.0));
     assert!(!occupied_near(run, 4.5, 2.2));
-    // No return (+inf, beams 0–4 at −0.1…−0.06 rad) clears to the core's 30 m range;
-    // the discarded 25 m readings (beams 16–20) leave their direction unknown.
+    // No return (+inf, beams 0–4 at −0.1…−0.06 rad) clears to the scan's 20 m range_max, not
+    // to the core's 30 m clearing range; the 25 m readings beyond range_max (beams 16–20) do
+    // the same and mark nothing.
     let dir = |a: f64, d: f64| (1.5 + d * (std::f64::consts::FRAC_PI_2 + a).cos(), 2.2 + d * (std::f64::consts::FRAC_PI_2 + a).sin());
-    let (x, y) = dir(-0.08, 10.0);
-    assert!(around(run, x, y).contains(&Cell::Free), "an inf beam clears beyond the wall's range");
-    let (x, y) = dir(0.08, 10.0);
-    assert!(around(run, x, y).iter().all(|c| *c == Cell::Unknown), "a reading beyond range_max is discarded");
+    for a in [-0.08, 0.08] {
+        let (x, y) = dir(a, 10.0);
+        assert!(around(run, x, y).contains(&Cell::Free), "a no-return beam clears beyond the wall's range ({a} rad)");
+        let (x, y) = dir(a, 19.5);
+        assert!(around(run, x, y).contains(&Cell::Free), "... out to range_max ({a} rad)");
+        let (x, y) = dir(a, 21.0);
+        assert!(around(run, x, y).iter().all(|c| *c == Cell::Unknown), "... and not beyond it ({a} rad)");
+    }
     let (x, y) = dir(0.08, 25.0);
-    assert!(!occupied_near(run, x, y));
+    assert!(!occupied_near(run, x, y), "a reading beyond range_max marks nothing");
 }
 
 #[test]
@@ -523,8 +528,10 @@ fn an_mcap_bag_replays_with_the_laser_mount_applied() {
     assert!((s.pose[0] - 1.5).abs() < 1e-12 && (s.pose[1] - 2.2).abs() < 1e-12, "{:?}", s.pose);
     assert!((s.pose[2] - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
     assert_eq!((s.angle_min, s.angle_increment), (-0.1f32 as f64, 0.01f32 as f64));
-    assert!(s.ranges_m[5].is_nan() && s.ranges_m[6].is_nan() && s.ranges_m[16].is_nan(), "NaN, −inf, > range_max");
+    // As recorded, with the scan's limits: the range rule applies when the scan is encoded.
+    assert!(s.ranges_m[5].is_nan() && s.ranges_m[6] == f32::NEG_INFINITY && s.ranges_m[16] == 25.0, "NaN, −inf, > range_max");
     assert_eq!((s.ranges_m[0], s.ranges_m[10]), (f32::INFINITY, 3.0));
+    assert_eq!(s.range_limits_m[1], 20.0);
     assert!(matches!(s.at, Location::Offset(_)));
     assert!(log.warnings.is_empty(), "{:?}", log.warnings);
     let run = replay::replay(&path, &no_classifier()).unwrap();
@@ -833,6 +840,7 @@ fn bag_poses_are_interpolated_and_bad_poses_are_named_rejections() {
     // Nothing was drawn at the mount offset from the origin (where the first scans would have
     // been put), nor 100 m away.
     assert!(r.trajectory_bounds[0][0] >= 1.8 && r.trajectory_bounds[1][0] < 4.5, "{:?}", r.trajectory_bounds);
+}
 
 /// Buildings larger than the grid (issue 27, item 6): the CSAIL trajectories (43 × 58 m corrected,
 /// 51 × 43 m raw) do not fit the 51.2 m grid. The grid starts on the first pose and the core's

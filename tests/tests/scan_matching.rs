@@ -3,7 +3,6 @@
 //! raw odometry's, with `lives mapcheck`'s metric (`host::mapcheck::relation_errors`). Reads
 //! `tests/data/carmen/raw/`.
 
-use firmware::Config;
 use host::mapcheck::{read_poses, read_relations, relation_errors, PoseIndex, RelationStats};
 use host::replay::{self, ReplayOptions};
 
@@ -29,7 +28,7 @@ fn scan_matching_beats_raw_odometry_on_the_csail_relations() {
     let mut figures = Vec::new();
     for matching in [false, true] {
         let opts =
-            ReplayOptions { model: None, config: Config { scan_matching: matching, ..Config::DEFAULT }, ..ReplayOptions::default() };
+            ReplayOptions { model: None, scan_matching: Some(matching), ..ReplayOptions::default() };
         let run = replay::replay(&log, &opts).unwrap();
         let e = relation_errors(&PoseIndex::new(&run.poses), &relations);
         let m = &run.controller.matcher.stats;

@@ -611,11 +611,41 @@ pub struct ReplayOptions {
     /// The controller's LiDAR range for this log, metres (`None`: [`CARMEN_MAX_RANGE_M`] for
     /// CARMEN logs, the configuration's range for bags).
     pub max_range_m: Option<f64>,
+    /// Whether the controller matches scans against its map (`None`: off for CARMEN logs, whose
+    /// published poses are SLAM-corrected, the configuration's `scan_matching` for bags, whose
+    /// poses are a robot's odometry). See docs/replay.md, "Scan matching".
+    pub scan_matching: Option<bool>,
+}
+
+/// The options `lives replay` and `lives mapcheck` take: a classifier blob or none, `--set`
+/// overrides (`scan_matching` among them decides matching for every format), `--max-range`.
+pub fn options(model: Option<&Path>, no_classifier: bool, set: &[String], max_range: Option<f64>) -> Result<ReplayOptions, String> {
+    let model = crate::model::model_option(model, no_classifier)?;
+    let mut opts = ReplayOptions { model, ..ReplayOptions::default() };
+    for a in set {
+        crate::overrides::apply(&mut opts.config, a)?;
+        if a.trim_start().starts_with("scan_matching") {
+            opts.scan_matching = Some(opts.config.scan_matching);
+        }
+    }
+    if let Some(m) = max_range {
+        fixed_point::meters_from_f64(m)
+            .filter(|v| *v > opts.config.lidar_min_range_m && m <= 65.0)
+            .ok_or_else(|| format!("--max-range {}: expected metres above the minimum range and at most 65", compact(m)))?;
+        opts.max_range_m = Some(m);
+    }
+    Ok(opts)
 }
 
 impl Default for ReplayOptions {
     fn default() -> Self {
-        ReplayOptions { config: Config::DEFAULT, model: Some(firmware::classifier::EMBEDDED_GEO_MODEL), record: None, max_range_m: None }
+        ReplayOptions {
+            config: Config::DEFAULT,
+            model: Some(firmware::classifier::EMBEDDED_GEO_MODEL),
+            record: None,
+            max_range_m: None,
+            scan_matching: None,
+        }
     }
 }
 
@@ -921,7 +951,8 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         (None, true) => fixed_point::meters_from_f64(CARMEN_MAX_RANGE_M).unwrap_or(opts.config.lidar_max_range_m),
         (None, false) => opts.config.lidar_max_range_m,
     };
-    let cfg = Config { origin_x_m, origin_y_m, lidar_max_range_m: max_range, ..opts.config };
+    let scan_matching = opts.scan_matching.unwrap_or(!carmen && opts.config.scan_matching);
+    let cfg = Config { origin_x_m, origin_y_m, lidar_max_range_m: max_range, scan_matching, ..opts.config };
     let mut ctrl = Box::new(Controller::new(cfg));
     if let Some(blob) = opts.model {
         ctrl.set_model(blob).map_err(ReplayError::Model)?;
@@ -977,14 +1008,6 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             rejected.no_pose += 1;
             continue;
         };
-        // The window where it is now (it moves when the laser nears an edge).
-        let (cx, cy) = ctrl.lidar.geom.cell_of(pose.x, pose.y);
-        if !firmware::grid::PackedGrid::in_bounds(cx, cy) {
-            // A jump past the window's edge: the core would refuse the pose, keep its last one
-            // and draw this scan from there. Skip it instead.
-            rejected.outside_grid += 1;
-            continue;
-        }
         let start = match last_start {
             None => true,
             Some(t) => ctrl.mode() == Mode::Exhausted && now_us.saturating_sub(t) >= cfg.replan_interval_us,
@@ -999,8 +1022,15 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             command: start.then_some(Command::Start),
             base_blocked: false,
         };
+        let refused_before = status.poses_rejected;
         let out = ctrl.tick(now_us, &inputs);
         status = out.status;
+        if status.poses_rejected > refused_before {
+            // A jump past the window's edge (in the controller's map frame): the core refused
+            // the pose and did not draw the scan.
+            rejected.outside_grid += 1;
+            continue;
+        }
         if let (Some(rec), None) = (recorder.as_mut(), &record_error) {
             if let Err(e) = rec.record_controller_tick(now_us, &inputs, &out, &ctrl) {
                 record_error = Some(e.to_string());
@@ -1199,17 +1229,8 @@ pub struct ReplayArgs {
 /// nothing could be replayed.
 pub fn run_command(args: &ReplayArgs) -> Result<std::process::ExitCode, String> {
     use std::io::Write as _;
-    let model = crate::model::model_option(args.model.as_deref(), args.no_classifier)?;
-    let mut opts = ReplayOptions { model, record: args.record.clone(), ..ReplayOptions::default() };
-    for a in &args.set {
-        crate::overrides::apply(&mut opts.config, a)?;
-    }
-    if let Some(m) = args.max_range {
-        fixed_point::meters_from_f64(m)
-            .filter(|v| *v > opts.config.lidar_min_range_m && m <= 65.0)
-            .ok_or_else(|| format!("--max-range {}: expected metres above the minimum range and at most 65", compact(m)))?;
-        opts.max_range_m = Some(m);
-    }
+    let mut opts = options(args.model.as_deref(), args.no_classifier, &args.set, args.max_range)?;
+    opts.record = args.record.clone();
     let run = replay(&args.file, &opts).map_err(|e| e.to_string())?;
     let r = &run.report;
     if let Some(path) = &args.png {
