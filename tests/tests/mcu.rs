@@ -515,7 +515,7 @@ fn the_emulated_mcu_searches_over_its_uart_exactly_as_the_host_node() {
     });
     assert_eq!(run.goals, local.goals, "the MCU chose other goals than the host node");
     assert_eq!(r.ticks, local.result.ticks);
-    assert_eq!((r.outcome, r.found), (local.result.outcome, local.result.found));
+    assert_eq!((&r.outcome, r.found), (&local.result.outcome, local.result.found));
     assert_eq!(r.labels, "int8-classifier", "the MCU labelled the scans with its embedded classifier");
 }
 
