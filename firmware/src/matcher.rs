@@ -189,7 +189,10 @@ impl ScanMatcher {
             if acc >= total && self.n < MATCH_MAX_POINTS {
                 acc -= total;
                 let a = beam_angle(b);
-                let len = mm_to_meters(r);
+                // Where the grid puts the return's hit (`grid::HIT_DEPTH_MM` behind the surface):
+                // at the measured range, a wall face on a cell boundary would pull every match
+                // a cell towards the walls.
+                let len = mm_to_meters(r).saturating_add(Meters::from_bits(((crate::grid::HIT_DEPTH_MM << 16) / 1000) as i32));
                 self.points[self.n] = (mul_unit(len, cos(a)), mul_unit(len, sin(a)));
                 self.n += 1;
             }

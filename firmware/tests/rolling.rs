@@ -26,7 +26,8 @@ fn corridor() -> Vec<Box2> {
 
 fn corridor_config() -> Config {
     // The window starts with the robot (x = 2 m) 22 m from its west edge.
-    Config { origin_x_m: Config::mm(-20_000), origin_y_m: Config::mm(-4_000), ..Config::DEFAULT }
+    // The window's own behaviour, on exact poses: no scan matching.
+    Config { origin_x_m: Config::mm(-20_000), origin_y_m: Config::mm(-4_000), scan_matching: false, ..Config::DEFAULT }
 }
 
 /// Drives the robot from x = 2 m to x = 82 m down the corridor's middle, a scan every 0.1 m, the
@@ -301,7 +302,7 @@ fn non_map_points_survive_a_shift_and_still_pool() {
 #[test]
 fn a_building_that_fits_never_moves_the_window() {
     let world = vec![wall(30.0, 10.0, 50.1, 10.1), wall(30.0, 20.0, 50.1, 20.1), wall(30.0, 10.0, 30.1, 20.1), wall(50.0, 10.0, 50.1, 20.1)];
-    let mut ctl = controller(Config::DEFAULT);
+    let mut ctl = controller(Config { scan_matching: false, ..Config::DEFAULT });
     for i in 0..=177 {
         let x = 31.0 + i as f64 * 0.1; // to 48.7 m: 2.5 m from the edge at 51.2 m
         let (ranges, labels) = scan_of(&world, (x, 15.0, 0.0), 720);
@@ -338,7 +339,7 @@ fn absurd_poses_are_refused_and_the_window_stops_at_the_coordinate_range() {
     assert_eq!(ctl.pose().map(|p| p.x), Some(m(82.0)), "the last good pose stays");
 
     // The window at the top of the range: the origin can go no farther east than MAX_ORIGIN_M.
-    let mut ctl = controller(Config { origin_x_m: MAX_ORIGIN_M, origin_y_m: MAX_ORIGIN_M, ..Config::DEFAULT });
+    let mut ctl = controller(Config { origin_x_m: MAX_ORIGIN_M, origin_y_m: MAX_ORIGIN_M, scan_matching: false, ..Config::DEFAULT });
     ctl.tick(0, &Inputs { command: Some(Command::Start), ..Inputs::default() });
     let mut t = 0;
     for i in 0..600 {
@@ -353,7 +354,7 @@ fn absurd_poses_are_refused_and_the_window_stops_at_the_coordinate_range() {
     assert!(ctl.lidar.window.refused > 0);
     assert_eq!(ctl.lidar.geom.origin_x, MAX_ORIGIN_M);
     // And at the bottom: the origin can go no farther west than Meters::MIN.
-    let mut ctl = controller(Config { origin_x_m: Meters::MIN, origin_y_m: Meters::MIN, ..Config::DEFAULT });
+    let mut ctl = controller(Config { origin_x_m: Meters::MIN, origin_y_m: Meters::MIN, scan_matching: false, ..Config::DEFAULT });
     for i in 0..300 {
         let p = Pose2::from_f64(-32_767.0 + i as f64 * 0.01, -32_760.0, 0.0).unwrap();
         ctl.tick(i * 100_000, &Inputs { pose: Some(p), ..Inputs::default() });
