@@ -877,15 +877,14 @@ mod ideal_sensor_digest {
         h
     }
 
-    /// What the controller was given over the first 150 ticks before the simulator had LiDAR
-    /// profiles, materials, mounts and odometry drift (computed at commit 831efe1 with that
-    /// day's default robot: the clean 897-beam sensor, a 0.25 m body).
-    const BEFORE_PROFILES: u64 = 0x9430_73f3_517c_f956;
-
+    /// The default robot gives the controller other scans and poses than the clean sensor it
+    /// replaced. (That the ideal profile still gives exactly the old scans is pinned where no
+    /// controller decision enters: `lives_sim`'s `IDEAL_APARTMENT_DIGEST` over 40 raw scans. A
+    /// digest over a whole search here also depends on where the controller sends the robot,
+    /// which issue 27 changed with the evidence grid and the scan matcher.)
     #[test]
-    fn the_ideal_sensor_without_drift_gives_the_controller_what_it_was_given_before() {
-        assert_eq!(digest(ideal_sim(), 150), BEFORE_PROFILES);
-        // The default robot is another sensor: it must not give the same.
-        assert_ne!(digest(default_sim(), 150), BEFORE_PROFILES);
+    fn the_default_robot_is_another_sensor_than_the_ideal_one() {
+        assert_ne!(digest(default_sim(), 150), digest(ideal_sim(), 150));
+        assert_eq!(digest(ideal_sim(), 150), digest(ideal_sim(), 150), "deterministic");
     }
 }
