@@ -670,7 +670,10 @@ fn run_with(
         if out.stop {
             sim.stop_base();
         } else if let (true, Some(g)) = (out.new_goal, &out.goal) {
-            goals.push((g.viewpoint.cell, g.viewpoint.heading));
+            // As the bridge records a goal from the wire: its pose's cell (the configured grid)
+            // and heading, in the frame the base follows (`Outputs::goal`).
+            let initial = firmware::grid::GridGeometry { origin_x: ctrl.config().origin_x_m, origin_y: ctrl.config().origin_y_m };
+            goals.push((initial.cell_of(g.pose.x, g.pose.y), g.pose.theta));
             if spec.trace {
                 let v = &g.viewpoint;
                 eprintln!(
