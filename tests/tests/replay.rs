@@ -93,7 +93,9 @@ fn intel_replays_into_a_building_map() {
     eprintln!("replay took {:.2} s for {:.0} s of log", r.wall_s, r.duration_s);
     // The Intel lab is ≈ 26 × 26 m; walls are thousands of cells, free space > 10 000 m²·100.
     assert!((2_000..30_000).contains(&r.grid.occupied), "{:?}", r.grid);
-    assert!(r.grid.free > 50_000, "{:?}", r.grid);
+    // 42 524 free cells since the evidence grid: "no return" no longer clears through walls (the
+    // free-space leak fell from 70 % to 26 %, docs/experiments/real-lidar-maps.md).
+    assert!(r.grid.free > 35_000, "{:?}", r.grid);
     assert!(r.goals.len() >= 20, "{} goals", r.goals.len());
     assert!(!r.exceeds_grid && r.error.is_none());
     assert_eq!(r.labels, "int8-classifier");
@@ -113,7 +115,9 @@ fn freiburg_079_replays_into_a_building_map() {
     // Speed is a measurement, not a test: `lives replay` prints the wall/log ratio.
     eprintln!("replay took {:.2} s for {:.0} s of log", r.wall_s, r.duration_s);
     assert!((1_000..30_000).contains(&r.grid.occupied), "{:?}", r.grid);
-    assert!(r.grid.free > 50_000, "{:?}", r.grid);
+    // 42 524 free cells since the evidence grid: "no return" no longer clears through walls (the
+    // free-space leak fell from 70 % to 26 %, docs/experiments/real-lidar-maps.md).
+    assert!(r.grid.free > 35_000, "{:?}", r.grid);
     assert!(r.goals.len() >= 20, "{} goals", r.goals.len());
     assert!(!r.exceeds_grid && r.error.is_none());
 }
