@@ -45,6 +45,8 @@ pub const MATCH_FINE_ANGLE_STEP: BinaryAngle = BinaryAngle::from_fraction(1, 288
 pub const MATCH_HALF_CELL: Meters = Meters::from_bits(3277);
 /// Fewest points a scan must give to be matched.
 pub const MATCH_MIN_POINTS: usize = 30;
+/// Rounds of the sub-cell refinement (26 candidates each).
+pub const MATCH_REFINE_ROUNDS: u32 = 4;
 /// The least score, in thousandths of the most the points could score, to accept a match.
 pub const MATCH_MIN_SCORE_PER_MILLE: u32 = 300;
 /// The controller matches no scan until this many are in the map (the first scans would be
@@ -61,19 +63,41 @@ const FINE_CANDIDATES: u32 = 26;
 
 /// Most point placements one scan's match can take: every point at every coarse and fine
 /// candidate (each placement reads at most 5 cells).
-pub const MATCH_WORST_CASE_WORK: u32 = MATCH_MAX_POINTS as u32 * (COARSE_HEADINGS * COARSE_TRANSLATIONS + FINE_CANDIDATES);
+pub const MATCH_WORST_CASE_WORK: u32 =
+    MATCH_MAX_POINTS as u32 * (COARSE_HEADINGS * COARSE_TRANSLATIONS + FINE_CANDIDATES + 1 + 26 * MATCH_REFINE_ROUNDS);
 
 /// What the matcher reads: whether a cell holds an obstacle. Out-of-bounds cells are not
 /// occupied.
 pub trait Occupancy {
     /// Is cell `(x, y)` occupied?
     fn occupied(&self, x: i32, y: i32) -> bool;
+
+    /// How surely cell `(x, y)` holds an obstacle, 0 ..= [`LEVEL_MAX`] (the sub-cell refinement
+    /// interpolates it): by default [`LEVEL_MAX`] if occupied, else 0.
+    #[inline]
+    fn level(&self, x: i32, y: i32) -> u32 {
+        if self.occupied(x, y) {
+            LEVEL_MAX
+        } else {
+            0
+        }
+    }
 }
+
+/// The highest [`Occupancy::level`]: the LiDAR grid's highest evidence.
+pub const LEVEL_MAX: u32 = crate::grid::EVIDENCE_MAX as u32;
 
 impl Occupancy for LidarGrid {
     #[inline]
     fn occupied(&self, x: i32, y: i32) -> bool {
         self.get(x, y) == Cell::Occupied
+    }
+
+    /// The cell's evidence if it is occupied (a wall many scans drew counts more than one drawn
+    /// once), else 0.
+    #[inline]
+    fn level(&self, x: i32, y: i32) -> u32 {
+        self.evidence.get(x, y).filter(|&e| e >= crate::grid::EVIDENCE_MIN_OCCUPIED).map_or(0, |e| e as u32)
     }
 }
 
@@ -212,6 +236,28 @@ impl ScanMatcher {
         s
     }
 
+    /// The points placed at `(x, y, theta)` scored on the map's [`Occupancy::level`] interpolated
+    /// bilinearly between cell centres (Q16 levels summed): smooth below a cell, so that a
+    /// pose can be refined by less than a cell.
+    fn smooth_at(&self, map: &impl Occupancy, geom: &GridGeometry, x: Meters, y: Meters, theta: BinaryAngle) -> u64 {
+        let (sn, cs) = (sin(theta), cos(theta));
+        let mut s = 0u64;
+        for &(px, py) in &self.points[..self.n] {
+            let (wx, wy) = place_point(x, y, sn, cs, px, py);
+            // Cell coordinates in Q16 with cell centres on whole numbers.
+            let u = (wx.to_bits() as i64 - geom.origin_x.to_bits() as i64) * crate::capacity::CELLS_PER_METER - (1 << 15);
+            let v = (wy.to_bits() as i64 - geom.origin_y.to_bits() as i64) * crate::capacity::CELLS_PER_METER - (1 << 15);
+            let (x0, y0) = (u.div_euclid(1 << 16), v.div_euclid(1 << 16));
+            let (fx, fy) = (u.rem_euclid(1 << 16) as u64, v.rem_euclid(1 << 16) as u64);
+            let (Ok(x0), Ok(y0)) = (i32::try_from(x0), i32::try_from(y0)) else { continue };
+            let m = |dx: i32, dy: i32| map.level(x0.saturating_add(dx), y0.saturating_add(dy)) as u64;
+            let top = (65_536 - fx) * m(0, 0) + fx * m(1, 0);
+            let bottom = (65_536 - fx) * m(0, 1) + fx * m(1, 1);
+            s += ((65_536 - fy) * top + fy * bottom) >> 16;
+        }
+        s
+    }
+
     /// Matches `scan`, taken at `predicted` (the odometry's pose, corrected by the matches so
     /// far), against `map`. Returns the corrected pose, or why the odometry's stands.
     pub fn match_scan(
@@ -278,8 +324,52 @@ impl ScanMatcher {
                 }
             }
         }
-        self.stats.last_work = work;
         let (_, score, hx, hy, q) = fine;
+        // Sub-cell refinement: hill-climbing on the interpolated levels from the fine best, in
+        // steps of a quarter cell and a sixteenth of a degree, halved when no neighbour is better.
+        let mut at = (
+            predicted.x.saturating_add(place(hx)),
+            predicted.y.saturating_add(place(hy)),
+            predicted.theta + BinaryAngle(MATCH_FINE_ANGLE_STEP.0.wrapping_mul(q)),
+        );
+        let smooth_value = |s: u64, p: &(Meters, Meters, BinaryAngle)| -> i64 {
+            // Offsets in 1/1024 half cells and 1/1024 eighths of a degree, as `value` weighs them.
+            let hx = (p.0.to_bits() as i64 - predicted.x.to_bits() as i64) * 1024 / MATCH_HALF_CELL.to_bits() as i64;
+            let hy = (p.1.to_bits() as i64 - predicted.y.to_bits() as i64) * 1024 / MATCH_HALF_CELL.to_bits() as i64;
+            let q = (p.2 - predicted.theta).0 as i64 * 1024 / MATCH_FINE_ANGLE_STEP.0 as i64;
+            // A level-LEVEL_MAX point (Q16) is worth a hit's 8192·HIT_SCORE.
+            (s as i64 * 8192 * HIT_SCORE as i64) / (LEVEL_MAX as i64 * 65_536) - n as i64 * ((32 * (hx * hx + hy * hy) + q * q) >> 20)
+        };
+        let mut best_v = smooth_value(self.smooth_at(map, geom, at.0, at.1, at.2), &at);
+        work += n as u32;
+        let (mut step_t, mut step_q) = (MATCH_HALF_CELL.to_bits() / 2, MATCH_FINE_ANGLE_STEP.0 / 2);
+        for _ in 0..MATCH_REFINE_ROUNDS {
+            let mut moved = false;
+            let centre = at;
+            for fq in [0, -1, 1] {
+                for fy in [0, -1, 1] {
+                    for fx in [0, -1, 1] {
+                        if fx == 0 && fy == 0 && fq == 0 {
+                            continue;
+                        }
+                        let p = (
+                            centre.0.saturating_add(Meters::from_bits(step_t * fx)),
+                            centre.1.saturating_add(Meters::from_bits(step_t * fy)),
+                            centre.2 + BinaryAngle(step_q * fq),
+                        );
+                        let v = smooth_value(self.smooth_at(map, geom, p.0, p.1, p.2), &p);
+                        work += n as u32;
+                        if v > best_v {
+                            (best_v, at, moved) = (v, p, true);
+                        }
+                    }
+                }
+            }
+            if !moved {
+                (step_t, step_q) = (step_t / 2, step_q / 2);
+            }
+        }
+        self.stats.last_work = work;
         let per_mille = (score as u64 * 1000 / (HIT_SCORE as u64 * n as u64)) as u16;
         self.stats.last_score_per_mille = per_mille;
         if (per_mille as u32) < MATCH_MIN_SCORE_PER_MILLE {
@@ -287,11 +377,7 @@ impl ScanMatcher {
             return Err(MatchRefusal::LowScore(per_mille));
         }
         self.stats.matched += 1;
-        let pose = Pose2::new(
-            predicted.x.saturating_add(place(hx)),
-            predicted.y.saturating_add(place(hy)),
-            predicted.theta + BinaryAngle(MATCH_FINE_ANGLE_STEP.0.wrapping_mul(q)),
-        );
+        let pose = Pose2::new(at.0, at.1, at.2);
         Ok(Match { pose, score_per_mille: per_mille, points: n as u16 })
     }
 }
@@ -455,7 +541,7 @@ mod tests {
 
     #[test]
     fn worst_case_work_is_bounded() {
-        assert_eq!(MATCH_WORST_CASE_WORK, MATCH_MAX_POINTS as u32 * (25 * 49 + 26));
+        assert_eq!(MATCH_WORST_CASE_WORK, MATCH_MAX_POINTS as u32 * (25 * 49 + 26 + 1 + 26 * 4));
         // A full scan of close returns: the points are capped.
         let r = room();
         let mut full = BeamScan::new();
