@@ -198,6 +198,8 @@ pub struct Controller {
     pose: Option<Pose2>,
     /// The last input pose (the odometry's, in its own frame).
     odom_pose: Option<Pose2>,
+    /// The odometry pose of the last scan the matcher saw.
+    last_scan_odom: Option<Pose2>,
     /// The correction from the odometry's frame to the map's ([`Config::scan_matching`]).
     map_from_odom: Pose2,
     last_pose_us: Option<u64>,
@@ -229,6 +231,7 @@ impl Controller {
             mode: Mode::Idle,
             pose: None,
             odom_pose: None,
+            last_scan_odom: None,
             map_from_odom: Pose2::IDENTITY,
             last_pose_us: None,
             last_scan_us: None,
@@ -335,6 +338,7 @@ impl Controller {
         self.mode = Mode::Idle;
         self.pose = None;
         self.odom_pose = None;
+        self.last_scan_odom = None;
         self.map_from_odom = Pose2::IDENTITY;
         self.matcher.reset();
         self.last_pose_us = None;
@@ -525,7 +529,17 @@ impl Controller {
             return *predicted;
         };
         let geom = self.lidar.geom;
-        match self.matcher.match_scan(&self.lidar, &geom, predicted, &self.beams, self.cfg.lidar_max_range_m) {
+        // The odometry's motion since the last scan: how much the prediction can be off.
+        let motion = self.last_scan_odom.map_or(crate::matcher::Motion::UNKNOWN, |last| {
+            let step = last.inverse().compose(&odom);
+            let dist = fixed_point::hypot(step.x, step.y);
+            crate::matcher::Motion {
+                dist_mm: (dist.to_bits().max(0) as i64 * 1000 >> 16) as u32,
+                turn_mdeg: ((step.theta.0 as i64).unsigned_abs() * 360_000 >> 32) as u32,
+            }
+        });
+        self.last_scan_odom = Some(odom);
+        match self.matcher.match_scan(&self.lidar, &geom, predicted, &self.beams, self.cfg.lidar_max_range_m, motion) {
             Ok(m) => {
                 let (cx, cy) = geom.cell_of(m.pose.x, m.pose.y);
                 if !crate::grid::PackedGrid::in_bounds(cx, cy) {

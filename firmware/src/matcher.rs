@@ -171,11 +171,37 @@ fn place_point(x: Meters, y: Meters, s: fixed_point::Unit, c: fixed_point::Unit,
     (x.saturating_add(mul_unit(px, c)).saturating_sub(mul_unit(py, s)), y.saturating_add(mul_unit(px, s)).saturating_add(mul_unit(py, c)))
 }
 
-/// A candidate's value: `8192·score − n·(32·(hx² + hy²) + q²)` (offsets in half cells and
-/// eighths of a degree).
+/// How far the odometry moved since the last scan: what the prediction's uncertainty grows
+/// with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Motion {
+    /// Distance driven, millimetres.
+    pub dist_mm: u32,
+    /// Angle turned, thousandths of a degree.
+    pub turn_mdeg: u32,
+}
+
+impl Motion {
+    /// Nothing known about the motion (the first matched scan): a weak prior, as after 5 m and
+    /// 90°.
+    pub const UNKNOWN: Motion = Motion { dist_mm: 5_000, turn_mdeg: 90_000 };
+
+    /// The penalty weights `(w_t, w_r)` per point, per half cell² and per eighth of a degree²:
+    /// a Gaussian prior on the odometry's increment with σ_t = 20 mm + 5 % of the distance and
+    /// σ_r = 0.25° + 5 % of the turn, scaled so that at σ_t = 25 mm a one-cell move costs half
+    /// a hit per point and at σ_r = 0.5° one degree costs half a hit per point.
+    fn weights(&self) -> (i64, i64) {
+        let st = 20 + self.dist_mm.min(100_000) as i64 / 20;
+        let sr = 250 + self.turn_mdeg.min(360_000) as i64 / 20;
+        ((1024 * 625 / (st * st)).max(1), (64 * 250_000 / (sr * sr)).max(1))
+    }
+}
+
+/// A candidate's value: `8192·score − n·(w_t·(hx² + hy²) + w_r·q²)` (offsets in half cells and
+/// eighths of a degree; the weights from [`Motion::weights`]).
 #[inline]
-fn value(score: u32, n: usize, hx: i32, hy: i32, q: i32) -> i64 {
-    8192 * score as i64 - n as i64 * (32 * (hx * hx + hy * hy) as i64 + (q * q) as i64)
+fn value(score: u32, n: usize, hx: i32, hy: i32, q: i32, w: (i64, i64)) -> i64 {
+    8192 * score as i64 - n as i64 * (w.0 * (hx * hx + hy * hy) as i64 + w.1 * (q * q) as i64)
 }
 
 impl ScanMatcher {
@@ -267,7 +293,9 @@ impl ScanMatcher {
         predicted: &Pose2,
         scan: &BeamScan,
         max_range: Meters,
+        motion: Motion,
     ) -> Result<Match, MatchRefusal> {
+        let w = motion.weights();
         let n = self.take_points(scan, max_range);
         self.stats.last_work = 0;
         if n < MATCH_MIN_POINTS {
@@ -295,7 +323,7 @@ impl ScanMatcher {
                         s += point_score(map, cx.saturating_add(dx), cy.saturating_add(dy));
                     }
                     work += n as u32;
-                    let v = value(s, n, 2 * dx, 2 * dy, 4 * k);
+                    let v = value(s, n, 2 * dx, 2 * dy, 4 * k, w);
                     if best.is_none_or(|b| v > b.0) {
                         best = Some((v, s, k, dx, dy));
                     }
@@ -305,7 +333,7 @@ impl ScanMatcher {
         let (_, coarse_score, k, dx, dy) = best.expect("at least one candidate");
         // Fine: half cells and eighth degrees around the coarse best.
         let (hx0, hy0, q0) = (2 * dx, 2 * dy, 4 * k);
-        let mut fine = (value(coarse_score, n, hx0, hy0, q0), coarse_score, hx0, hy0, q0);
+        let mut fine = (value(coarse_score, n, hx0, hy0, q0, w), coarse_score, hx0, hy0, q0);
         let place = |h: i32| Meters::from_bits(MATCH_HALF_CELL.to_bits().wrapping_mul(h));
         for fq in [0, -1, 1] {
             for fy in [0, -1, 1] {
@@ -317,7 +345,7 @@ impl ScanMatcher {
                     let theta = predicted.theta + BinaryAngle(MATCH_FINE_ANGLE_STEP.0.wrapping_mul(q));
                     let s = self.score_at(map, geom, predicted.x.saturating_add(place(hx)), predicted.y.saturating_add(place(hy)), theta);
                     work += n as u32;
-                    let v = value(s, n, hx, hy, q);
+                    let v = value(s, n, hx, hy, q, w);
                     if v > fine.0 {
                         fine = (v, s, hx, hy, q);
                     }
@@ -338,7 +366,7 @@ impl ScanMatcher {
             let hy = (p.1.to_bits() as i64 - predicted.y.to_bits() as i64) * 1024 / MATCH_HALF_CELL.to_bits() as i64;
             let q = (p.2 - predicted.theta).0 as i64 * 1024 / MATCH_FINE_ANGLE_STEP.0 as i64;
             // A level-LEVEL_MAX point (Q16) is worth a hit's 8192·HIT_SCORE.
-            (s as i64 * 8192 * HIT_SCORE as i64) / (LEVEL_MAX as i64 * 65_536) - n as i64 * ((32 * (hx * hx + hy * hy) + q * q) >> 20)
+            (s as i64 * 8192 * HIT_SCORE as i64) / (LEVEL_MAX as i64 * 65_536) - n as i64 * ((w.0 * (hx * hx + hy * hy) + w.1 * q * q) >> 20)
         };
         let mut best_v = smooth_value(self.smooth_at(map, geom, at.0, at.1, at.2), &at);
         work += n as u32;
@@ -494,19 +522,19 @@ mod tests {
         let mut mm_ = ScanMatcher::new();
         for (ox, oy, odeg) in [(200, 0, 30), (0, -200, -30), (140, 140, 30), (-200, 100, -20)] {
             let predicted = pose(13_000 + ox, 12_500 + oy, 200 + odeg);
-            let got = mm_.match_scan(&r, &geom(), &predicted, &scan, range).unwrap();
+            let got = mm_.match_scan(&r, &geom(), &predicted, &scan, range, Motion::UNKNOWN).unwrap();
             // Within a cell (0.1 m) and 1°.
             assert!(near(&got.pose, &truth, mm(100), 10), "offset ({ox} mm, {oy} mm, {odeg}/10°): {got:?}");
             assert!(got.score_per_mille >= 800, "{got:?}");
             assert!(mm_.stats.last_work <= MATCH_WORST_CASE_WORK && mm_.stats.last_work > 0);
         }
         // At the true pose it stays within half a cell and an eighth of a degree.
-        let got = mm_.match_scan(&r, &geom(), &truth, &scan, range).unwrap();
+        let got = mm_.match_scan(&r, &geom(), &truth, &scan, range, Motion::UNKNOWN).unwrap();
         assert!(near(&got.pose, &truth, mm(50), 2), "{got:?}");
         assert_eq!(mm_.stats.matched, 5);
         // The same inputs give the same bits.
-        let again = ScanMatcher::new().match_scan(&r, &geom(), &pose(13_200, 12_500, 230), &scan, range).unwrap();
-        let first = ScanMatcher::new().match_scan(&r, &geom(), &pose(13_200, 12_500, 230), &scan, range).unwrap();
+        let again = ScanMatcher::new().match_scan(&r, &geom(), &pose(13_200, 12_500, 230), &scan, range, Motion::UNKNOWN).unwrap();
+        let first = ScanMatcher::new().match_scan(&r, &geom(), &pose(13_200, 12_500, 230), &scan, range, Motion::UNKNOWN).unwrap();
         assert_eq!(again, first);
     }
 
@@ -518,14 +546,14 @@ mod tests {
         let at = pose(13_000, 12_500, 0);
         let scan = cast(&r, &at);
         let mut m = ScanMatcher::new();
-        assert_eq!(m.match_scan(&empty(), &geom(), &at, &scan, range), Err(MatchRefusal::LowScore(0)));
+        assert_eq!(m.match_scan(&empty(), &geom(), &at, &scan, range, Motion::UNKNOWN), Err(MatchRefusal::LowScore(0)));
         assert_eq!(m.stats.low_score, 1);
         // Too few returns: refused before any work.
         let mut sparse = BeamScan::new();
         for b in (0..BEAMS).step_by(40) {
             sparse.ranges_mm[b] = 2000;
         }
-        assert_eq!(m.match_scan(&r, &geom(), &at, &sparse, range), Err(MatchRefusal::TooFewPoints(23)));
+        assert_eq!(m.match_scan(&r, &geom(), &at, &sparse, range, Motion::UNKNOWN), Err(MatchRefusal::TooFewPoints(23)));
         assert_eq!((m.stats.last_work, m.stats.too_few_points), (0, 1));
         // A corridor along x: the walls fix y and θ; x is free, so the prediction's x stands.
         let c = corridor();
@@ -533,7 +561,7 @@ mod tests {
         let scan = cast(&c, &truth);
         for ox in [-200, 0, 200] {
             let predicted = pose(25_000 + ox, 11_150, 20);
-            let got = m.match_scan(&c, &geom(), &predicted, &scan, range).unwrap();
+            let got = m.match_scan(&c, &geom(), &predicted, &scan, range, Motion::UNKNOWN).unwrap();
             assert_eq!(got.pose.x, predicted.x, "x moved along the corridor: {got:?}");
             assert!(near(&got.pose, &pose(25_000 + ox, 11_000, 0), mm(100), 10), "{got:?}");
         }
@@ -547,7 +575,7 @@ mod tests {
         let mut full = BeamScan::new();
         full.ranges_mm = [1500; BEAMS];
         let mut m = ScanMatcher::new();
-        let _ = m.match_scan(&r, &geom(), &pose(13_000, 12_500, 0), &full, mm(10_000));
+        let _ = m.match_scan(&r, &geom(), &pose(13_000, 12_500, 0), &full, mm(10_000), Motion::UNKNOWN);
         assert_eq!(m.n, MATCH_MAX_POINTS);
         assert_eq!(m.stats.last_work, MATCH_WORST_CASE_WORK);
     }
