@@ -198,7 +198,7 @@ pub struct Controller {
     pose: Option<Pose2>,
     /// The last input pose (the odometry's, in its own frame).
     odom_pose: Option<Pose2>,
-    /// The odometry pose of the last scan the matcher saw.
+    /// The odometry pose of the last scan the matcher matched.
     last_scan_odom: Option<Pose2>,
     /// The correction from the odometry's frame to the map's ([`Config::scan_matching`]).
     map_from_odom: Pose2,
@@ -529,7 +529,9 @@ impl Controller {
             return *predicted;
         };
         let geom = self.lidar.geom;
-        // The odometry's motion since the last scan: how much the prediction can be off.
+        // The odometry's motion since the last match: how much the prediction can be off. A
+        // motion filter (as Cartographer's): a robot that has not moved is not matched again,
+        // or the match's own noise would walk a standing robot's pose.
         let motion = self.last_scan_odom.map_or(crate::matcher::Motion::UNKNOWN, |last| {
             let step = last.inverse().compose(&odom);
             let dist = fixed_point::hypot(step.x, step.y);
@@ -538,6 +540,9 @@ impl Controller {
                 turn_mdeg: ((step.theta.0 as i64).unsigned_abs() * 360_000 >> 32) as u32,
             }
         });
+        if motion.dist_mm < crate::matcher::MATCH_MIN_MOTION.dist_mm && motion.turn_mdeg < crate::matcher::MATCH_MIN_MOTION.turn_mdeg {
+            return *predicted;
+        }
         self.last_scan_odom = Some(odom);
         match self.matcher.match_scan(&self.lidar, &geom, predicted, &self.beams, self.cfg.lidar_max_range_m, motion) {
             Ok(m) => {

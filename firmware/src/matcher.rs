@@ -189,6 +189,9 @@ pub struct Motion {
     pub turn_mdeg: u32,
 }
 
+/// The least motion since the last match for a scan to be matched (either one): 50 mm or 1°.
+pub const MATCH_MIN_MOTION: Motion = Motion { dist_mm: 50, turn_mdeg: 1_000 };
+
 impl Motion {
     /// Nothing known about the motion (the first matched scan): a weak prior, as after 5 m and
     /// 90°.
