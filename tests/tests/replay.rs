@@ -871,3 +871,22 @@ fn csail_logs_larger_than_the_grid_are_followed_by_the_window() {
         assert!(r.warnings.iter().any(|w| w.contains("window moved")), "{name}: {:?}", r.warnings);
     }
 }
+
+/// The VLP-16 captures replay (issue 27): one scan per rotation from the ±1° band, each placed
+/// at the origin (a capture holds no pose, which a warning says), mapped with the scanner's own
+/// 0.3–100 m limits.
+#[test]
+fn vlp16_captures_replay_one_scan_per_rotation_at_the_origin() {
+    for (name, scans) in [("velodyne_vlp16.pcap", 2), ("einride_vlp16_recording.bin", 14)] {
+        let path = common::root().join("tests/data/velodyne").join(name);
+        let log = replay::read_log(&path).unwrap();
+        assert_eq!(log.format, LogFormat::Vlp16, "{name}");
+        assert_eq!(log.scans.len(), scans, "{name}");
+        assert!(log.scans.iter().all(|s| s.pose == [0.0; 3] && s.range_limits_m == [0.3, 100.0]), "{name}");
+        let run = replay::replay(&path, &no_classifier()).unwrap();
+        let r = &run.report;
+        assert_eq!((r.scans_used, r.scans_rejected), (scans as u32, 0), "{name}");
+        assert!(r.grid.occupied > 200 && r.grid.free > 10_000, "{name}: {:?}", r.grid);
+        assert!(r.warnings.iter().any(|w| w.contains("holds no pose")), "{name}: {:?}", r.warnings);
+    }
+}

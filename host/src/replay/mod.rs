@@ -109,6 +109,8 @@ pub enum LogFormat {
     Ros2Mcap,
     /// ROS 2 bag, sqlite3 storage.
     Ros2Sqlite3,
+    /// A Velodyne VLP-16 capture: pcap, or raw 1206-byte payloads back to back (docs/vlp16.md).
+    Vlp16,
 }
 
 impl fmt::Display for LogFormat {
@@ -118,6 +120,7 @@ impl fmt::Display for LogFormat {
             LogFormat::CarmenGzip => "carmen-gzip",
             LogFormat::Ros2Mcap => "ros2-mcap",
             LogFormat::Ros2Sqlite3 => "ros2-sqlite3",
+            LogFormat::Vlp16 => "vlp16",
         })
     }
 }
@@ -266,7 +269,7 @@ impl fmt::Display for ReplayError {
         match self {
             ReplayError::Io { file, source } => write!(f, "{}: {source}", file.display()),
             ReplayError::UnknownFormat { file } => {
-                write!(f, "{}: not a CARMEN log (plain or gzip), an MCAP file or a sqlite3 bag", file.display())
+                write!(f, "{}: not a CARMEN log (plain or gzip), an MCAP file, a sqlite3 bag or a VLP-16 capture", file.display())
             }
             ReplayError::Gzip { file, lines, offset, reason } => {
                 write!(f, "{}: gzip stream damaged at compressed byte {offset} (after line {lines}): {reason}", file.display())
@@ -400,6 +403,49 @@ impl<R: Read> Read for Counting<R> {
     }
 }
 
+/// A VLP-16 capture (`host::sensors::vlp16`, default configuration: the ±1° band, 897 beams,
+/// 0.3–100 m): one scan per rotation, stamped with the sensor's time. A capture holds no pose:
+/// the sensor is placed at the origin facing +x for every scan (a warning says so), which is
+/// right for a sensor that stood still.
+fn read_vlp16(file: &Path) -> Result<LogData, ReplayError> {
+    let cfg = crate::sensors::vlp16::Vlp16Config::default();
+    let (_, capture) = crate::sensors::vlp16::read_capture(file, &cfg)
+        .map_err(|e| ReplayError::Io { file: file.to_path_buf(), source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()) })?;
+    let mut log = LogData {
+        file: file.to_path_buf(),
+        format: LogFormat::Vlp16,
+        scans: Vec::new(),
+        odometry: 0,
+        no_pose: 0,
+        no_odometry_yet: 0,
+        stale_pose: 0,
+        scan_stamp_backwards: 0,
+        transforms_rejected: rosbag::RejectedTransforms::default(),
+        span_s: None,
+        sources: vec!["vlp16".to_string()],
+        warnings: vec!["a VLP-16 capture holds no pose: every scan is placed at the origin, facing +x (a sensor that stood still)".to_string()],
+        bad_records: BadRecords::default(),
+        error: None,
+    };
+    for (i, s) in capture.scans.into_iter().chain(capture.partial).enumerate() {
+        let t_s = s.stamp_us as f64 / 1e6;
+        widen(&mut log.span_s, t_s);
+        log.scans.push(ScanRecord {
+            t_s,
+            pose: [0.0, 0.0, 0.0],
+            angle_min: s.angle_min_rad,
+            angle_increment: s.angle_increment_rad,
+            ranges_m: s.ranges_m,
+            range_limits_m: s.range_limits_m,
+            at: Location::Line(i + 1),
+        });
+    }
+    if let Some(e) = capture.error {
+        log.warnings.push(format!("the capture's reading stopped early: {e}"));
+    }
+    Ok(log)
+}
+
 fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
     let mut log = LogData {
         file: file.to_path_buf(),
@@ -523,6 +569,8 @@ pub fn detect(head: &[u8]) -> Option<LogFormat> {
         Some(LogFormat::Ros2Mcap)
     } else if head.starts_with(b"SQLite format 3\0") {
         Some(LogFormat::Ros2Sqlite3)
+    } else if crate::sensors::pcap::looks_like_pcap(head) || crate::sensors::vlp16::frames_packet(head) {
+        Some(LogFormat::Vlp16)
     } else if head.iter().take(4096).all(|&b| b == b'\t' || b == b'\n' || b == b'\r' || (0x20..0x7f).contains(&b) || b >= 0x80) {
         Some(LogFormat::Carmen)
     } else {
@@ -539,6 +587,10 @@ fn read_one(file: &Path) -> Result<LogData, ReplayError> {
         LogFormat::Ros2Sqlite3 => {
             drop(bytes);
             read_bag(file, format, None)
+        }
+        LogFormat::Vlp16 => {
+            drop(bytes);
+            read_vlp16(file)?
         }
     })
 }
@@ -1284,6 +1336,8 @@ mod tests {
         assert_eq!(detect(&[0x1f, 0x8b, 8, 0]), Some(LogFormat::CarmenGzip));
         assert_eq!(detect(b"\x89MCAP0\r\n\x01"), Some(LogFormat::Ros2Mcap));
         assert_eq!(detect(b"SQLite format 3\0rest"), Some(LogFormat::Ros2Sqlite3));
+        assert_eq!(detect(&[0xd4, 0xc3, 0xb2, 0xa1, 2, 0, 4, 0]), Some(LogFormat::Vlp16), "a pcap");
+        assert_eq!(detect(&[0xff, 0xee, 0x10, 0x27]), Some(LogFormat::Vlp16), "a raw VLP-16 payload");
         assert_eq!(detect(b"# CARMEN\nODOM 0 0 0 0 0 0 1 h 1\n"), Some(LogFormat::Carmen));
         assert_eq!(detect(&[0u8, 1, 2, 3]), None);
     }
