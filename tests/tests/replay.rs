@@ -890,3 +890,35 @@ fn vlp16_captures_replay_one_scan_per_rotation_at_the_origin() {
         assert!(r.warnings.iter().any(|w| w.contains("holds no pose")), "{name}: {:?}", r.warnings);
     }
 }
+
+/// Bad scans in a bag (issue 27): a `range_max` of 0, a `range_max` below `range_min`, no beams
+/// and a NaN `angle_min` are each a counted rejection with its own name, and every good scan
+/// before and after them is mapped.
+#[test]
+fn bad_scans_in_a_bag_are_named_rejections_and_lose_nothing_good() {
+    let mut m = bag_messages(YAW_90);
+    // Scans 5, 10, 15 and 20 go bad, each its own way.
+    let mut k = 0;
+    for msg in m.iter_mut().filter(|msg| msg.0 == "/scan") {
+        let mut s = laser_scan(k, "laser");
+        match k {
+            5 => s.range_max = 0.0,
+            10 => (s.range_min, s.range_max) = (5.0, 2.0),
+            15 => s.ranges.clear(),
+            20 => s.angle_min = f32::NAN,
+            _ => {}
+        }
+        msg.3 = cdr::encode_laser_scan(&s);
+        k += 1;
+    }
+    let path = tmp("bad-scans.mcap");
+    write_mcap(&path, &m, 4096);
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let r = &run.report;
+    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (SCANS, SCANS - 4, 4), "{:?}", r.rejected);
+    assert_eq!((r.rejected.bad_angles, r.rejected.controller), (1, 3), "{:?}", r.rejected);
+    let want: BTreeMap<&str, u32> = [("bad_range_limits", 2), ("empty", 1)].into_iter().collect();
+    assert_eq!(r.controller_rejections, want);
+    // The good scans still drew the wall ahead of the laser.
+    assert!(occupied_near(&run, 1.5, 5.2));
+}

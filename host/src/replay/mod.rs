@@ -745,9 +745,13 @@ pub struct Rejected {
     /// past the window's edge (the window follows a laser that moves on; see
     /// [`firmware::rolling`]).
     pub outside_grid: u32,
-    /// No pose (bag frames not connected) or a non-finite pose or angle.
+    /// No pose (bag frames not connected) or a non-finite pose.
     pub no_pose: u32,
-    /// Refused by the controller (empty, too many beams, zero increment).
+    /// A scan whose `angle_min` or `angle_increment` is not a finite number.
+    pub bad_angles: u32,
+    /// Refused by the controller: no beams, too many, a zero increment, labels miscounted, a
+    /// `range_max` of 0 or not above `range_min` (by reason in
+    /// [`ReplayReport::controller_rejections`]).
     pub controller: u32,
     /// The laser's pose strays far from the rest of the trajectory ([`place_grid`]): it did not
     /// place the grid.
@@ -796,6 +800,9 @@ pub struct ReplayReport {
     pub scans_rejected: u32,
     /// Why.
     pub rejected: Rejected,
+    /// The controller's refusals by reason (`empty`, `too_many_beams`, `zero_increment`,
+    /// `label_count_mismatch`, `bad_range_limits`).
+    pub controller_rejections: BTreeMap<&'static str, u32>,
     /// Bad records skipped (reading went on after each).
     pub skipped_records: SkippedRecords,
     /// Bag transforms (odometry, `tf`) rejected: a jump, a loop of frames, a stamp going
@@ -1040,6 +1047,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     let mut last_start: Option<u64> = None;
     let mut status = firmware::Status::default();
     let mut strays = Vec::new();
+    let mut controller_rejections: BTreeMap<&'static str, u32> = BTreeMap::new();
     for (i, s) in log.scans.iter().enumerate() {
         let t_us = if synthetic_time { i as u64 * crate::search::TICK_US } else { ((s.t_s - t0) * 1e6).round().max(0.0) as u64 };
         let now_us = last_us.max(t_us);
@@ -1051,13 +1059,14 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             }
             continue;
         }
-        // A non-finite pose or beam angle: no pose to map the scan at.
-        let limits = RangeLimits::new(s.range_limits_m[0], s.range_limits_m[1]);
-        let (Some(pose), Some(encoded)) = (
-            Pose2::from_f64(s.pose[0], s.pose[1], s.pose[2]),
-            EncodedScan::new(s.angle_min, s.angle_increment, s.ranges_m.iter().map(|&r| r as f64), &limits),
-        ) else {
+        // A non-finite pose: no pose to map the scan at; non-finite beam angles: no beams.
+        let Some(pose) = Pose2::from_f64(s.pose[0], s.pose[1], s.pose[2]) else {
             rejected.no_pose += 1;
+            continue;
+        };
+        let limits = RangeLimits::new(s.range_limits_m[0], s.range_limits_m[1]);
+        let Some(encoded) = EncodedScan::new(s.angle_min, s.angle_increment, s.ranges_m.iter().map(|&r| r as f64), &limits) else {
+            rejected.bad_angles += 1;
             continue;
         };
         let start = match last_start {
@@ -1075,8 +1084,20 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             base_blocked: false,
         };
         let refused_before = status.poses_rejected;
+        let scans_refused_before = status.scans_rejected;
         let out = ctrl.tick(now_us, &inputs);
         status = out.status;
+        if status.scans_rejected > scans_refused_before {
+            let reason = match status.last_scan_error {
+                Some(firmware::ScanError::Empty) => "empty",
+                Some(firmware::ScanError::TooManyBeams(_)) => "too_many_beams",
+                Some(firmware::ScanError::ZeroIncrement) => "zero_increment",
+                Some(firmware::ScanError::LabelCountMismatch { .. }) => "label_count_mismatch",
+                Some(firmware::ScanError::BadRangeLimits { .. }) => "bad_range_limits",
+                None => "unknown",
+            };
+            *controller_rejections.entry(reason).or_insert(0) += 1;
+        }
         if status.poses_rejected > refused_before {
             // A jump past the window's edge (in the controller's map frame): the core refused
             // the pose and did not draw the scan.
@@ -1174,6 +1195,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     let scans_read = log.scans.len() as u32 + unplaced as u32;
     let scans_rejected = rejected.outside_grid
         + rejected.no_pose
+        + rejected.bad_angles
         + rejected.controller
         + rejected.stray_pose
         + rejected.no_odometry_yet
@@ -1187,6 +1209,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         scans_used: status.scans,
         scans_rejected,
         rejected,
+        controller_rejections,
         skipped_records: SkippedRecords::of(&log.bad_records),
         transforms_rejected: log.transforms_rejected,
         odometry: log.odometry as u32,
