@@ -314,6 +314,33 @@ pub fn mm_to_meters(mm: u16) -> Meters {
     Meters::from_bits(((mm as i64 * 65_536 + 500) / 1000) as i32)
 }
 
+/// What the rolling window ([`crate::rolling`]) has done: kept with the LiDAR grid it moves.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WindowStats {
+    /// Shifts so far.
+    pub shifts: u32,
+    /// The window's total movement in cells (x, y) since it was placed.
+    pub moved_cells: (i32, i32),
+    /// The last shift, cells (x, y).
+    pub last_shift: (i32, i32),
+    /// Work of the last shift (cells and entries touched).
+    pub last_work: u32,
+    /// Stored cell coordinates dropped for falling outside the window (blacklist entries,
+    /// candidates, frontiers, `rrt` nodes and points, the goal); non-map points dropped are
+    /// counted in [`crate::nonmap::NonMapStats::dropped_outside`].
+    pub dropped: u32,
+    /// Shifts refused because the origin would leave the fixed-point range
+    /// ([`crate::config::MAX_ORIGIN_M`]).
+    pub refused: u32,
+}
+
+impl WindowStats {
+    /// Nothing yet.
+    pub const fn new() -> Self {
+        Self { shifts: 0, moved_cells: (0, 0), last_shift: (0, 0), last_work: 0, dropped: 0, refused: 0 }
+    }
+}
+
 /// Occupancy evidence of one cell in the [`LidarGrid`]: a saturating log-odds count in 4 bits.
 ///
 /// The unit is about 0.41 nats (OctoMap's miss, `logit(0.4)`); a hit adds [`EVIDENCE_HIT`] (≈ 0.85,
@@ -454,7 +481,7 @@ pub struct LidarGrid {
     /// ([`crate::rolling`]) when the robot nears an edge.
     pub geom: GridGeometry,
     /// What the rolling window has done since the last [`LidarGrid::clear`].
-    pub window: crate::rolling::WindowStats,
+    pub window: WindowStats,
     /// Work of window shifts not yet reported: added to the next scan's [`IntegrateStats::work`]
     /// (the LiDAR stage of the same tick whenever the pose comes with its scan).
     pub(crate) pending_work: u32,
@@ -469,7 +496,7 @@ impl LidarGrid {
             grid: PackedGrid::new(),
             evidence: EvidenceGrid::new(),
             geom,
-            window: crate::rolling::WindowStats::new(),
+            window: WindowStats::new(),
             pending_work: 0,
             hits: [(0, 0); BEAMS],
             marks: BitGrid::new(),
@@ -488,7 +515,7 @@ impl LidarGrid {
         self.grid.clear();
         self.evidence.clear();
         self.marks.clear();
-        self.window = crate::rolling::WindowStats::new();
+        self.window = WindowStats::new();
         self.pending_work = 0;
     }
 

@@ -16,7 +16,7 @@
 //!    quarter-step rotations (26 candidates), each point placed anew.
 //! 4. **Choice.** A candidate's value is its score less a penalty for moving away from the
 //!    prediction, a Gaussian prior on the odometry's increment since the last scan
-//!    ([`Motion::weights`]: σ = 20 mm + 5 % of the distance driven, 0.25° + 5 % of the angle
+//!    (`Motion::weights`: σ = 20 mm + 5 % of the distance driven, 0.25° + 5 % of the angle
 //!    turned): `8192·score − n·(w_t·(hx² + hy²) + w_r·q²)` with `hx, hy` the offset in half
 //!    cells and `q` in eighths of a degree. The prediction is the first candidate and a
 //!    candidate replaces the best only if strictly better, in a fixed order: ties keep the one
@@ -209,7 +209,7 @@ impl Motion {
 }
 
 /// A candidate's value: `8192·score − n·(w_t·(hx² + hy²) + w_r·q²)` (offsets in half cells and
-/// eighths of a degree; the weights from [`Motion::weights`]).
+/// eighths of a degree; the weights from `Motion::weights`).
 #[inline]
 fn value(score: u32, n: usize, hx: i32, hy: i32, q: i32, w: (i64, i64)) -> i64 {
     8192 * score as i64 - n as i64 * (w.0 * (hx * hx + hy * hy) as i64 + w.1 * (q * q) as i64)

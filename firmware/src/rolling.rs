@@ -59,32 +59,8 @@ const _: () = assert!((WINDOW_SHIFT_CELLS as i64 * 65_536) % CELLS_PER_METER == 
 const _: () = assert!(GRID_CELLS as i32 / 2 - WINDOW_SHIFT_CELLS / 2 > WINDOW_MARGIN_CELLS);
 const _: () = assert!(WINDOW_HARD_MARGIN_CELLS < WINDOW_MARGIN_CELLS);
 
-/// What the rolling window has done.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct WindowStats {
-    /// Shifts so far.
-    pub shifts: u32,
-    /// The window's total movement in cells (x, y) since it was placed.
-    pub moved_cells: (i32, i32),
-    /// The last shift, cells (x, y).
-    pub last_shift: (i32, i32),
-    /// Work of the last shift (cells and entries touched).
-    pub last_work: u32,
-    /// Stored cell coordinates dropped for falling outside the window (blacklist entries,
-    /// candidates, frontiers, `rrt` nodes and points, the goal); non-map points dropped are
-    /// counted in [`crate::nonmap::NonMapStats::dropped_outside`].
-    pub dropped: u32,
-    /// Shifts refused because the origin would leave the fixed-point range
-    /// ([`MAX_ORIGIN_M`]).
-    pub refused: u32,
-}
+pub use crate::grid::WindowStats;
 
-impl WindowStats {
-    /// Nothing yet.
-    pub const fn new() -> Self {
-        Self { shifts: 0, moved_cells: (0, 0), last_shift: (0, 0), last_work: 0, dropped: 0, refused: 0 }
-    }
-}
 
 /// Everything in the controller that holds grid cell coordinates.
 pub struct Maps<'a> {
