@@ -96,7 +96,8 @@ pub fn export(log: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportSumm
         let id = match channels.get(topic) {
             Some(&id) => id,
             None => {
-                let schema = w.add_schema(ty, "ros2msg", b"").map_err(|e| e.to_string())?;
+                let def = crate::replay::cdr::ros2msg_definition(ty).unwrap_or_default();
+                let schema = w.add_schema(ty, "ros2msg", def.as_bytes()).map_err(|e| e.to_string())?;
                 let id = w.add_channel(schema, topic, "cdr", &BTreeMap::new()).map_err(|e| e.to_string())?;
                 channels.insert(topic, id);
                 id

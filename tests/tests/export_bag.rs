@@ -87,3 +87,29 @@ fn the_intel_log_exported_as_a_bag_replays_into_the_same_map() {
     );
     assert!(c_in_b >= 0.95 && b_in_c >= 0.95, "{c_in_b} {b_in_c}");
 }
+
+/// The exported bag decodes with the ROS 2 message decoder Foxglove and rosbag2 use (the PyPI
+/// `mcap-ros2-support` package: the bag's own `ros2msg` schemas, CDR payloads), which
+/// `scripts/test.sh` installs with the `mcap` reader in `target/py-mcap` (or `LIVES_PYTHON`).
+#[test]
+fn the_exported_bag_decodes_with_the_ros2_message_definitions_it_carries() {
+    let py = std::env::var("LIVES_PYTHON").unwrap_or_else(|_| common::root().join("target/py-mcap/bin/python").to_string_lossy().into_owned());
+    let ok = std::process::Command::new(&py).args(["-c", "import mcap, mcap_ros2"]).status().is_ok_and(|s| s.success());
+    assert!(ok, "`{py}` cannot import mcap and mcap_ros2: run ./scripts/test.sh (it installs them), or set LIVES_PYTHON to a python with `pip install mcap mcap-ros2-support`");
+    let log = common::root().join("tests/data/carmen/aces-corrected.log.gz");
+    let bag = std::env::temp_dir().join(format!("lives-export-bag-ros2-{}.mcap", std::process::id()));
+    export_bag::export(&log, &bag, &ExportOptions::default()).unwrap();
+    let out = std::process::Command::new(&py).arg(common::root().join("tests/python/check_ros2_bag.py")).arg(&bag).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(
+        lines,
+        [
+            "nav_msgs/msg/Odometry 437 frame=odom child=base_link",
+            "sensor_msgs/msg/LaserScan 440 frame=laser range_max=12.0 beams=180",
+            "tf2_msgs/msg/TFMessage 1 parent=base_link child=laser",
+        ],
+        "{stdout}"
+    );
+}

@@ -416,6 +416,63 @@ impl CdrWriter {
     }
 }
 
+// The message definitions (`ros2msg`, as rosbag2's MCAP writer stores them in a schema: the
+// type's own `.msg` text, then each type it uses after a line of 80 `=` and `MSG: pkg/Type`), so
+// that Foxglove and `ros2 bag` can decode what `lives export-bag` writes.
+
+const SEP: &str = "================================================================================\n";
+const DEF_TIME: &str = "MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n";
+const DEF_HEADER: &str = "MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n";
+const DEF_VECTOR3: &str = "MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n";
+const DEF_QUATERNION: &str = "MSG: geometry_msgs/Quaternion\nfloat64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n";
+
+/// The `ros2msg` schema text of `sensor_msgs/msg/LaserScan`, `nav_msgs/msg/Odometry` or
+/// `tf2_msgs/msg/TFMessage` (`None` for another type).
+pub fn ros2msg_definition(type_name: &str) -> Option<String> {
+    let join = |own: &str, deps: &[&str]| {
+        let mut s = own.to_string();
+        for d in deps {
+            s.push_str(SEP);
+            s.push_str(d);
+        }
+        s
+    };
+    Some(match type_name {
+        "sensor_msgs/msg/LaserScan" => join(
+            "std_msgs/Header header\nfloat32 angle_min\nfloat32 angle_max\nfloat32 angle_increment\nfloat32 time_increment\n\
+             float32 scan_time\nfloat32 range_min\nfloat32 range_max\nfloat32[] ranges\nfloat32[] intensities\n",
+            &[DEF_HEADER, DEF_TIME],
+        ),
+        "nav_msgs/msg/Odometry" => join(
+            "std_msgs/Header header\nstring child_frame_id\ngeometry_msgs/PoseWithCovariance pose\n\
+             geometry_msgs/TwistWithCovariance twist\n",
+            &[
+                DEF_HEADER,
+                DEF_TIME,
+                "MSG: geometry_msgs/PoseWithCovariance\nPose pose\nfloat64[36] covariance\n",
+                "MSG: geometry_msgs/Pose\nPoint position\nQuaternion orientation\n",
+                "MSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n",
+                DEF_QUATERNION,
+                "MSG: geometry_msgs/TwistWithCovariance\nTwist twist\nfloat64[36] covariance\n",
+                "MSG: geometry_msgs/Twist\nVector3 linear\nVector3 angular\n",
+                DEF_VECTOR3,
+            ],
+        ),
+        "tf2_msgs/msg/TFMessage" => join(
+            "geometry_msgs/TransformStamped[] transforms\n",
+            &[
+                "MSG: geometry_msgs/TransformStamped\nstd_msgs/Header header\nstring child_frame_id\nTransform transform\n",
+                DEF_HEADER,
+                DEF_TIME,
+                "MSG: geometry_msgs/Transform\nVector3 translation\nQuaternion rotation\n",
+                DEF_VECTOR3,
+                DEF_QUATERNION,
+            ],
+        ),
+        _ => return None,
+    })
+}
+
 /// Serialises a `sensor_msgs/msg/LaserScan`.
 pub fn encode_laser_scan(m: &LaserScan) -> Vec<u8> {
     let mut w = CdrWriter::new();
