@@ -43,6 +43,20 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
     let mut lidar = Box::new(ctrl.lidar.clone());
     let mut lidar_work = 0;
     let t_lidar = time(reps, || lidar_work = lidar.integrate(&pose, &beams, cfg.lidar_max_range_m).work);
+    // The scan matcher on the same scan against the same map, from the pose 10 cm and 1° off (a
+    // step's worth of drift and more), after a 10 cm, 2° motion.
+    let mut matcher = Box::new(firmware::matcher::ScanMatcher::new());
+    let off = firmware::Pose2::new(
+        pose.x.saturating_add(fixed_point::Meters::from_bits(6554)),
+        pose.y,
+        pose.theta + firmware::BinaryAngle::from_degrees(1),
+    );
+    let mut match_work = 0;
+    let motion = firmware::matcher::Motion { dist_mm: 100, turn_mdeg: 2_000 };
+    let t_match = time(reps, || {
+        let _ = matcher.match_scan(&ctrl.lidar, &ctrl.lidar.geom, &off, &beams, cfg.lidar_max_range_m, motion);
+        match_work = matcher.stats.last_work;
+    });
     let mut visual = Box::new(ctrl.visual.clone());
     let mut visual_work = 0;
     let t_visual = time(reps, || visual_work = visual.integrate(&ctrl.lidar, &pose, cfg.camera_fov, cfg.camera_range_m));
@@ -157,6 +171,7 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
     }
     println!("{:<36} {:>12.3} {:>14}", "labeller (ground truth, per scan)", t_labeller, "");
     println!("{:<36} {:>12.3} {:>14}", "LiDAR update (897 beams)", t_lidar, lidar_work);
+    println!("{:<36} {:>12.3} {:>14}", "scan matching (160 points)", t_match, match_work);
     println!("{:<36} {:>12.3} {:>14}", "visual update (camera cone)", t_visual, visual_work);
     println!("{:<36} {:>12.3} {:>14}", "frontiers (both maps)", t_frontiers, "");
     println!("{:<36} {:>12.3} {:>14}", "full planning step (frontiers+plan)", t_plan, plan_work);
