@@ -530,7 +530,9 @@ pub fn candidate_lines(ctrl: &Controller, n: usize) -> Vec<String> {
     let mut cands: Vec<&Viewpoint> = ctrl.planner.candidates.iter().collect();
     // A stable sort: equal utilities keep the planner's order, whose first wins the argmax.
     cands.sort_by_key(|v| std::cmp::Reverse(v.utility));
-    let chosen = ctrl.goal().map(|g| (g.viewpoint.cell, g.viewpoint.heading));
+    // The goal is the first candidate with its cell and heading (two sites can offer the same
+    // spot and heading: a frontier's viewpoint and a non-map cluster's).
+    let chosen = ctrl.goal().and_then(|g| cands.iter().position(|v| (v.cell, v.heading) == (g.viewpoint.cell, g.viewpoint.heading)));
     cands
         .iter()
         .take(n)
@@ -539,7 +541,7 @@ pub fn candidate_lines(ctrl: &Controller, n: usize) -> Vec<String> {
             let (x, y) = ctrl.lidar.geom.center_of(v.cell.0, v.cell.1);
             format!(
                 "    {}{:>2} ({:5.1},{:5.1}) {:>4.0}° {:<14} {}",
-                if chosen == Some((v.cell, v.heading)) { '*' } else { ' ' },
+                if chosen == Some(i) { '*' } else { ' ' },
                 i + 1,
                 x.to_num::<f64>(),
                 y.to_num::<f64>(),
