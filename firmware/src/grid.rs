@@ -461,7 +461,8 @@ pub struct IntegrateStats {
 /// ([`LidarGrid::grid`], what the planner, the camera model and the pictures read).
 ///
 /// Each scan, in this order (Cartographer's rule: one update per cell per scan, hits first):
-/// 1. every return marks its hit cell ([`HIT_DEPTH_MM`] behind the surface), once per cell;
+/// 1. every return marks its hit cell ([`HIT_DEPTH_MM`] behind the surface), once per cell,
+///    but a mixed pixel ([`veiling`]: between a nearer and a farther neighbour) marks none;
 /// 2. every beam frees the cells before its hit cell, once per cell, skipping cells hit in this
 ///    scan. A return beyond the clearing range, and a "no return" beam (nothing within the
 ///    scan's `range_max`), frees cells out to the nearer of `range_max` and the clearing range and
@@ -546,7 +547,7 @@ impl LidarGrid {
         let mut nhits = 0usize;
         for b in 0..BEAMS {
             let r = scan.ranges_mm[b];
-            if r == RANGE_INVALID || r == RANGE_NO_RETURN || mm_to_meters(r) >= clear_range {
+            if r == RANGE_INVALID || r == RANGE_NO_RETURN || mm_to_meters(r) >= clear_range || veiling(scan, b) {
                 continue;
             }
             let a = pose.theta + beam_angle(b);
@@ -614,6 +615,33 @@ pub fn grazing(scan: &BeamScan, b: usize) -> bool {
         let rn = scan.ranges_mm[n];
         rn != RANGE_INVALID && rn != RANGE_NO_RETURN && (rn as i64 - r as i64).unsigned_abs() > step
     })
+}
+
+/// Whether beam `b` is a mixed pixel (a "veiling" return): its footprint straddled a depth edge
+/// and the sensor reported a range between the two surfaces, so one neighbour is nearer and the
+/// other farther, each by more than [`GRAZING_STEP_PER_MILLE`] of its range. Such a return lies
+/// on no surface: it marks no cell (ROS `laser_filters`' shadow filter drops the same points by
+/// their angle to the neighbours), and like a grazing beam it frees no occupied cell. A thin
+/// object one beam wide has both neighbours farther, and is kept.
+pub fn veiling(scan: &BeamScan, b: usize) -> bool {
+    let r = scan.ranges_mm[b];
+    if r == RANGE_INVALID || r == RANGE_NO_RETURN {
+        return false;
+    }
+    let step = (r as u64 * GRAZING_STEP_PER_MILLE / 1000) as i64;
+    let side = |n: usize| {
+        let rn = scan.ranges_mm[n];
+        if rn == RANGE_INVALID {
+            0
+        } else if rn == RANGE_NO_RETURN || rn as i64 > r as i64 + step {
+            1
+        } else if (rn as i64) < r as i64 - step {
+            -1
+        } else {
+            0
+        }
+    };
+    side((b + BEAMS - 1) % BEAMS) * side((b + 1) % BEAMS) == -1
 }
 
 /// See [`grazing`]: 28 mm per metre of range is 4 beam spacings (2π/897 rad each) across the
