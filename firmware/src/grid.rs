@@ -619,16 +619,17 @@ pub fn grazing(scan: &BeamScan, b: usize) -> bool {
 
 /// Whether beam `b` is a mixed pixel (a "veiling" return): its footprint straddled a depth edge
 /// and the sensor reported a range between the two surfaces, so one neighbour is nearer and the
-/// other farther, each by more than [`GRAZING_STEP_PER_MILLE`] of its range. Such a return lies
-/// on no surface: it marks no cell (ROS `laser_filters`' shadow filter drops the same points by
-/// their angle to the neighbours), and like a grazing beam it frees no occupied cell. A thin
-/// object one beam wide has both neighbours farther, and is kept.
+/// other farther, each by more than [`VEIL_STEP_PER_MILLE`] of its range. Such a return lies on
+/// no surface: it marks no cell (ROS `laser_filters`' shadow filter drops such points by their
+/// angle to the neighbours), and like a grazing beam it frees no occupied cell. A thin object
+/// one beam wide has both neighbours farther, and is kept; a wall met at more than about 4° (its
+/// neighbours a few per cent nearer and farther) is kept too.
 pub fn veiling(scan: &BeamScan, b: usize) -> bool {
     let r = scan.ranges_mm[b];
     if r == RANGE_INVALID || r == RANGE_NO_RETURN {
         return false;
     }
-    let step = (r as u64 * GRAZING_STEP_PER_MILLE / 1000) as i64;
+    let step = (r as u64 * VEIL_STEP_PER_MILLE / 1000) as i64;
     let side = |n: usize| {
         let rn = scan.ranges_mm[n];
         if rn == RANGE_INVALID {
@@ -643,6 +644,11 @@ pub fn veiling(scan: &BeamScan, b: usize) -> bool {
     };
     side((b + BEAMS - 1) % BEAMS) * side((b + 1) % BEAMS) == -1
 }
+
+/// See [`veiling`]: a mixed pixel lies at least 10 % of its range from both its neighbours (the
+/// surfaces either side of a depth edge are far apart); consecutive beams on a wall met at 4° or
+/// more differ by less (the beams are 0.4° apart).
+pub const VEIL_STEP_PER_MILLE: u64 = 100;
 
 /// See [`grazing`]: 28 mm per metre of range is 4 beam spacings (2π/897 rad each) across the
 /// beam, so a surface met at under about 14° counts as grazed.
