@@ -218,13 +218,12 @@ fn value(score: u32, n: usize, hx: i32, hy: i32, q: i32, w: (i64, i64)) -> i64 {
 impl ScanMatcher {
     /// An empty matcher.
     pub const fn new() -> Self {
-        Self { points: [(Meters::ZERO, Meters::ZERO); MATCH_MAX_POINTS], cells: [(0, 0); MATCH_MAX_POINTS], n: 0, stats: MatchStats {
-            matched: 0,
-            too_few_points: 0,
-            low_score: 0,
-            last_work: 0,
-            last_score_per_mille: 0,
-        } }
+        Self {
+            points: [(Meters::ZERO, Meters::ZERO); MATCH_MAX_POINTS],
+            cells: [(0, 0); MATCH_MAX_POINTS],
+            n: 0,
+            stats: MatchStats { matched: 0, too_few_points: 0, low_score: 0, last_work: 0, last_score_per_mille: 0 },
+        }
     }
 
     /// Forgets the counters.
@@ -377,7 +376,8 @@ impl ScanMatcher {
             let hy = (p.1.to_bits() as i64 - predicted.y.to_bits() as i64) * 1024 / MATCH_HALF_CELL.to_bits() as i64;
             let q = (p.2 - predicted.theta).0 as i64 * 1024 / MATCH_FINE_ANGLE_STEP.0 as i64;
             // A level-LEVEL_MAX point (Q16) is worth a hit's 8192·HIT_SCORE.
-            (s as i64 * 8192 * HIT_SCORE as i64) / (LEVEL_MAX as i64 * 65_536) - n as i64 * ((w.0 * (hx * hx + hy * hy) + w.1 * q * q) >> 20)
+            (s as i64 * 8192 * HIT_SCORE as i64) / (LEVEL_MAX as i64 * 65_536)
+                - n as i64 * ((w.0 * (hx * hx + hy * hy) + w.1 * q * q) >> 20)
         };
         let mut best_v = smooth_value(self.smooth_at(map, geom, at.0, at.1, at.2), &at);
         work += n as u32;

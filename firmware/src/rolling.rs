@@ -61,7 +61,6 @@ const _: () = assert!(WINDOW_HARD_MARGIN_CELLS < WINDOW_MARGIN_CELLS);
 
 pub use crate::grid::WindowStats;
 
-
 /// Everything in the controller that holds grid cell coordinates.
 pub struct Maps<'a> {
     /// The LiDAR map (its geometry is the window's).

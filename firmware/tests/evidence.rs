@@ -5,7 +5,7 @@
 
 mod common;
 use common::*;
-use firmware::grid::{Cell, GridGeometry, LidarGrid, EVIDENCE_MAX, EVIDENCE_MISS, EVIDENCE_MIN_OCCUPIED};
+use firmware::grid::{Cell, GridGeometry, LidarGrid, EVIDENCE_MAX, EVIDENCE_MIN_OCCUPIED, EVIDENCE_MISS};
 use firmware::scan::{BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
 use firmware::{Config, ScanInput};
 
@@ -61,12 +61,8 @@ fn a_person_who_walks_away_leaves_free_cells_within_a_few_scans_and_a_wall_survi
     // beside them; then they walk away and the beams reach the wall at 15 m behind them.
     let person = |a: f64| a.abs() < 0.05;
     let standing = |a: f64| {
-        if person(a) {
-            to_plane(10.05, 12.0, a)
-        } else {
-            to_plane(10.05, 15.0, a).filter(|&r| r < 8.0)
-        }
-        .map(|r| (r * 1000.0).round() as u16)
+        if person(a) { to_plane(10.05, 12.0, a) } else { to_plane(10.05, 15.0, a).filter(|&r| r < 8.0) }
+            .map(|r| (r * 1000.0).round() as u16)
     };
     for _ in 0..20 {
         g.integrate(&p, &scan(30_000, standing), Config::DEFAULT.lidar_max_range_m);

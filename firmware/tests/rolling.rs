@@ -16,7 +16,8 @@ const N: i32 = firmware::capacity::GRID_CELLS as i32;
 /// A corridor 2.4 m wide and 100 m long along +x (inner faces at y = 20 and 22.4), closed at both
 /// ends, with a pillar against the south wall every 4 m (landmarks).
 fn corridor() -> Vec<Box2> {
-    let mut w = vec![wall(-0.1, 19.9, 100.1, 20.0), wall(-0.1, 22.4, 100.1, 22.5), wall(-0.1, 19.9, 0.0, 22.5), wall(100.0, 19.9, 100.1, 22.5)];
+    let mut w =
+        vec![wall(-0.1, 19.9, 100.1, 20.0), wall(-0.1, 22.4, 100.1, 22.5), wall(-0.1, 19.9, 0.0, 22.5), wall(100.0, 19.9, 100.1, 22.5)];
     for k in 0..25 {
         let x = 2.0 + 4.0 * k as f64;
         w.push(wall(x, 20.0, x + 0.4, 20.4));
@@ -190,7 +191,8 @@ fn a_shift_moves_every_cell_and_every_stored_coordinate_exactly() {
         nonmap: 0,
     };
     let (gx, gy) = geom.center_of(350, 90);
-    let mut goal = Some(Goal { pose: Pose2::new(gx, gy, BinaryAngle::ZERO), viewpoint: vp, path: heapless::Vec::new(), path_length_m: Meters::ZERO });
+    let mut goal =
+        Some(Goal { pose: Pose2::new(gx, gy, BinaryAngle::ZERO), viewpoint: vp, path: heapless::Vec::new(), path_length_m: Meters::ZERO });
 
     let (sx, sy) = (160, -320);
     let maps = Maps {
@@ -284,8 +286,14 @@ fn non_map_points_survive_a_shift_and_still_pool() {
     let mut lidar = Box::new(LidarGrid::new(geom));
     let (mut visual, mut frontiers, mut planner) = (Box::new(VisualGrid::new()), Box::new(FrontierSet::new()), Box::new(Planner::new()));
     let mut goal = None;
-    let maps =
-        Maps { lidar: &mut lidar, visual: &mut visual, nonmap: &mut nonmap, frontiers: &mut frontiers, planner: &mut planner, goal: &mut goal };
+    let maps = Maps {
+        lidar: &mut lidar,
+        visual: &mut visual,
+        nonmap: &mut nonmap,
+        frontiers: &mut frontiers,
+        planner: &mut planner,
+        goal: &mut goal,
+    };
     rolling::shift(maps, 160, 0, r).unwrap();
     let pts: Vec<_> = nonmap.points().iter().map(|p| (p.x, p.y)).collect();
     assert_eq!(pts.len(), 2, "the point at x = 3 m left the window [16, 67.2) m");
@@ -301,12 +309,16 @@ fn non_map_points_survive_a_shift_and_still_pool() {
 /// does not reach the edge); only a robot within 1 m of the edge moves it whatever the map holds.
 #[test]
 fn a_building_that_fits_never_moves_the_window() {
-    let world = vec![wall(30.0, 10.0, 50.1, 10.1), wall(30.0, 20.0, 50.1, 20.1), wall(30.0, 10.0, 30.1, 20.1), wall(50.0, 10.0, 50.1, 20.1)];
+    let world =
+        vec![wall(30.0, 10.0, 50.1, 10.1), wall(30.0, 20.0, 50.1, 20.1), wall(30.0, 10.0, 30.1, 20.1), wall(50.0, 10.0, 50.1, 20.1)];
     let mut ctl = controller(Config { scan_matching: false, ..Config::DEFAULT });
     for i in 0..=177 {
         let x = 31.0 + i as f64 * 0.1; // to 48.7 m: 2.5 m from the edge at 51.2 m
         let (ranges, labels) = scan_of(&world, (x, 15.0, 0.0), 720);
-        ctl.tick(i * 100_000, &Inputs { pose: Some(pose(x, 15.0, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), ..Inputs::default() });
+        ctl.tick(
+            i * 100_000,
+            &Inputs { pose: Some(pose(x, 15.0, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), ..Inputs::default() },
+        );
     }
     assert_eq!(ctl.lidar.window.shifts, 0);
     assert_eq!(ctl.lidar.geom, GridGeometry { origin_x: Meters::ZERO, origin_y: Meters::ZERO });
@@ -332,7 +344,9 @@ fn absurd_poses_are_refused_and_the_window_stops_at_the_coordinate_range() {
     let mut last = Status::default();
     for (x, y) in [(30_000.0, 21.2), (-30_000.0, -30_000.0), (82.0, 30_000.0), (32_767.0, 32_767.0), (-32_767.0, 21.2)] {
         let (ranges, labels) = scan_of(&corridor(), (82.0, 21.2, 0.0), 720);
-        last = ctl.tick(90_000_000, &Inputs { pose: Some(pose(x, y, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), ..Inputs::default() }).status;
+        last = ctl
+            .tick(90_000_000, &Inputs { pose: Some(pose(x, y, 0.0)), scan: Some(scan_input(&ranges, Some(&labels))), ..Inputs::default() })
+            .status;
     }
     assert_eq!(last.poses_rejected, rejected + 5);
     assert_eq!(ctl.lidar.geom, geom, "the window did not move");

@@ -24,10 +24,8 @@ fn occupied(run: &ReplayRun) -> Vec<(i32, i32)> {
 /// The share of `a`'s cells with an occupied cell of `b` within one cell (both grids share the
 /// origin: the same trajectory places them).
 fn overlap(a: &[(i32, i32)], b: &ReplayRun) -> f64 {
-    let hit = a
-        .iter()
-        .filter(|&&(x, y)| (-1..=1).any(|dy| (-1..=1).any(|dx| b.controller.lidar.get(x + dx, y + dy) == Cell::Occupied)))
-        .count();
+    let hit =
+        a.iter().filter(|&&(x, y)| (-1..=1).any(|dy| (-1..=1).any(|dx| b.controller.lidar.get(x + dx, y + dy) == Cell::Occupied))).count();
     hit as f64 / a.len() as f64
 }
 
@@ -93,7 +91,8 @@ fn the_intel_log_exported_as_a_bag_replays_into_the_same_map() {
 /// `scripts/test.sh` installs with the `mcap` reader in `target/py-mcap` (or `LIVES_PYTHON`).
 #[test]
 fn the_exported_bag_decodes_with_the_ros2_message_definitions_it_carries() {
-    let py = std::env::var("LIVES_PYTHON").unwrap_or_else(|_| common::root().join("target/py-mcap/bin/python").to_string_lossy().into_owned());
+    let py =
+        std::env::var("LIVES_PYTHON").unwrap_or_else(|_| common::root().join("target/py-mcap/bin/python").to_string_lossy().into_owned());
     let ok = std::process::Command::new(&py).args(["-c", "import mcap, mcap_ros2"]).status().is_ok_and(|s| s.success());
     assert!(ok, "`{py}` cannot import mcap and mcap_ros2: run ./scripts/test.sh (it installs them), or set LIVES_PYTHON to a python with `pip install mcap mcap-ros2-support`");
     let log = common::root().join("tests/data/carmen/aces-corrected.log.gz");

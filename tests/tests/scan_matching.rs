@@ -27,8 +27,7 @@ fn scan_matching_beats_raw_odometry_on_the_csail_relations() {
     let corrected = read_poses(&dir.join("mit-csail-corrected-poses.txt")).unwrap();
     let mut figures = Vec::new();
     for matching in [false, true] {
-        let opts =
-            ReplayOptions { model: None, scan_matching: Some(matching), ..ReplayOptions::default() };
+        let opts = ReplayOptions { model: None, scan_matching: Some(matching), ..ReplayOptions::default() };
         let run = replay::replay(&log, &opts).unwrap();
         let e = relation_errors(&PoseIndex::new(&run.poses), &relations);
         let m = &run.controller.matcher.stats;

@@ -267,7 +267,12 @@ fn try_generate(seed: u64, attempt: u64, furnish: bool, density: f64) -> Option<
                     };
                     let shape = Shape::Rect { center, size, yaw: 0.0 };
                     if inside(shape.aabb(), r, 0.04) && fits(&shape, &walls, &obstacles, &zones, 0.0) {
-                        obstacles.push(Obstacle { shape, kind: HitKind::Furniture, label: label.to_string(), material: Default::default() });
+                        obstacles.push(Obstacle {
+                            shape,
+                            kind: HitKind::Furniture,
+                            label: label.to_string(),
+                            material: Default::default(),
+                        });
                         break;
                     }
                 }

@@ -1698,7 +1698,8 @@ rect = {{ center = [2.0, 2.0], size = [0.5, 0.35] }}
         let exact = SimConfig::default();
         assert_eq!(drift_after(exact.clone(), 10.0, 3.0), (0.0, 0.0));
         let cfg = SimConfig { odom_slip_per_m: 0.02, odom_heading_drift_per_rad: 0.01, ..exact };
-        let (two, six, twelve) = (drift_after(cfg.clone(), 2.0, 0.0), drift_after(cfg.clone(), 6.0, 0.0), drift_after(cfg.clone(), 12.0, 0.0));
+        let (two, six, twelve) =
+            (drift_after(cfg.clone(), 2.0, 0.0), drift_after(cfg.clone(), 6.0, 0.0), drift_after(cfg.clone(), 12.0, 0.0));
         assert!(two.0 > 0.0 && two.0 < six.0 && six.0 < twelve.0, "{two:?} {six:?} {twelve:?}");
         // 2 % of the distance, the sign and size (0.5–1.5×) from the seed.
         assert!((0.01 * 12.0..=0.03 * 12.0).contains(&twelve.0), "{twelve:?}");

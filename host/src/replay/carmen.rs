@@ -373,7 +373,16 @@ pub fn parse_line(line: &str) -> Result<Option<CarmenRecord>, LineError> {
                 t.num(f)?;
             }
             let t_s = t.stamp()?;
-            CarmenRecord::Scan(CarmenScan { kind, t_s, laser_pose, robot_pose, angle_min, angle_increment, ranges_m, range_max_m: max_range })
+            CarmenRecord::Scan(CarmenScan {
+                kind,
+                t_s,
+                laser_pose,
+                robot_pose,
+                angle_min,
+                angle_increment,
+                ranges_m,
+                range_max_m: max_range,
+            })
         }
     };
     Ok(Some(rec))

@@ -409,8 +409,10 @@ impl<R: Read> Read for Counting<R> {
 /// right for a sensor that stood still.
 fn read_vlp16(file: &Path) -> Result<LogData, ReplayError> {
     let cfg = crate::sensors::vlp16::Vlp16Config::default();
-    let (_, capture) = crate::sensors::vlp16::read_capture(file, &cfg)
-        .map_err(|e| ReplayError::Io { file: file.to_path_buf(), source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()) })?;
+    let (_, capture) = crate::sensors::vlp16::read_capture(file, &cfg).map_err(|e| ReplayError::Io {
+        file: file.to_path_buf(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
+    })?;
     let mut log = LogData {
         file: file.to_path_buf(),
         format: LogFormat::Vlp16,
@@ -423,7 +425,9 @@ fn read_vlp16(file: &Path) -> Result<LogData, ReplayError> {
         transforms_rejected: rosbag::RejectedTransforms::default(),
         span_s: None,
         sources: vec!["vlp16".to_string()],
-        warnings: vec!["a VLP-16 capture holds no pose: every scan is placed at the origin, facing +x (a sensor that stood still)".to_string()],
+        warnings: vec![
+            "a VLP-16 capture holds no pose: every scan is placed at the origin, facing +x (a sensor that stood still)".to_string()
+        ],
         bad_records: BadRecords::default(),
         error: None,
     };
@@ -990,10 +994,8 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     };
     let centred = grid_origin(bounds);
     let size = grid_size_m();
-    let exceeds = bounds[0][0] < centred[0]
-        || bounds[0][1] < centred[1]
-        || bounds[1][0] >= centred[0] + size
-        || bounds[1][1] >= centred[1] + size;
+    let exceeds =
+        bounds[0][0] < centred[0] || bounds[0][1] < centred[1] || bounds[1][0] >= centred[0] + size || bounds[1][1] >= centred[1] + size;
     // A trajectory that does not fit: the grid starts centred on the first pose that placed it,
     // and the core's rolling window follows the laser from there.
     let first = log.scans.iter().zip(&stray).find(|(s, st)| !**st && s.pose[0].is_finite() && s.pose[1].is_finite());
