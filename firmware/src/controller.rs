@@ -513,7 +513,7 @@ impl Controller {
         // The goal goes out in the frame the poses come in (the odometry's): the base follows it
         // there. Inside, the controller plans in its map frame (`Controller::goal`).
         let goal = match (&self.goal, exploring) {
-            (Some(g), true) if self.map_from_odom != Pose2::default() => Some(g.transformed(&self.map_from_odom.inverse())),
+            (Some(g), true) if self.map_from_odom != Pose2::IDENTITY => Some(g.transformed(&self.map_from_odom.inverse())),
             (Some(g), true) => Some(g.clone()),
             _ => None,
         };

@@ -382,6 +382,28 @@ pub struct LogData {
     pub error: Option<ReplayError>,
 }
 
+impl LogData {
+    /// Nothing read yet from `file`.
+    fn new(file: &Path, format: LogFormat) -> Self {
+        LogData {
+            file: file.to_path_buf(),
+            format,
+            scans: Vec::new(),
+            odometry: 0,
+            no_pose: 0,
+            no_odometry_yet: 0,
+            stale_pose: 0,
+            scan_stamp_backwards: 0,
+            transforms_rejected: rosbag::RejectedTransforms::default(),
+            span_s: None,
+            sources: Vec::new(),
+            warnings: Vec::new(),
+            bad_records: BadRecords::default(),
+            error: None,
+        }
+    }
+}
+
 fn widen(span: &mut Option<(f64, f64)>, t: f64) {
     *span = Some(match *span {
         None => (t, t),
@@ -413,24 +435,10 @@ fn read_vlp16(file: &Path) -> Result<LogData, ReplayError> {
         file: file.to_path_buf(),
         source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
     })?;
-    let mut log = LogData {
-        file: file.to_path_buf(),
-        format: LogFormat::Vlp16,
-        scans: Vec::new(),
-        odometry: 0,
-        no_pose: 0,
-        no_odometry_yet: 0,
-        stale_pose: 0,
-        scan_stamp_backwards: 0,
-        transforms_rejected: rosbag::RejectedTransforms::default(),
-        span_s: None,
-        sources: vec!["vlp16".to_string()],
-        warnings: vec![
-            "a VLP-16 capture holds no pose: every scan is placed at the origin, facing +x (a sensor that stood still)".to_string()
-        ],
-        bad_records: BadRecords::default(),
-        error: None,
-    };
+    let mut log = LogData::new(file, LogFormat::Vlp16);
+    log.sources.push("vlp16".to_string());
+    log.warnings
+        .push("a VLP-16 capture holds no pose: every scan is placed at the origin, facing +x (a sensor that stood still)".to_string());
     for (i, s) in capture.scans.into_iter().chain(capture.partial).enumerate() {
         let t_s = s.stamp_us as f64 / 1e6;
         widen(&mut log.span_s, t_s);
@@ -451,22 +459,7 @@ fn read_vlp16(file: &Path) -> Result<LogData, ReplayError> {
 }
 
 fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
-    let mut log = LogData {
-        file: file.to_path_buf(),
-        format,
-        scans: Vec::new(),
-        odometry: 0,
-        no_pose: 0,
-        no_odometry_yet: 0,
-        stale_pose: 0,
-        scan_stamp_backwards: 0,
-        transforms_rejected: rosbag::RejectedTransforms::default(),
-        span_s: None,
-        sources: Vec::new(),
-        warnings: Vec::new(),
-        bad_records: BadRecords::default(),
-        error: None,
-    };
+    let mut log = LogData::new(file, format);
     let counter = std::rc::Rc::new(std::cell::Cell::new(0u64));
     let mut reader: Box<dyn BufRead> = match format {
         LogFormat::CarmenGzip => {
