@@ -411,7 +411,7 @@ impl Controller {
 
         if let (Some(scan), Some(predicted), false) = (inputs.scan, self.pose, pose_refused) {
             // The robot's own body: readings below the configured minimum are invalid too.
-            let body_mm = (self.cfg.lidar_min_range_m.to_bits() as i64 * 1000 >> 16).clamp(0, u16::MAX as i64) as u16;
+            let body_mm = ((self.cfg.lidar_min_range_m.to_bits() as i64 * 1000) >> 16).clamp(0, u16::MAX as i64) as u16;
             let scan = ScanInput { range_min_mm: scan.range_min_mm.max(body_mm), ..scan };
             match self.beams.resample(&scan) {
                 Ok(_) => {
@@ -536,8 +536,8 @@ impl Controller {
             let step = last.inverse().compose(&odom);
             let dist = fixed_point::hypot(step.x, step.y);
             crate::matcher::Motion {
-                dist_mm: (dist.to_bits().max(0) as i64 * 1000 >> 16) as u32,
-                turn_mdeg: ((step.theta.0 as i64).unsigned_abs() * 360_000 >> 32) as u32,
+                dist_mm: ((dist.to_bits().max(0) as i64 * 1000) >> 16) as u32,
+                turn_mdeg: (((step.theta.0 as i64).unsigned_abs() * 360_000) >> 32) as u32,
             }
         });
         if motion.dist_mm < crate::matcher::MATCH_MIN_MOTION.dist_mm && motion.turn_mdeg < crate::matcher::MATCH_MIN_MOTION.turn_mdeg {

@@ -1,0 +1,273 @@
+//! Reachability: which cells the robot may stand on (inflation), the path distance to every one
+//! of them (Dijkstra), and goals with their paths down that distance field.
+
+use super::{Goal, Planner, Viewpoint, HEADINGS};
+use crate::capacity::{GRID_AREA, GRID_CELLS, MAX_INFLATION_OFFSETS, MAX_PATH_WAYPOINTS};
+use crate::config::MAX_ROBOT_RADIUS_M;
+use crate::grid::{Cell, LidarGrid, Line, PackedGrid};
+use fixed_point::{atan2, BinaryAngle, Meters, Pose2};
+
+/// Path-distance cost of a straight step (one unit = 0.02 m at 0.10 m cells).
+pub const STEP_STRAIGHT: u16 = 5;
+/// Path-distance cost of a diagonal step.
+pub const STEP_DIAGONAL: u16 = 7;
+/// Distance value of an unreachable cell.
+pub const UNREACHABLE: u16 = u16::MAX;
+/// Longest straight segment between two path waypoints, cells (3 m).
+pub const MAX_SEGMENT_CELLS: i32 = 30;
+
+#[inline]
+pub(super) fn idx(x: i32, y: i32) -> usize {
+    y as usize * GRID_CELLS + x as usize
+}
+
+impl Planner {
+    /// Path distance (units of 0.02 m) from the robot to `(x, y)` as of the last step.
+    #[inline]
+    pub fn distance(&self, x: i32, y: i32) -> u16 {
+        if PackedGrid::in_bounds(x, y) {
+            self.dist[idx(x, y)]
+        } else {
+            UNREACHABLE
+        }
+    }
+
+    /// True if the last step considered `(x, y)` traversable.
+    pub fn traversable(&self, x: i32, y: i32) -> bool {
+        PackedGrid::in_bounds(x, y) && !self.blocked.get(x, y)
+    }
+
+    /// Step 1: which cells the robot may stand on.
+    pub(super) fn inflate(&mut self, lidar: &LidarGrid, radius: Meters, robot: (i32, i32)) -> u32 {
+        let mut offsets: heapless::Vec<(i8, i8), MAX_INFLATION_OFFSETS> = heapless::Vec::new();
+        // Cells whose centre lies within `radius` of an occupied cell's centre: the squared
+        // distance in cells, exact (0.35 m → ≤ 12.25 cells², not a radius rounded to 4 cells,
+        // which would leave a 1 m doorway only two cells wide). A radius beyond the largest a
+        // valid configuration has ([`MAX_ROBOT_RADIUS_M`], the capacity of `offsets`) is taken
+        // as that one.
+        let radius = radius.clamp(Meters::ZERO, MAX_ROBOT_RADIUS_M);
+        let r_q16 = radius.to_bits() as i64 * crate::capacity::CELLS_PER_METER;
+        let r2 = ((r_q16 * r_q16) >> 32) as i32;
+        let r = ((r_q16 + 0xFFFF) >> 16) as i32;
+        for dy in -r..=r {
+            for dx in -r..=r {
+                if dx * dx + dy * dy <= r2 {
+                    let _ = offsets.push((dx as i8, dy as i8));
+                }
+            }
+        }
+        let mut work = 0;
+        for y in 0..GRID_CELLS as i32 {
+            for x in 0..GRID_CELLS as i32 {
+                let c = lidar.get(x, y);
+                self.blocked.put(x, y, c != Cell::Free);
+                work += 1;
+            }
+        }
+        for y in 0..GRID_CELLS as i32 {
+            for x in 0..GRID_CELLS as i32 {
+                if lidar.get(x, y) == Cell::Occupied {
+                    for &(dx, dy) in offsets.iter() {
+                        self.blocked.put(x + dx as i32, y + dy as i32, true);
+                    }
+                    work += offsets.len() as u32;
+                }
+            }
+        }
+        // A robot inside the inflation (it drifted close to something, or came upon furniture
+        // the LiDAR had not seen) may leave it, but only by moving away: the free cells around
+        // it that are farther from every occupied cell than the robot's own cell. Clearing the
+        // whole disc instead lets the path run along the obstacle, and a base that is already
+        // touching it is then blocked on every goal. Where no neighbour is farther (the robot
+        // stands on the middle line of a passage narrower than the inflation), cells as far as
+        // its own are allowed too, so it can walk along that line.
+        let mut clearance = |x: i32, y: i32| {
+            work += offsets.len() as u32;
+            offsets
+                .iter()
+                .filter(|&&(dx, dy)| lidar.get(x + dx as i32, y + dy as i32) == Cell::Occupied)
+                .map(|&(dx, dy)| dx as i32 * dx as i32 + dy as i32 * dy as i32)
+                .min()
+                .unwrap_or(i32::MAX)
+        };
+        let own = clearance(robot.0, robot.1);
+        let mut escape = false;
+        for pass in 0..2 {
+            for &(dx, dy) in offsets.iter() {
+                let (x, y) = (robot.0 + dx as i32, robot.1 + dy as i32);
+                let neighbour = (dx, dy) != (0, 0) && dx.abs() <= 1 && dy.abs() <= 1;
+                if lidar.get(x, y) != Cell::Free {
+                    continue;
+                }
+                if !self.blocked.get(x, y) {
+                    escape |= neighbour;
+                    continue;
+                }
+                let c = clearance(x, y);
+                if (dx, dy) == (0, 0) || c > own || (pass == 1 && c == own) {
+                    self.blocked.put(x, y, false);
+                    escape |= neighbour;
+                }
+            }
+            if escape || own == i32::MAX {
+                break;
+            }
+        }
+        work
+    }
+
+    /// Step 2: Dijkstra from the robot's cell over traversable cells.
+    pub(super) fn distances(&mut self, robot: (i32, i32)) -> u32 {
+        self.dist.fill(UNREACHABLE);
+        self.heap.clear();
+        let mut work = 0;
+        if !PackedGrid::in_bounds(robot.0, robot.1) {
+            return work;
+        }
+        self.dist[idx(robot.0, robot.1)] = 0;
+        let _ = self.heap.push(idx(robot.0, robot.1) as u64);
+        const N8: [(i32, i32, u16); 8] = [
+            (1, 0, STEP_STRAIGHT),
+            (-1, 0, STEP_STRAIGHT),
+            (0, 1, STEP_STRAIGHT),
+            (0, -1, STEP_STRAIGHT),
+            (1, 1, STEP_DIAGONAL),
+            (1, -1, STEP_DIAGONAL),
+            (-1, 1, STEP_DIAGONAL),
+            (-1, -1, STEP_DIAGONAL),
+        ];
+        while let Some(e) = self.heap.pop() {
+            let d = (e >> 32) as u16;
+            let i = (e & 0xFFFF_FFFF) as usize;
+            if d > self.dist[i] {
+                continue;
+            }
+            work += 1;
+            self.stats.reachable_cells += 1;
+            let (x, y) = ((i % GRID_CELLS) as i32, (i / GRID_CELLS) as i32);
+            for &(dx, dy, cost) in N8.iter() {
+                let (nx, ny) = (x + dx, y + dy);
+                if !self.traversable(nx, ny) {
+                    continue;
+                }
+                if dx != 0 && dy != 0 && (!self.traversable(x + dx, y) || !self.traversable(x, y + dy)) {
+                    continue;
+                }
+                let nd = d.saturating_add(cost);
+                let ni = idx(nx, ny);
+                if nd < self.dist[ni] {
+                    self.dist[ni] = nd;
+                    if self.heap.push(((nd as u64) << 32) | ni as u64).is_err() {
+                        self.stats.heap_overflows += 1;
+                    }
+                }
+            }
+            work += 8;
+        }
+        work
+    }
+
+    /// One step down the distance field from `(x, y)`, or `None` at the robot / a dead end.
+    #[inline]
+    pub(super) fn descend(&self, x: i32, y: i32) -> Option<(i32, i32)> {
+        let here = self.distance(x, y);
+        if here == 0 || here == UNREACHABLE {
+            return None;
+        }
+        let mut best = (here, None);
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                let d = self.distance(x + dx, y + dy);
+                if d < best.0 {
+                    best = (d, Some((x + dx, y + dy)));
+                }
+            }
+        }
+        best.1
+    }
+
+    /// Where a frontier's (or frontier point's) viewpoint stands: [`Planner::reachable_near`],
+    /// with its work added to `work` and a miss counted in `unreachable`.
+    pub(super) fn snap_site(&self, at: (i32, i32), snap: i32, work: &mut u32, unreachable: &mut u32) -> Option<(i32, i32)> {
+        *work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
+        let c = self.reachable_near(at, snap);
+        *unreachable += c.is_none() as u32;
+        c
+    }
+
+    /// The nearest reachable cell to `c` within `radius` cells (Euclidean), `c` itself first.
+    pub(super) fn reachable_near(&self, c: (i32, i32), radius: i32) -> Option<(i32, i32)> {
+        if self.distance(c.0, c.1) != UNREACHABLE {
+            return Some(c);
+        }
+        let mut best: Option<(i64, (i32, i32))> = None;
+        for dy in -radius..=radius {
+            for dx in -radius..=radius {
+                let d2 = (dx * dx + dy * dy) as i64;
+                if d2 > (radius * radius) as i64 || self.distance(c.0 + dx, c.1 + dy) == UNREACHABLE {
+                    continue;
+                }
+                if best.is_none_or(|(bd, _)| d2 < bd) {
+                    best = Some((d2, (c.0 + dx, c.1 + dy)));
+                }
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// True if every cell on the straight line between `a` and `b` is reachable.
+    pub(super) fn line_clear(&self, a: (i32, i32), b: (i32, i32)) -> bool {
+        Line::new(a.0, a.1, b.0, b.1).all(|(x, y)| self.distance(x, y) != UNREACHABLE)
+    }
+
+    /// For `nearest`: the quarter-turn heading closest to the direction of travel into `site`.
+    pub(super) fn travel_heading(&self, site: (i32, i32), pose: &Pose2) -> BinaryAngle {
+        let mut back = site;
+        for _ in 0..5 {
+            match self.descend(back.0, back.1) {
+                Some(c) => back = c,
+                None => break,
+            }
+        }
+        let a = if back == site { pose.theta } else { atan2(site.1 - back.1, site.0 - back.0) };
+        // Round to the nearest quarter turn.
+        HEADINGS[((((a.0 as u32).wrapping_add(1 << 29)) >> 30) & 3) as usize]
+    }
+
+    /// The goal for `vp`, with its path pulled taut: walking down the distance field from the
+    /// goal, a waypoint is emitted where the straight line from the previous waypoint would leave
+    /// reachable cells, or every [`MAX_SEGMENT_CELLS`], so the base can drive straight between
+    /// consecutive waypoints. The path starts at the first waypoint after the robot's cell.
+    pub(super) fn goal_for(&self, lidar: &LidarGrid, vp: Viewpoint) -> Goal {
+        let mut rev: heapless::Vec<(i32, i32), MAX_PATH_WAYPOINTS> = heapless::Vec::new();
+        let _ = rev.push(vp.cell);
+        let mut anchor = vp.cell;
+        let mut prev = vp.cell;
+        let mut steps = 0usize;
+        let mut cur = self.descend(vp.cell.0, vp.cell.1);
+        while let Some(c) = cur {
+            steps += 1;
+            if steps > GRID_AREA {
+                break;
+            }
+            let long = (c.0 - anchor.0).abs().max((c.1 - anchor.1).abs()) > MAX_SEGMENT_CELLS;
+            if (long || !self.line_clear(anchor, c)) && prev != anchor {
+                if rev.push(prev).is_err() {
+                    break;
+                }
+                anchor = prev;
+            }
+            prev = c;
+            cur = self.descend(c.0, c.1);
+        }
+        // `prev` is now the robot's own cell. Its centre is not a waypoint: the robot stands
+        // up to half a cell from it, and a base pressed against something would have to walk
+        // back into it (the line from there to the first waypoint is clear, as checked above).
+        let mut path = heapless::Vec::new();
+        for &(x, y) in rev.iter().rev() {
+            let _ = path.push(lidar.geom.center_of(x, y));
+        }
+        let (gx, gy) = lidar.geom.center_of(vp.cell.0, vp.cell.1);
+        Goal { pose: Pose2::new(gx, gy, vp.heading), viewpoint: vp, path, path_length_m: vp.path_length_m() }
+    }
+}

@@ -1,0 +1,27 @@
+//! `rrt`: the frontier points of [`crate::rrt::RrtExplorer`]'s trees (LiDAR points first, camera
+//! points once none is reachable), scored by the original assigner's revenue, facing the
+//! direction of travel. A goal is kept until it is reached or fails (see `Controller`).
+
+use super::{Planner, Site, Sites, Step};
+use crate::frontier::FrontierSource;
+use crate::rrt;
+
+impl Planner {
+    /// Grows the trees and returns their points as sites with their revenue; scored by
+    /// [`super::Score::Own`]. Returns the work.
+    pub(super) fn rrt_sites(&mut self, step: &Step, sites: &mut Sites) -> u32 {
+        let snap = step.snap;
+        let mut work = self.rrt.grow(step.lidar, step.visual, step.robot);
+        let mut unreachable = 0;
+        let lidar_points = self.rrt.points().any(|p| p.source == FrontierSource::Lidar && self.reachable_near(p.cell, snap).is_some());
+        for &p in self.rrt.points() {
+            if lidar_points && p.source != FrontierSource::Lidar {
+                continue;
+            }
+            let Some(c) = self.snap_site(p.cell, snap, &mut work, &mut unreachable) else { continue };
+            let _ = sites.push((c, Site::frontier(p.source), None, rrt::revenue(step.lidar, step.visual, p, step.robot)));
+        }
+        self.stats.unreachable += unreachable;
+        work
+    }
+}
