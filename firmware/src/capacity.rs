@@ -50,3 +50,8 @@ pub const BLOCKS: usize = GRID_CELLS / BLOCK_CELLS;
 /// Most scan points the scan matcher places per candidate pose (`crate::matcher`): a scan's
 /// returns are subsampled to this many.
 pub const MATCH_MAX_POINTS: usize = 160;
+
+/// Tasks (frontier clusters, viewpoints) one global tour orders (`crate::tour`): it sizes the
+/// tour problem's `(MAX_TASKS + 1)²` cost matrix and bounds the solver's work per replan
+/// (`crate::tour::MAX_SOLVE_WORK`).
+pub const MAX_TASKS: usize = 48;

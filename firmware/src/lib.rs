@@ -18,6 +18,9 @@
 //! | viewpoints, path distance, utility, argmax | [`planner`] | [`Planner`] |
 //! | the fixed-rate state machine | [`controller`] | [`Controller`] |
 //!
+//! [`tour`] orders a set of tasks (an open asymmetric TSP path with precedence classes) under a
+//! work budget per call, for a planner that keeps a global tour over its frontiers.
+//!
 //! Parameters a user may tune are in [`Config`] (units in the names); capacities that size memory
 //! are compile-time constants in [`capacity`].
 #![no_std]
@@ -39,6 +42,7 @@ pub mod protocol;
 pub mod rolling;
 pub mod rrt;
 pub mod scan;
+pub mod tour;
 
 pub use config::{Config, PlannerKind};
 pub use controller::{Command, Controller, Detection, Inputs, Mode, Outputs, Status};
