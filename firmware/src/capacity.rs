@@ -55,3 +55,17 @@ pub const MATCH_MAX_POINTS: usize = 160;
 /// tour problem's `(MAX_TASKS + 1)²` cost matrix and bounds the solver's work per replan
 /// (`crate::tour::MAX_SOLVE_WORK`).
 pub const MAX_TASKS: usize = 48;
+
+/// Side of the coarse lattice the room segmentation (`crate::rooms`) works on: 2 × 2 cells
+/// (0.2 m) per coarse cell.
+pub const COARSE_CELLS: usize = GRID_CELLS / 2;
+/// Coarse cells in the lattice (65 536): one byte each for clearance and room label.
+pub const COARSE_AREA: usize = COARSE_CELLS * COARSE_CELLS;
+/// Rooms (and corridors) kept by the segmentation; room cores beyond it are dropped and counted.
+/// Ids are `1..=MAX_ROOMS`.
+pub const MAX_ROOMS: usize = 64;
+/// Doorways kept by the segmentation; more are dropped and counted.
+pub const MAX_DOORS: usize = 128;
+/// Work list of the segmentation's flood fills and wavefront (a ring; a power of two). It holds
+/// a wavefront, not an area, so it is much smaller than [`COARSE_AREA`]; overflow is counted.
+pub const ROOM_QUEUE: usize = 16384;

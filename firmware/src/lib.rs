@@ -16,6 +16,7 @@
 //! | non-map points, pooled and filtered | [`nonmap`] | [`NonMapStore`] |
 //! | frontiers of both maps | [`frontier`] | [`FrontierSet`] |
 //! | viewpoints, path distance, utility, argmax | [`planner`] | [`Planner`] |
+//! | rooms, corridors and doorways of the LiDAR map | [`rooms`] | [`rooms::Rooms`] |
 //! | the fixed-rate state machine | [`controller`] | [`Controller`] |
 //!
 //! [`tour`] orders a set of tasks (an open asymmetric TSP path with precedence classes) under a
@@ -40,6 +41,7 @@ pub mod nonmap;
 pub mod planner;
 pub mod protocol;
 pub mod rolling;
+pub mod rooms;
 pub mod rrt;
 pub mod scan;
 pub mod tour;
