@@ -69,3 +69,7 @@ pub const MAX_DOORS: usize = 128;
 /// Work list of the segmentation's flood fills and wavefront (a ring; a power of two). It holds
 /// a wavefront, not an area, so it is much smaller than [`COARSE_AREA`]; overflow is counted.
 pub const ROOM_QUEUE: usize = 16384;
+
+/// Object proposals (clusters of non-map points that fit a target) kept per planning step
+/// (`crate::planner::proposals`), best evidence first.
+pub const MAX_PROPOSALS: usize = 12;

@@ -19,10 +19,12 @@ pub type Weight = fixed_point::fixed::types::I16F16;
 /// Which viewpoint-selection rule the planner uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum PlannerKind {
-    /// LIVES: all four utility terms (path distance, unseen cells, frontier cells near the path,
-    /// non-map points in the camera cone).
+    /// LIVES, structured: object proposals, rooms and a global tour with precedence over them
+    /// and the frontier viewpoints of both maps, the non-map term in the view utility
+    /// ([`crate::planner::schedule`]).
     Lives,
-    /// The paper's "multisensor frontier" baseline: LIVES with `w_nonmap = 0`.
+    /// The paper's "multisensor frontier" baseline: the greedy LIVES utility with
+    /// `w_nonmap = 0` ([`crate::planner::greedy`]).
     Multisensor,
     /// Yamauchi's nearest frontier: the reachable frontier with the shortest path, LiDAR frontiers
     /// first, camera frontiers once the LiDAR map has none.
@@ -35,9 +37,31 @@ pub enum PlannerKind {
     /// A baseline in the spirit of RRT exploration: frontier points found by random trees, scored
     /// by the original assigner's revenue. See [`crate::rrt`].
     Rrt,
+    /// The paper's LIVES (Algorithm 1): the greedy argmax of the four-term utility, non-map
+    /// term included ([`crate::planner::greedy`]).
+    LivesGreedy,
+    /// The structured search without the non-map term (no proposals, `w_nonmap = 0`): the
+    /// ablation that measures what non-map knowledge adds to it.
+    LivesNoNonMap,
 }
 
 impl PlannerKind {
+    /// Every kind, in wire order.
+    pub const ALL: [PlannerKind; 7] = [
+        PlannerKind::Lives,
+        PlannerKind::Multisensor,
+        PlannerKind::Nearest,
+        PlannerKind::ExploreLite,
+        PlannerKind::Rrt,
+        PlannerKind::LivesGreedy,
+        PlannerKind::LivesNoNonMap,
+    ];
+
+    /// The structured search (tasks, rooms, a tour): `lives` and its ablation.
+    pub const fn is_structured(self) -> bool {
+        matches!(self, PlannerKind::Lives | PlannerKind::LivesNoNonMap)
+    }
+
     /// One of the baselines (`nearest`, `explore-lite`, `rrt`): scored by their own rules, facing
     /// the direction of travel, every reached goal retired.
     pub const fn is_baseline(self) -> bool {
@@ -360,8 +384,10 @@ impl Config {
     /// The non-map weight actually used by the selected planner.
     pub fn effective_w_nonmap(&self) -> Weight {
         match self.planner {
-            PlannerKind::Lives => self.w_nonmap_per_point,
-            PlannerKind::Multisensor | PlannerKind::Nearest | PlannerKind::ExploreLite | PlannerKind::Rrt => Weight::ZERO,
+            PlannerKind::Lives | PlannerKind::LivesGreedy => self.w_nonmap_per_point,
+            PlannerKind::Multisensor | PlannerKind::Nearest | PlannerKind::ExploreLite | PlannerKind::Rrt | PlannerKind::LivesNoNonMap => {
+                Weight::ZERO
+            }
         }
     }
 }
@@ -408,7 +434,7 @@ mod tests {
     #[test]
     fn the_defaults_are_in_range() {
         assert_eq!(Config::DEFAULT.validate(), Ok(()));
-        for planner in [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest, PlannerKind::ExploreLite, PlannerKind::Rrt] {
+        for planner in PlannerKind::ALL {
             assert_eq!(Config { planner, ..Config::DEFAULT }.validate(), Ok(()));
         }
     }

@@ -569,8 +569,10 @@ impl Controller {
             if d <= self.cfg.goal_tolerance_m && heading_err <= self.cfg.goal_heading_tolerance.unsigned_abs() {
                 // Reached: whatever it offered has been looked at. A LiDAR frontier still there
                 // once the robot stands on it is one the sensor cannot resolve (a shadow under
-                // furniture, a glass pane): retire the spot so it is not chosen again.
-                if g.viewpoint.source == Site::LidarFrontier || self.cfg.planner.is_baseline() {
+                // furniture, a glass pane): retire the spot so it is not chosen again. The
+                // baselines and the tour retire every reached goal: what is still there was not
+                // resolved by standing there, and a tour would come back to it.
+                if g.viewpoint.source == Site::LidarFrontier || self.cfg.planner.is_baseline() || self.cfg.planner.is_structured() {
                     let cell = g.viewpoint.cell;
                     self.planner.blacklist(cell);
                     self.status.retired += 1;

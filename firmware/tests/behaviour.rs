@@ -238,13 +238,13 @@ fn score_headings_capped(kind: PlannerKind, with_points: bool, nonmap_view_cap: 
 #[test]
 fn non_map_points_make_a_viewpoint_win_under_lives_but_not_multisensor() {
     // Headings: 0 = east (out of the door), 1 = north, 2 = west (towards the points), 3 = south.
-    let lives = score_headings(PlannerKind::Lives, true);
+    let lives = score_headings(PlannerKind::LivesGreedy, true);
     assert!(lives[2] > lives[0] && lives[2] > lives[1] && lives[2] > lives[3], "{lives:?}");
     let multi = score_headings(PlannerKind::Multisensor, true);
     assert_eq!(multi[2], multi[0], "{multi:?}");
     assert!(multi.iter().all(|&u| u == multi[0]), "{multi:?}");
     // And under lives without points, the west viewpoint has no advantage either.
-    let empty = score_headings(PlannerKind::Lives, false);
+    let empty = score_headings(PlannerKind::LivesGreedy, false);
     assert!(empty.iter().all(|&u| u == empty[0]), "{empty:?}");
 }
 
@@ -252,14 +252,14 @@ fn non_map_points_make_a_viewpoint_win_under_lives_but_not_multisensor() {
 fn at_most_nonmap_view_cap_points_count_in_one_view() {
     // West (heading 2) sees the cluster; the other headings see none of it.
     let w = Config::DEFAULT.w_nonmap_per_point.to_bits() as i64;
-    let uncapped = score_headings_capped(PlannerKind::Lives, true, 0);
+    let uncapped = score_headings_capped(PlannerKind::LivesGreedy, true, 0);
     let points = (uncapped[2] - uncapped[0]) / w;
     assert!(points >= 3 && (uncapped[2] - uncapped[0]) % w == 0, "{points} points in view: {uncapped:?}");
-    let capped = score_headings_capped(PlannerKind::Lives, true, 2);
+    let capped = score_headings_capped(PlannerKind::LivesGreedy, true, 2);
     assert_eq!(capped[2] - capped[0], 2 * w, "{capped:?}");
     assert_eq!((capped[0], capped[1], capped[3]), (uncapped[0], uncapped[1], uncapped[3]), "views without points are unchanged");
     // A cap above the count changes nothing.
-    assert_eq!(score_headings_capped(PlannerKind::Lives, true, points as u16), uncapped);
+    assert_eq!(score_headings_capped(PlannerKind::LivesGreedy, true, points as u16), uncapped);
 }
 
 #[test]
@@ -285,7 +285,7 @@ fn an_unreachable_frontier_is_never_chosen() {
     let mut f = Box::new(FrontierSet::new());
     let cfg = Config::DEFAULT;
     let robot = pose(7.55, 7.55, 0.0);
-    for kind in [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest, PlannerKind::ExploreLite, PlannerKind::Rrt] {
+    for kind in PlannerKind::ALL {
         let cfg = Config { planner: kind, ..cfg };
         f.compute(&lidar, &vis, cfg.min_frontier_cells);
         assert!(f.frontiers().iter().any(|fr| fr.source == FrontierSource::Lidar && fr.anchor.0 > 200));
@@ -630,7 +630,7 @@ fn a_robot_inside_the_inflation_leaves_it_by_moving_away_not_along_the_obstacle(
     assert_eq!(lidar.geom.cell_of(robot.x, robot.y), robot_cell);
     let own = clearance2(robot_cell);
     assert_eq!(own, 4, "the robot is 2 cells from the bar");
-    for kind in [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest] {
+    for kind in [PlannerKind::Lives, PlannerKind::LivesGreedy, PlannerKind::Multisensor, PlannerKind::Nearest] {
         let cfg = Config { planner: kind, ..Config::DEFAULT };
         let inflation = GridGeometry::cells(cfg.robot_radius_m);
         assert!(own < inflation * inflation);

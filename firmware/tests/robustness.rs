@@ -140,8 +140,7 @@ fn random_config(rng: &mut Rng) -> Config {
     let origin = |rng: &mut Rng| if rng.below(4) == 0 { length(rng, Meters::MIN, MAX_ORIGIN_M) } else { Meters::ZERO };
     let lidar_max_range_m = length(rng, tiny, MAX_LIDAR_RANGE_M);
     let mut c = Config {
-        planner: [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest, PlannerKind::ExploreLite, PlannerKind::Rrt]
-            [rng.below(5) as usize],
+        planner: PlannerKind::ALL[rng.below(PlannerKind::ALL.len() as u64) as usize],
         origin_x_m: origin(rng),
         origin_y_m: origin(rng),
         lidar_max_range_m,

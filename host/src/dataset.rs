@@ -676,7 +676,7 @@ fn drive_episode(
         on_tick(tick, p, &scan);
         let mut handed_over = false;
         if let Some((c, planner)) = ctrl.as_mut() {
-            let use_labels = matches!(planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
+            let use_labels = planner.uses_labels();
             let encoded = encode_sim_scan(&scan);
             let inputs = Inputs {
                 pose: Pose2::from_f64(p[0], p[1], p[2]),

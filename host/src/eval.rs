@@ -348,7 +348,7 @@ pub fn eval_specs(
             for &p in planners {
                 for seed in 1..=trials {
                     let mut spec = SearchSpec::new(w, world.clone(), s, p, seed);
-                    if p == PlannerChoice::Lives {
+                    if p.uses_classifier() {
                         spec.model = Some(model);
                     }
                     configure(&mut spec)?;
@@ -428,7 +428,7 @@ pub fn tune(
                 let world = World::random_scenario(seed, scenario);
                 for &p in planners {
                     let mut spec = SearchSpec::new(&format!("random-{seed}"), world.clone(), scenario, p, seed);
-                    if p == PlannerChoice::Lives {
+                    if p.uses_classifier() {
                         spec.model = Some(model);
                     }
                     for a in sets {

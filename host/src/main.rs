@@ -724,7 +724,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             let t0 = Instant::now();
             // The committed geometric classifier (docs/model-card-geo.md) unless `--model`; only
             // `lives` runs it.
-            if model.is_some() && spec.planner != PlannerChoice::Lives {
+            if model.is_some() && !spec.planner.uses_classifier() {
                 return Err(format!("--model is the classifier `lives` runs; `{}` runs none", spec.planner));
             }
             spec.model = host::model::model_option(model.as_deref(), false)?;
@@ -967,7 +967,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             }
             let mut spec = load_spec(&run)?;
             configure_spec(&mut spec, &set, &sim)?;
-            if spec.planner == PlannerChoice::Lives {
+            if spec.planner.uses_classifier() {
                 // As `lives search`: the scans go without labels and the node's classifier (the
                 // committed geometric one unless `lives node --model` says otherwise) labels
                 // them; the bridge stops with a clear error if the node has none.

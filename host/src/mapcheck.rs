@@ -758,7 +758,7 @@ pub fn run_command(
             for a in &args.set {
                 crate::overrides::apply(&mut spec.controller, a)?;
             }
-            if args.model.is_some() && planner != PlannerChoice::Lives {
+            if args.model.is_some() && !planner.uses_classifier() {
                 return Err(format!("--model is the classifier `lives` runs; `{planner}` runs none"));
             }
             spec.model = crate::model::model_option(args.model.as_deref(), args.no_classifier)?;

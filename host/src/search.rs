@@ -35,13 +35,19 @@ pub enum PlannerChoice {
     ExploreLite,
     /// A sampling-based explorer in the spirit of RRT exploration.
     Rrt,
+    /// The paper's LIVES: the greedy four-term utility with the classifier's labels.
+    LivesGreedy,
+    /// The structured search without the non-map term (the ablation of `lives`).
+    LivesNoNonMap,
 }
 
 impl PlannerChoice {
     /// All of them.
-    pub const ALL: [PlannerChoice; 6] = [
+    pub const ALL: [PlannerChoice; 8] = [
         PlannerChoice::Lives,
         PlannerChoice::LivesGt,
+        PlannerChoice::LivesNoNonMap,
+        PlannerChoice::LivesGreedy,
         PlannerChoice::Multisensor,
         PlannerChoice::Nearest,
         PlannerChoice::ExploreLite,
@@ -52,6 +58,8 @@ impl PlannerChoice {
     pub fn kind(self) -> PlannerKind {
         match self {
             PlannerChoice::Lives | PlannerChoice::LivesGt => PlannerKind::Lives,
+            PlannerChoice::LivesGreedy => PlannerKind::LivesGreedy,
+            PlannerChoice::LivesNoNonMap => PlannerKind::LivesNoNonMap,
             PlannerChoice::Multisensor => PlannerKind::Multisensor,
             PlannerChoice::Nearest => PlannerKind::Nearest,
             PlannerChoice::ExploreLite => PlannerKind::ExploreLite,
@@ -59,13 +67,27 @@ impl PlannerChoice {
         }
     }
 
+    /// Runs the int8 classifier when a model is given (`lives`, `lives-greedy`).
+    pub fn uses_classifier(self) -> bool {
+        matches!(self, PlannerChoice::Lives | PlannerChoice::LivesGreedy)
+    }
+
+    /// Has non-map labels: the classifier's, or the simulator's without a model.
+    pub fn uses_labels(self) -> bool {
+        matches!(self, PlannerChoice::Lives | PlannerChoice::LivesGreedy | PlannerChoice::LivesGt)
+    }
+
     /// Where this planner's labels come from, given whether a classifier model is installed.
     pub fn label_source(self, model: bool) -> &'static str {
         match self {
-            PlannerChoice::Lives if model => "int8-classifier",
+            PlannerChoice::Lives | PlannerChoice::LivesGreedy if model => "int8-classifier",
             // Without a model `lives` runs on simulator labels, like `lives-gt`.
-            PlannerChoice::Lives | PlannerChoice::LivesGt => "ground-truth",
-            PlannerChoice::Multisensor | PlannerChoice::Nearest | PlannerChoice::ExploreLite | PlannerChoice::Rrt => "none",
+            PlannerChoice::Lives | PlannerChoice::LivesGreedy | PlannerChoice::LivesGt => "ground-truth",
+            PlannerChoice::Multisensor
+            | PlannerChoice::Nearest
+            | PlannerChoice::ExploreLite
+            | PlannerChoice::Rrt
+            | PlannerChoice::LivesNoNonMap => "none",
         }
     }
 }
@@ -79,6 +101,8 @@ impl fmt::Display for PlannerChoice {
             PlannerChoice::Nearest => "nearest",
             PlannerChoice::ExploreLite => "explore-lite",
             PlannerChoice::Rrt => "rrt",
+            PlannerChoice::LivesGreedy => "lives-greedy",
+            PlannerChoice::LivesNoNonMap => "lives-no-nonmap",
         })
     }
 }
@@ -89,7 +113,7 @@ impl FromStr for PlannerChoice {
         PlannerChoice::ALL
             .into_iter()
             .find(|p| p.to_string() == s)
-            .ok_or_else(|| format!("unknown planner `{s}` (expected lives, lives-gt, multisensor, nearest, explore-lite or rrt)"))
+            .ok_or_else(|| format!("unknown planner `{s}` (expected {})", PlannerChoice::ALL.map(|p| p.to_string()).join(", ")))
     }
 }
 
@@ -593,7 +617,7 @@ pub fn try_run_observed(
 ) -> Result<SearchRun, firmware::classifier::ModelError> {
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
     let mut ctrl = Box::new(Controller::new(cfg));
-    let classifier = spec.planner == PlannerChoice::Lives && spec.model.is_some();
+    let classifier = spec.planner.uses_classifier() && spec.model.is_some();
     if let (true, Some(blob)) = (classifier, spec.model) {
         ctrl.set_model(blob)?;
     }
@@ -618,7 +642,7 @@ fn run_with(
     let start = sim.pose();
     let limit = spec.world.time_limit_s;
     // Ground-truth labels for lives-gt, and for lives until a classifier model is installed.
-    let use_labels = !classifier && matches!(spec.planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
+    let use_labels = !classifier && spec.planner.uses_labels();
     let mut trajectory = vec![[start[0], start[1]]];
     let mut goals = Vec::new();
     let (mut ticks, mut blocked_count, mut collisions) = (0u32, 0u32, 0u32);
@@ -679,7 +703,7 @@ fn run_with(
             if spec.trace {
                 let v = &g.viewpoint;
                 eprintln!(
-                    "t={:6.1}s robot ({:5.1},{:5.1}) goal #{:<3} ({:5.1},{:5.1}) {:>4.0}° {:?} {} cands={} {:?}",
+                    "t={:6.1}s robot ({:5.1},{:5.1}) goal #{:<3} ({:5.1},{:5.1}) {:>4.0}° {:?} {} cands={} {:?}{}",
                     sim.time_s(),
                     p[0],
                     p[1],
@@ -690,7 +714,8 @@ fn run_with(
                     v.source,
                     utility_terms(v),
                     ctrl.planner.stats.candidates,
-                    ctrl.planner.stats
+                    ctrl.planner.stats,
+                    if spec.planner.kind().is_structured() { format!(" {:?}", ctrl.planner.sched) } else { String::new() }
                 );
                 for line in candidate_lines(&ctrl, spec.trace_candidates) {
                     eprintln!("{line}");

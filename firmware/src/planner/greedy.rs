@@ -1,4 +1,4 @@
-//! The paper's Algorithm 1 (`lives`, `multisensor`): four candidate viewpoints per frontier of
+//! The paper's Algorithm 1 (`lives-greedy`, `multisensor`): four candidate viewpoints per frontier of
 //! either map, scored by the LIVES utility (Q16.16 fixed point)
 //! `U = − w_dist·path_m + w_unknown·unseen_cells + w_surface·unseen_surface_rays
 //!      + w_frontier·frontier_cells_near_path + w_nonmap·nonmap_points_in_cone`
@@ -8,7 +8,7 @@
 //! (occluded by LiDAR-occupied cells); `frontier_cells_near_path` counts the frontier cells of
 //! either map in the 8 × 8-cell blocks within `frontier_near_path_blocks` of the path, each block
 //! once; `nonmap_points_in_cone` counts stored non-map points within camera range and field of
-//! view with an unoccluded line of sight. `lives` also looks at clusters of non-map points from
+//! view with an unoccluded line of sight. `lives-greedy` also looks at clusters of non-map points from
 //! `nonmap_standoff_m` (`nonmap_viewpoints`), and every rule but the baselines may turn in place
 //! (`look_around_here`).
 
@@ -20,13 +20,14 @@ use crate::nonmap::NonMapStore;
 use fixed_point::{atan2, BinaryAngle};
 
 impl Planner {
-    /// The sites of `lives` and `multisensor`: every frontier, the non-map clusters (`lives`),
+    /// The sites of `lives-greedy` and `multisensor`: every frontier, the non-map clusters
+    /// (`lives-greedy`),
     /// the robot's own cell, the current goal. Returns the work.
     pub(super) fn greedy_sites(&mut self, step: &Step, current: Option<((i32, i32), BinaryAngle)>, sites: &mut Sites) -> u32 {
         let cfg = step.cfg;
         let snap = step.snap;
         let mut work = self.frontier_sites(step, sites, |_| true, |_| 0);
-        if cfg.planner == PlannerKind::Lives && cfg.nonmap_viewpoints {
+        if cfg.planner == PlannerKind::LivesGreedy && cfg.nonmap_viewpoints {
             let standoff = GridGeometry::cells(cfg.nonmap_standoff_m);
             for (p, _) in self.nonmap_clusters(step.lidar, step.nonmap) {
                 work += ((2 * snap + 1) * (2 * snap + 1)) as u32;

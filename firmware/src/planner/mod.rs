@@ -11,8 +11,11 @@
 //!
 //! Then one rule, by [`PlannerKind`], proposes *sites* (a cell, what produced it, a heading if
 //! it has one, the rule's own score) and [`Planner::choose`] scores and picks among them:
-//! - [`greedy`]: the paper's Algorithm 1 (`lives`, `multisensor`): four viewpoints per frontier,
-//!   the LIVES utility ([`view`]), the argmax;
+//! - [`schedule`]: the structured search (`lives`, `lives-no-nonmap`): object proposals
+//!   ([`proposals`]), rooms ([`crate::rooms`]) and a global tour with precedence
+//!   ([`crate::tour`]); it returns the tour's first task rather than scoring sites;
+//! - [`greedy`]: the paper's Algorithm 1 (`lives-greedy`, `multisensor`): four viewpoints per
+//!   frontier, the LIVES utility ([`view`]), the argmax;
 //! - [`nearest`]: Yamauchi's nearest frontier;
 //! - [`explore_lite`]: after ROS `explore_lite`;
 //! - [`rrt_points`]: frontier points of random trees ([`crate::rrt`]).
@@ -23,13 +26,15 @@
 pub mod explore_lite;
 pub mod greedy;
 pub mod nearest;
+pub mod proposals;
 pub mod reach;
 pub mod rrt_points;
+pub mod schedule;
 pub mod view;
 
 use crate::capacity::{
     BLOCKS, DIJKSTRA_HEAP, GRID_AREA, GRID_CELLS, MAX_BLACKLIST, MAX_FRONTIERS_PER_GRID, MAX_NONMAP_POINTS, MAX_NONMAP_SITES,
-    MAX_PATH_WAYPOINTS, MAX_VIEWPOINTS,
+    MAX_PATH_WAYPOINTS, MAX_PROPOSALS, MAX_ROOMS, MAX_TASKS, MAX_VIEWPOINTS,
 };
 use crate::config::{Config, PlannerKind, Weight};
 use crate::frontier::{FrontierSet, FrontierSource};
@@ -73,6 +78,8 @@ pub enum Site {
     Here,
     /// The goal being pursued, re-scored for hysteresis (never a new goal itself).
     Current,
+    /// A room the camera has not seen, looked into from its most open cell (the tour).
+    Room,
 }
 
 impl Site {
@@ -178,7 +185,31 @@ pub struct Planner {
     robot_cell: (i32, i32),
     /// The `rrt` baseline's trees and frontier points (idle under the other planners).
     pub rrt: RrtExplorer,
+    /// The room segmentation of the last structured step.
+    pub rooms: crate::rooms::Rooms,
+    /// Object proposals of the last structured step, and the clustering's scratch.
+    pub proposals: proposals::ProposalScratch,
+    /// The tasks of the last structured step (index + 1 is the tour's node).
+    pub tasks: heapless::Vec<schedule::Task, MAX_TASKS>,
+    task_pool: heapless::Vec<schedule::Task, TASK_POOL>,
+    room_scratch: heapless::Vec<(i32, i32), MAX_ROOMS>,
+    problem: crate::tour::TourProblem,
+    /// The tour solver (its best tour: the last structured step's order of `tasks`).
+    pub tour: crate::tour::TourSolver,
+    last_tour: heapless::Vec<((i32, i32), schedule::TaskKind), MAX_TASKS>,
+    /// The task the last structured step chose: (its viewpoint cell, its anchor, its kind).
+    last_goal: Option<((i32, i32), (i32, i32), schedule::TaskKind)>,
+    /// The room of the task the last structured step chose.
+    last_goal_room: Option<u8>,
+    /// The destination of the last structured step's tour: (anchor, kind, room).
+    last_dest: Option<((i32, i32), schedule::TaskKind, Option<u8>)>,
+    /// Counters of the last structured step.
+    pub sched: schedule::ScheduleStats,
 }
+
+/// Candidate tasks of one structured step before the [`MAX_TASKS`] best are kept: every
+/// frontier, every proposal, the room tasks.
+const TASK_POOL: usize = 2 * MAX_FRONTIERS_PER_GRID + MAX_PROPOSALS + schedule::MAX_ROOM_TASKS;
 
 /// What a selection rule reads in one planning step.
 pub(crate) struct Step<'a> {
@@ -229,6 +260,18 @@ impl Planner {
             },
             robot_cell: (0, 0),
             rrt: RrtExplorer::new(),
+            rooms: crate::rooms::Rooms::new(),
+            proposals: proposals::ProposalScratch::new(),
+            tasks: heapless::Vec::new(),
+            task_pool: heapless::Vec::new(),
+            room_scratch: heapless::Vec::new(),
+            problem: crate::tour::TourProblem::new(),
+            tour: crate::tour::TourSolver::new(),
+            last_tour: heapless::Vec::new(),
+            last_goal: None,
+            last_goal_room: None,
+            last_dest: None,
+            sched: schedule::ScheduleStats { tasks: [0; 4], dropped: 0, rooms: 0, tour_units: 0, solved: false, kept: false, pursued: false },
         }
     }
 
@@ -239,6 +282,11 @@ impl Planner {
         self.rrt.clear();
         self.dist.fill(UNREACHABLE);
         self.stats = PlanStats::default();
+        self.tasks.clear();
+        self.last_tour.clear();
+        self.last_goal = None;
+        self.last_dest = None;
+        self.sched = schedule::ScheduleStats::default();
     }
 
     /// Moves the window by `(sx, sy)` cells ([`crate::rolling::shift`]): the distance field and
@@ -268,6 +316,15 @@ impl Planner {
         });
         self.robot_cell = (self.robot_cell.0 - sx, self.robot_cell.1 - sy);
         work += n as u32;
+        // The tour's memory of its last order moves too (tasks are recomputed every step).
+        self.last_tour.retain_mut(|(c, _)| {
+            *c = (c.0 - sx, c.1 - sy);
+            PackedGrid::in_bounds(c.0, c.1)
+        });
+        self.tasks.clear();
+        self.last_goal = self.last_goal.map(|(c, a, k)| ((c.0 - sx, c.1 - sy), (a.0 - sx, a.1 - sy), k));
+        self.last_dest = self.last_dest.map(|(a, k, r)| ((a.0 - sx, a.1 - sy), k, r));
+        work += self.rooms.shift(sx, sy);
         let (w, d) = self.rrt.shift(sx, sy);
         (work + w, dropped + d)
     }
@@ -329,7 +386,12 @@ impl Planner {
         let step = Step { cfg, lidar, visual, frontiers, nonmap, pose, robot, snap: GridGeometry::cells(cfg.viewpoint_snap_radius_m) };
         let mut sites = Sites::new();
         let score = match cfg.planner {
-            PlannerKind::Lives | PlannerKind::Multisensor => {
+            PlannerKind::Lives | PlannerKind::LivesNoNonMap => {
+                let (best, w) = self.schedule(&step, current);
+                self.stats.work = work + w;
+                return (best.map(|vp| self.goal_for(lidar, vp)), None);
+            }
+            PlannerKind::LivesGreedy | PlannerKind::Multisensor => {
                 work += self.greedy_sites(&step, current, &mut sites);
                 Score::Utility(cfg.effective_w_nonmap())
             }

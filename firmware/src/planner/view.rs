@@ -18,7 +18,7 @@ pub const GAZE_HANDOVER_M: Meters = Meters::from_bits(1 << 16);
 
 /// The view terms of one pose and heading.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) struct View {
+pub struct View {
     /// `w_unknown·unseen + w_surface·surface + w_nonmap·nonmap`, Q16.16 utility bits (the
     /// frontier-near-path term is the path's, not the view's, and is added by the caller).
     pub gain: i64,
@@ -34,7 +34,7 @@ impl Planner {
     /// The view from `cell` facing `heading`: the camera-unseen cells and surfaces in the cone
     /// (occluded by the LiDAR map) and, with `w_nonmap` non-zero, the non-map points in it
     /// (call [`Planner::visible_nonmap`] for `cell` first). Returns the view and its work.
-    pub(crate) fn view(
+    pub fn view(
         &self,
         cfg: &Config,
         lidar: &LidarGrid,

@@ -545,6 +545,10 @@ pub enum WirePlanner {
     ExploreLite,
     /// [`PlannerKind::Rrt`].
     Rrt,
+    /// [`PlannerKind::LivesGreedy`].
+    LivesGreedy,
+    /// [`PlannerKind::LivesNoNonMap`].
+    LivesNoNonMap,
 }
 
 impl From<PlannerKind> for WirePlanner {
@@ -555,6 +559,8 @@ impl From<PlannerKind> for WirePlanner {
             PlannerKind::Nearest => Self::Nearest,
             PlannerKind::ExploreLite => Self::ExploreLite,
             PlannerKind::Rrt => Self::Rrt,
+            PlannerKind::LivesGreedy => Self::LivesGreedy,
+            PlannerKind::LivesNoNonMap => Self::LivesNoNonMap,
         }
     }
 }
@@ -567,6 +573,8 @@ impl From<WirePlanner> for PlannerKind {
             WirePlanner::Nearest => Self::Nearest,
             WirePlanner::ExploreLite => Self::ExploreLite,
             WirePlanner::Rrt => Self::Rrt,
+            WirePlanner::LivesGreedy => Self::LivesGreedy,
+            WirePlanner::LivesNoNonMap => Self::LivesNoNonMap,
         }
     }
 }
@@ -1355,7 +1363,7 @@ mod tests {
         for m in [Mode::Idle, Mode::Exploring, Mode::TargetFound, Mode::Exhausted, Mode::Stopped] {
             assert_eq!(Mode::from(WireMode::from(m)), m);
         }
-        for p in [PlannerKind::Lives, PlannerKind::Multisensor, PlannerKind::Nearest, PlannerKind::ExploreLite, PlannerKind::Rrt] {
+        for p in PlannerKind::ALL {
             assert_eq!(PlannerKind::from(WirePlanner::from(p)), p);
         }
         let d = Detection { position: Some((Meters::from_bits(3), Meters::from_bits(-4))) };

@@ -29,7 +29,7 @@
 
 use super::robot::Base;
 use super::{Link, Summary, TimeMode};
-use crate::search::{controller_config, encode_sim_scan, step_base, PlannerChoice, RunTally, SearchResult, SearchSpec, TICK_US};
+use crate::search::{controller_config, encode_sim_scan, step_base, RunTally, SearchResult, SearchSpec, TICK_US};
 use crate::sim::Sim;
 use firmware::protocol::{
     encode, BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, ErrorCode, GoalMsg, Heartbeat, Hello, HostDecoder, HostToCore,
@@ -672,8 +672,8 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
     let limit = spec.world.time_limit_s;
     // As in the in-process loop: ground-truth labels unless `lives` runs the node's classifier
     // (then the node must have been started with the same model, see `NodeOptions::model`).
-    let classifier = spec.planner == PlannerChoice::Lives && spec.model.is_some();
-    let use_labels = !classifier && matches!(spec.planner, PlannerChoice::Lives | PlannerChoice::LivesGt);
+    let classifier = spec.planner.uses_classifier() && spec.model.is_some();
+    let use_labels = !classifier && spec.planner.uses_labels();
     let mut classifier_check = ClassifierCheck { expected: classifier, seen: false };
     let mut trajectory = vec![[start[0], start[1]]];
     let mut goals = Vec::new();

@@ -763,6 +763,7 @@ fn site_name(s: Site) -> &'static str {
         Site::NonMapCluster => "nonmap-cluster",
         Site::Here => "here",
         Site::Current => "current",
+        Site::Room => "room",
     }
 }
 

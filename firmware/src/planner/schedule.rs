@@ -1,0 +1,613 @@
+//! The structured search (`lives`, and its ablation `lives-no-nonmap`): tasks, rooms and a
+//! global tour with precedence, after Gao et al. (object proposals, room segmentation, a
+//! travelling-salesman tour with precedence) and FUEL (Zhou et al. 2021: a global tour over
+//! frontier clusters, replanned as they change).
+//!
+//! Each planning step:
+//! 1. **Rooms**: the LiDAR map segmented into rooms, corridors and doorways ([`crate::rooms`]).
+//! 2. **Tasks** (at most [`MAX_TASKS`]):
+//!    - object proposals ([`super::proposals`]; `lives` only), each looked at from its viewpoint;
+//!    - frontier viewpoints of both maps: at each frontier's (snapped) anchor, the best of the
+//!      four headings by the view utility ([`super::view`]); every LiDAR frontier is a task, a
+//!      camera frontier only if its view offers at least `gaze_min_gain`;
+//!    - rooms not yet seen by the camera (at most half their free cells seen, no other task
+//!      inside), looked at from their most open cell with the best of four headings.
+//!    When there are more, proposals and rooms are kept first, then frontier tasks by the
+//!    greedy utility (view gain minus `w_dist`·path).
+//! 3. **Precedence classes** (Gao et al.): 0 — proposals within [`PROPOSAL_REACH_CAMERA_RANGES`]
+//!    camera ranges of path; 1 — tasks in the room the robot stands in (when it stands in a
+//!    room, not a corridor); 2 — tasks in other rooms; 3 — tasks in corridors or outside any
+//!    room.
+//! 4. **Costs**: from the robot, the exact path distance (the step's Dijkstra); between two
+//!    tasks, the straight line if every cell on it is reachable, else the distance through the
+//!    shortest-path tree rooted at the robot (down both paths to where they meet: an upper bound
+//!    that is exact when the paths share their way, as they do through a building's doors);
+//!    each leg costs `max(distance, turn)` (FUEL's time lower bound, with a quarter turn worth
+//!    [`TURN_UNITS_PER_QUARTER`] of distance).
+//! 5. **Tour**: an open asymmetric TSP path from the robot through every task, classes in order
+//!    ([`crate::tour`]: cheapest insertion, 2-opt, Or-opt), warm-started from the last step's
+//!    tour so it does not thrash; the robot goes to the tour's first task. Hysteresis: the goal
+//!    being pursued stays first unless the best tour that starts elsewhere is shorter by
+//!    [`TOUR_SWITCH_UNITS`].
+
+use super::{Planner, Site, Step, Viewpoint, HEADINGS, STEP_STRAIGHT, UNREACHABLE};
+use crate::capacity::MAX_TASKS;
+use crate::config::{PlannerKind, Weight};
+use crate::grid::{Cell, GridGeometry, Line};
+use crate::rooms::{Room, RoomKind, Rooms};
+use fixed_point::BinaryAngle;
+
+/// Proposals whose viewpoint lies within this many camera ranges of path come first (the
+/// others take the class of their room): a near proposal costs little to look at, a far one
+/// is ordered with everything else so the robot does not cross the building for every chair.
+pub const PROPOSAL_REACH_CAMERA_RANGES: i64 = 1;
+/// A quarter turn costs as much as this much path (units of 0.02 m: 0.8 m; Spot turns at about
+/// 1 rad/s and walks at about 0.5 m/s).
+pub const TURN_UNITS_PER_QUARTER: u32 = 40;
+/// The goal being pursued stays first unless a tour starting elsewhere is shorter by this
+/// much (units of 0.02 m: 2 m).
+pub const TOUR_SWITCH_UNITS: u64 = 100;
+/// A task of the last step and one of this step are the same when their anchors (or the goal's
+/// viewpoint and the task's) are within this many cells (1.5 m).
+pub const TASK_MATCH_CELLS: i32 = 15;
+/// Tasks the tour orders: the proposals, the room tasks, then the frontier tasks of best
+/// greedy utility.
+pub const TOUR_TASKS: usize = 16;
+/// Tasks of the current room come before those of other rooms (Gao et al.).
+pub const ROOM_PRECEDENCE: bool = false;
+/// The tour runs to the greedy choice, picking up on the way what pays for its detour.
+pub const DESTINATION: bool = true;
+/// Proposals within reach come before everything else (Gao et al.).
+pub const PROPOSAL_PRECEDENCE: bool = false;
+/// How far [`room_near`] looks for a labelled cell around an unlabelled one (cells: 0.6 m).
+pub const ROOM_SEARCH_CELLS: i32 = 6;
+/// Rooms (not yet seen by the camera) that become tasks, at most.
+pub const MAX_ROOM_TASKS: usize = 8;
+/// Work the tour solver may spend per planning step.
+pub const TOUR_WORK_BUDGET: u32 = 2_000_000;
+/// Longest walk down the shortest-path tree when costing a pair of tasks, cells per side.
+const TREE_WALK_LIMIT: u32 = 4096;
+
+/// What a task is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TaskKind {
+    /// Look at an object proposal.
+    Proposal,
+    /// Look at a frontier of the LiDAR map.
+    LidarFrontier,
+    /// Look at a frontier of the camera's map.
+    VisualFrontier,
+    /// Look into a room the camera has not seen.
+    Room,
+}
+
+impl TaskKind {
+    /// The site kind a goal for it reports.
+    pub const fn site(self) -> Site {
+        match self {
+            TaskKind::Proposal => Site::NonMapCluster,
+            TaskKind::LidarFrontier => Site::LidarFrontier,
+            TaskKind::VisualFrontier => Site::VisualFrontier,
+            TaskKind::Room => Site::Room,
+        }
+    }
+}
+
+/// One task of the tour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Task {
+    /// What it looks at: the proposal's centre, the frontier's anchor, the room's most open
+    /// cell. Tasks are matched across planning steps by it (a proposal's viewpoint moves with
+    /// the robot; what it looks at does not).
+    pub anchor: (i32, i32),
+    /// Where the robot stands.
+    pub cell: (i32, i32),
+    /// The room (or corridor) its viewpoint stands in.
+    pub room: Option<u8>,
+    /// Which way it looks.
+    pub heading: BinaryAngle,
+    /// What it is.
+    pub kind: TaskKind,
+    /// Precedence class (lower first).
+    pub class: u8,
+    /// Path distance from the robot, units of 0.02 m.
+    pub path_units: u16,
+    /// The view's gain (Q16.16 utility bits) and terms.
+    pub view: super::view::View,
+    /// Greedy utility (gain − w_dist·path), for choosing which tasks to keep.
+    pub utility: i64,
+}
+
+impl Task {
+    fn viewpoint(&self, utility: i64) -> Viewpoint {
+        Viewpoint {
+            cell: self.cell,
+            heading: self.heading,
+            source: self.kind.site(),
+            utility,
+            path_units: self.path_units,
+            unseen: self.view.unseen,
+            surface: self.view.surface,
+            frontier_near_path: 0,
+            nonmap: self.view.nonmap,
+        }
+    }
+}
+
+/// Counters of the last structured step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ScheduleStats {
+    /// Tasks in the tour, by kind: proposals, LiDAR frontiers, camera frontiers, rooms.
+    pub tasks: [u16; 4],
+    /// Tasks left out for capacity.
+    pub dropped: u16,
+    /// Rooms and corridors of the segmentation.
+    pub rooms: u16,
+    /// The tour's cost, units of 0.02 m.
+    pub tour_units: u64,
+    /// The solver finished within its budget.
+    pub solved: bool,
+    /// The goal being pursued was kept by hysteresis over a different first task.
+    pub kept: bool,
+    /// The goal being pursued was found among this step's tasks.
+    pub pursued: bool,
+}
+
+fn quarter_turns(a: BinaryAngle, b: BinaryAngle) -> u32 {
+    // |a − b| in units of a quarter turn, rounded up to 1/8 of one.
+    let d = (a - b).unsigned_abs() as u64; // 2^32 = a full turn
+    ((d * 8 + (1 << 30) - 1) >> 30) as u32
+}
+
+impl Planner {
+    /// The structured step: returns the goal's viewpoint and the work.
+    pub(super) fn schedule(&mut self, step: &Step, current: Option<((i32, i32), BinaryAngle)>) -> (Option<Viewpoint>, u32) {
+        let cfg = step.cfg;
+        let mut work = self.rooms.update(step.lidar);
+        let range_cells = GridGeometry::cells(cfg.camera_range_m);
+        let w_nonmap = cfg.effective_w_nonmap();
+        let lives = cfg.planner == PlannerKind::Lives;
+        self.tasks.clear();
+        self.sched = ScheduleStats { rooms: self.rooms.rooms().len() as u16, ..ScheduleStats::default() };
+        let bl = GridGeometry::cells(cfg.blacklist_radius_m);
+        let here = GridGeometry::cells(cfg.goal_tolerance_m) as i64 * STEP_STRAIGHT as i64;
+        let pose = step.pose;
+        let robot = step.robot;
+        let already_there = |cell: (i32, i32), h: BinaryAngle, d: u16| {
+            (cell == robot || (d as i64) <= here) && (h - pose.theta).unsigned_abs() <= cfg.goal_heading_tolerance.unsigned_abs()
+        };
+        let dist_term = |units: u16| (cfg.w_dist_per_m.to_bits() as i64 * units as i64 * (crate::capacity::CELL_MM / STEP_STRAIGHT as i64)) / 1000;
+
+        // Proposals.
+        self.task_pool.clear();
+        if lives {
+            work += self.find_proposals(step.lidar, step.nonmap, range_cells, step.snap);
+        }
+        let reach = (PROPOSAL_REACH_CAMERA_RANGES * range_cells as i64 * STEP_STRAIGHT as i64).min(UNREACHABLE as i64 - 1) as u16;
+        for k in 0..self.proposals.proposals.len() {
+            let p = self.proposals.proposals[k];
+            let d = self.distance(p.viewpoint.0, p.viewpoint.1);
+            if d == UNREACHABLE || self.is_blacklisted(p.viewpoint, bl) || already_there(p.viewpoint, p.heading, d) {
+                continue;
+            }
+            if w_nonmap != Weight::ZERO {
+                work += self.visible_nonmap(step.lidar, step.nonmap, p.viewpoint, range_cells);
+            }
+            let (view, w) = self.view(cfg, step.lidar, step.visual, p.viewpoint, p.heading, w_nonmap);
+            work += w;
+            let class = if PROPOSAL_PRECEDENCE && d <= reach { 0 } else { u8::MAX };
+            let t = Task { anchor: p.cell, cell: p.viewpoint, room: room_near(&self.rooms, p.viewpoint), heading: p.heading, kind: TaskKind::Proposal, class, path_units: d, view, utility: view.gain - dist_term(d) };
+            let _ = self.task_pool.push(t);
+        }
+        let n_props = self.task_pool.len();
+
+        // Frontier viewpoints: the best heading of each.
+        let mut unreachable = 0;
+        for f in step.frontiers.frontiers() {
+            let Some(c) = self.snap_site(f.anchor, step.snap, &mut work, &mut unreachable) else { continue };
+            if self.is_blacklisted(c, bl) {
+                self.stats.blacklisted += 1;
+                continue;
+            }
+            let d = self.distance(c.0, c.1);
+            if w_nonmap != Weight::ZERO {
+                work += self.visible_nonmap(step.lidar, step.nonmap, c, range_cells);
+            }
+            let (best, w) = self.best_heading(step, c, d, w_nonmap, &already_there);
+            work += w;
+            let Some((view, h)) = best else { continue };
+            let kind = match f.source {
+                crate::frontier::FrontierSource::Lidar => TaskKind::LidarFrontier,
+                crate::frontier::FrontierSource::Visual => TaskKind::VisualFrontier,
+            };
+            if view.gain < cfg.gaze_min_gain.to_bits() as i64 {
+                // Nothing worth a look there (a shadow behind furniture, a sliver).
+                continue;
+            }
+            let t = Task { anchor: f.anchor, cell: c, room: None, heading: h, kind, class: u8::MAX, path_units: d, view, utility: view.gain - dist_term(d) };
+            let _ = self.task_pool.push(t);
+        }
+        self.stats.unreachable += unreachable;
+        // One frontier task per room: its best view by the greedy utility (the next one appears
+        // when the camera has looked or the LiDAR has seen), so the tour orders rooms and the
+        // robot does not zigzag between a room's small gaps. Frontiers outside every room (in
+        // space the segmentation has not labelled yet) stay tasks of their own.
+        let mut best_in_room = [i64::MIN; crate::capacity::MAX_ROOMS + 1];
+        for t in self.task_pool[n_props..].iter_mut() {
+            t.room = room_near(&self.rooms, t.cell);
+            if let Some(r) = t.room {
+                let b = &mut best_in_room[r as usize];
+                *b = (*b).max(t.utility);
+            }
+            work += 1;
+        }
+        let mut taken = [false; crate::capacity::MAX_ROOMS + 1];
+        let mut k = 0;
+        self.task_pool.retain(|t| {
+            k += 1;
+            if k <= n_props {
+                return true;
+            }
+            match t.room {
+                Some(r) if t.utility == best_in_room[r as usize] && !taken[r as usize] => {
+                    taken[r as usize] = true;
+                    true
+                }
+                Some(_) => false,
+                None => true,
+            }
+        });
+        let n_frontiers = self.task_pool.len() - n_props;
+
+        // Rooms the camera has not seen (no task inside yet).
+        work += self.rooms_unseen(step);
+        let mut room_tasks = 0;
+        for k in 0..self.room_scratch.len() {
+            if room_tasks >= MAX_ROOM_TASKS {
+                break;
+            }
+            let anchor = self.room_scratch[k];
+            let Some(c) = self.reachable_near(anchor, step.snap) else { continue };
+            if self.is_blacklisted(c, bl) {
+                continue;
+            }
+            let d = self.distance(c.0, c.1);
+            if w_nonmap != Weight::ZERO {
+                work += self.visible_nonmap(step.lidar, step.nonmap, c, range_cells);
+            }
+            let (best, w) = self.best_heading(step, c, d, w_nonmap, &already_there);
+            work += w;
+            if let Some((view, h)) = best.filter(|(v, _)| v.gain >= cfg.gaze_min_gain.to_bits() as i64) {
+                let t = Task { anchor, cell: c, room: room_near(&self.rooms, c), heading: h, kind: TaskKind::Room, class: u8::MAX, path_units: d, view, utility: view.gain - dist_term(d) };
+                if self.task_pool.push(t).is_ok() {
+                    room_tasks += 1;
+                }
+            }
+        }
+
+        // Keep proposals and rooms first, then frontier tasks by utility (stable: frontier order
+        // breaks ties).
+        let f0 = n_props;
+        for i in f0 + 1..f0 + n_frontiers {
+            let mut j = i;
+            while j > f0 && self.task_pool[j - 1].utility < self.task_pool[j].utility {
+                self.task_pool.swap(j - 1, j);
+                j -= 1;
+                work += 1;
+            }
+        }
+        let order = (0..n_props).chain(f0 + n_frontiers..self.task_pool.len()).chain(f0..f0 + n_frontiers);
+        for k in order {
+            let t = self.task_pool[k];
+            if self.tasks.len() >= TOUR_TASKS || self.tasks.push(t).is_err() {
+                self.sched.dropped += 1;
+            }
+        }
+
+        // Classes: proposals in reach; the current room (the one the goal being pursued lies in,
+        // else the robot's own: a robot crossing a doorway keeps its commitment); the rest.
+        let current_room = match current {
+            Some((c, _)) => room_near(&self.rooms, c),
+            None => room_near(&self.rooms, robot),
+        };
+        for t in self.tasks.iter_mut() {
+            if t.class == 0 {
+                continue;
+            }
+            t.class = if ROOM_PRECEDENCE && t.room.is_some() && t.room == current_room { 1 } else { 2 };
+        }
+        for t in self.tasks.iter() {
+            let k = match t.kind {
+                TaskKind::Proposal => 0,
+                TaskKind::LidarFrontier => 1,
+                TaskKind::VisualFrontier => 2,
+                TaskKind::Room => 3,
+            };
+            self.sched.tasks[k] += 1;
+        }
+        if self.tasks.is_empty() {
+            self.last_tour.clear();
+            self.last_goal = None;
+            self.last_dest = None;
+            return (None, work);
+        }
+
+        // The goal being pursued: the task chosen last time, if the controller still pursues it.
+        let pursued = match (current, self.last_goal) {
+            (Some((c, _)), Some((cell, anchor, kind))) if c == cell => Some((anchor, kind, self.last_goal_room)),
+            _ => None,
+        };
+        let current_task = pursued.and_then(|(a, kind, room)| self.find_task(a, kind, room, current.map(|(c, _)| c)));
+
+        // Costs.
+        work += self.tour_costs(pose.theta);
+        if DESTINATION {
+            // The destination is the greedy choice (the best utility); the tour picks up, before
+            // it, every task whose view pays for its detour (gain ≥ w_dist · detour), in the
+            // order of a shortest path; the rest come after it.
+            let n = self.tasks.len();
+            let mut g = 0;
+            for i in 1..n {
+                if self.tasks[i].utility > self.tasks[g].utility {
+                    g = i;
+                }
+            }
+            // Hysteresis, as the greedy planner's: the last destination stays unless another
+            // beats it by `switch_margin`.
+            if let Some(d) = self.last_dest.and_then(|(a, kind, room)| self.find_task(a, kind, room, None)) {
+                if self.tasks[d].utility.saturating_add(cfg.switch_margin.to_bits() as i64) >= self.tasks[g].utility {
+                    g = d;
+                }
+            }
+            self.last_dest = Some((self.tasks[g].anchor, self.tasks[g].kind, self.tasks[g].room));
+            let c = &self.problem.cost;
+            for j in 0..n {
+                let t = &mut self.tasks[j];
+                if j == g {
+                    t.class = t.class.min(2);
+                    continue;
+                }
+                let detour = (c[0][j + 1] as u64).saturating_add(c[j + 1][g + 1] as u64).saturating_sub(c[0][g + 1] as u64);
+                let pays = detour < u16::MAX as u64 && t.view.gain >= dist_term(detour as u16);
+                t.class = if t.class == 0 { 0 } else if pays { 1 } else { 3 };
+            }
+            for j in 0..n {
+                self.problem.class[j + 1] = self.tasks[j].class;
+            }
+        }
+
+        // Warm start: the last tour's tasks, matched by place and kind, the current goal first.
+        let mut warm: heapless::Vec<u8, MAX_TASKS> = heapless::Vec::new();
+        let near = |a: (i32, i32), b: (i32, i32)| (a.0 - b.0).abs() <= 5 && (a.1 - b.1).abs() <= 5;
+        self.sched.pursued = current_task.is_some();
+        if let Some(i) = current_task {
+            let _ = warm.push(i as u8 + 1);
+        }
+        for &(c, kind) in self.last_tour.iter() {
+            if let Some(i) = self.tasks.iter().position(|t| t.kind == kind && near(t.anchor, c)) {
+                let id = i as u8 + 1;
+                if !warm.contains(&id) {
+                    let _ = warm.push(id);
+                }
+            }
+        }
+        work += self.tour.start(&self.problem, &warm);
+        let (w, done) = self.tour.step(&self.problem, TOUR_WORK_BUDGET);
+        work += w;
+        self.sched.solved = done;
+        let mut first = self.tour.best().order.first().map(|&i| i as usize - 1);
+        let mut cost = self.tour.best().cost;
+        // Hysteresis: keep pursuing the current task unless the best tour that starts elsewhere
+        // is shorter than the best one that starts with it by [`TOUR_SWITCH_UNITS`], or a task
+        // of a lower class (a proposal now in reach) came up.
+        if let (Some(cur), Some(f)) = (current_task, first) {
+            let cur_class = self.problem.class[cur + 1];
+            if cur != f && cur_class <= self.problem.class[f + 1] {
+                let free: heapless::Vec<u8, MAX_TASKS> = self.tour.best().order.clone();
+                let classes = self.problem.class;
+                // The same problem with the pursued task alone in the lowest class.
+                for c in self.problem.class[1..=self.tasks.len()].iter_mut() {
+                    *c = c.saturating_add(1);
+                }
+                self.problem.class[cur + 1] = 0;
+                work += self.tour.start(&self.problem, &warm);
+                let (w, _) = self.tour.step(&self.problem, TOUR_WORK_BUDGET);
+                work += w;
+                let kept = self.tour.best().cost;
+                self.problem.class = classes;
+                if kept <= cost.saturating_add(TOUR_SWITCH_UNITS) {
+                    first = Some(cur);
+                    cost = kept;
+                    self.sched.kept = true;
+                } else {
+                    // Back to the free tour (for the order reported and the next warm start).
+                    let mut order = free;
+                    work += self.tour.start(&self.problem, &order);
+                    order.clear();
+                }
+            }
+        }
+        self.sched.tour_units = cost;
+        self.last_tour.clear();
+        let order: heapless::Vec<u8, MAX_TASKS> = self.tour.best().order.clone();
+        for &i in order.iter() {
+            let t = self.tasks[i as usize - 1];
+            let _ = self.last_tour.push((t.anchor, t.kind));
+            self.stats.candidates += 1;
+            let _ = self.candidates.push(t.viewpoint(-(cost as i64)));
+        }
+        self.last_goal = first.map(|i| (self.tasks[i].cell, self.tasks[i].anchor, self.tasks[i].kind));
+        self.last_goal_room = first.and_then(|i| self.tasks[i].room);
+        (first.map(|i| self.tasks[i].viewpoint(-(cost as i64))), work)
+    }
+
+    /// This step's task that continues one of the last step's (`anchor`, `kind`, `room`): a
+    /// room's frontier task is the room's, whichever of its frontiers is best now; otherwise a
+    /// frontier shrinks and its anchor moves as the robot nears it, so the task of the same kind
+    /// whose anchor is nearest the last one (or whose viewpoint is `goal_cell`) within
+    /// [`TASK_MATCH_CELLS`].
+    fn find_task(&self, a: (i32, i32), kind: TaskKind, room: Option<u8>, goal_cell: Option<(i32, i32)>) -> Option<usize> {
+        let goal_cell = goal_cell.unwrap_or(a);
+        let frontier = |k: TaskKind| matches!(k, TaskKind::LidarFrontier | TaskKind::VisualFrontier);
+        if let Some(i) = self.tasks.iter().position(|t| room.is_some() && t.room == room && frontier(t.kind) && frontier(kind)) {
+            return Some(i);
+        }
+        self.tasks
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.kind == kind)
+            .map(|(i, t)| (((t.anchor.0 - a.0).pow(2) + (t.anchor.1 - a.1).pow(2)).min((t.cell.0 - goal_cell.0).pow(2) + (t.cell.1 - goal_cell.1).pow(2)), i))
+            .filter(|&(d2, _)| d2 <= TASK_MATCH_CELLS * TASK_MATCH_CELLS)
+            .min()
+            .map(|(_, i)| i)
+    }
+
+    /// The best of the four headings at `c` by the view's gain, skipping those the robot already
+    /// has (standing there); with the work.
+    fn best_heading(
+        &self,
+        step: &Step,
+        c: (i32, i32),
+        d: u16,
+        w_nonmap: Weight,
+        already_there: &impl Fn((i32, i32), BinaryAngle, u16) -> bool,
+    ) -> (Option<(super::view::View, BinaryAngle)>, u32) {
+        let mut best: Option<(super::view::View, BinaryAngle)> = None;
+        let mut work = 0;
+        for &h in HEADINGS.iter() {
+            if already_there(c, h, d) {
+                continue;
+            }
+            let (view, w) = self.view(step.cfg, step.lidar, step.visual, c, h, w_nonmap);
+            work += w;
+            if best.is_none_or(|(b, _)| view.gain > b.gain) {
+                best = Some((view, h));
+            }
+        }
+        (best, work)
+    }
+
+    /// Fills the tour problem from the tasks. Returns the work.
+    fn tour_costs(&mut self, robot_heading: BinaryAngle) -> u32 {
+        let n = self.tasks.len();
+        let mut work = 0;
+        self.problem.n = n;
+        self.problem.class[0] = 0;
+        for i in 0..n {
+            let t = self.tasks[i];
+            self.problem.class[i + 1] = t.class;
+            let turn = quarter_turns(robot_heading, t.heading) * TURN_UNITS_PER_QUARTER / 8;
+            self.problem.cost[0][i + 1] = (t.path_units as u32).max(turn);
+            self.problem.cost[i + 1][0] = u32::MAX;
+            self.problem.cost[i + 1][i + 1] = 0;
+        }
+        for i in 0..n {
+            for j in i + 1..n {
+                let (a, b) = (self.tasks[i], self.tasks[j]);
+                let (d, w) = self.pair_distance(a.cell, b.cell);
+                work += w;
+                let turn = quarter_turns(a.heading, b.heading) * TURN_UNITS_PER_QUARTER / 8;
+                let c = if d == u32::MAX { u32::MAX } else { d.max(turn) };
+                self.problem.cost[i + 1][j + 1] = c;
+                self.problem.cost[j + 1][i + 1] = c;
+            }
+        }
+        work
+    }
+
+    /// Path distance between two reachable cells (units of 0.02 m): the straight line when every
+    /// cell on it is reachable, else down the shortest-path tree to where the two paths meet.
+    /// `u32::MAX` if either is unreachable. Returns the distance and the work.
+    fn pair_distance(&self, a: (i32, i32), b: (i32, i32)) -> (u32, u32) {
+        let (da, db) = (self.distance(a.0, a.1), self.distance(b.0, b.1));
+        if da == UNREACHABLE || db == UNREACHABLE {
+            return (u32::MAX, 1);
+        }
+        let (dx, dy) = ((a.0 - b.0) as i64, (a.1 - b.1) as i64);
+        let euclid = (fixed_point::isqrt_u64(((dx * dx + dy * dy) as u64) << 16) as i64 * STEP_STRAIGHT as i64 >> 8) as u32;
+        let mut work = (dx.abs().max(dy.abs())) as u32;
+        if Line::new(a.0, a.1, b.0, b.1).all(|(x, y)| self.distance(x, y) != UNREACHABLE) {
+            return (euclid, work);
+        }
+        // Walk the farther one down until both stand on the same cell.
+        let (mut p, mut q) = (a, b);
+        let mut steps = 0;
+        while p != q && steps < 2 * TREE_WALK_LIMIT {
+            steps += 1;
+            let (dp, dq) = (self.distance(p.0, p.1), self.distance(q.0, q.1));
+            let moved = if dp >= dq { self.descend(p.0, p.1).map(|c| p = c) } else { self.descend(q.0, q.1).map(|c| q = c) };
+            if moved.is_none() {
+                break;
+            }
+        }
+        work += steps * 9;
+        if p != q {
+            return ((da as u32 + db as u32).max(euclid), work);
+        }
+        let meet = self.distance(p.0, p.1) as u32;
+        ((da as u32 - meet) + (db as u32 - meet), work)
+    }
+
+    /// Rooms the camera has not seen: their most open cells into `self.room_scratch`, for rooms
+    /// (not corridors) with at most half their free cells seen by the camera and no task of the
+    /// pool inside. Returns the work.
+    fn rooms_unseen(&mut self, step: &Step) -> u32 {
+        self.room_scratch.clear();
+        let mut work = 0;
+        let mut has_task = [false; crate::capacity::MAX_ROOMS];
+        for t in self.task_pool.iter() {
+            if let Some(r) = self.rooms.room_at(t.cell.0, t.cell.1) {
+                has_task[r as usize % crate::capacity::MAX_ROOMS] = true;
+            }
+            work += 1;
+        }
+        for r in self.rooms.rooms() {
+            if r.kind != RoomKind::Room || has_task[r.id as usize % crate::capacity::MAX_ROOMS] {
+                continue;
+            }
+            let (seen, free, w) = camera_coverage(&self.rooms, r, step);
+            work += w;
+            if free > 0 && 2 * seen <= free && step.lidar.get(r.view.0, r.view.1) == Cell::Free {
+                let _ = self.room_scratch.push(r.view);
+            }
+        }
+        work
+    }
+}
+
+/// The room of `c`, or, where the segmentation left `c` unlabelled (a viewpoint next to
+/// unknown space: its coarse cell is not free enough), the room of the nearest labelled cell
+/// within [`ROOM_SEARCH_CELLS`] (rings of growing Chebyshev radius, scanned in a fixed order).
+fn room_near(rooms: &Rooms, c: (i32, i32)) -> Option<u8> {
+    if let Some(r) = rooms.room_at(c.0, c.1) {
+        return Some(r);
+    }
+    for r in (2..=ROOM_SEARCH_CELLS).step_by(2) {
+        for d in -r..=r {
+            for (x, y) in [(c.0 + d, c.1 - r), (c.0 + d, c.1 + r), (c.0 - r, c.1 + d), (c.0 + r, c.1 + d)] {
+                if let Some(id) = rooms.room_at(x, y) {
+                    return Some(id);
+                }
+            }
+        }
+    }
+    None
+}
+
+/// How much of room `r` the camera has seen: (seen, free) over every other cell of its bounding
+/// box in both directions (a quarter sample: the share is what matters), and the work.
+fn camera_coverage(rooms: &Rooms, r: &Room, step: &Step) -> (u32, u32, u32) {
+    let (x0, y0, x1, y1) = r.bbox;
+    let (mut seen, mut free, mut work) = (0, 0, 0);
+    for y in (y0..=y1).step_by(2) {
+        for x in (x0..=x1).step_by(2) {
+            work += 1;
+            if rooms.room_at(x, y) != Some(r.id) || step.lidar.get(x, y) != Cell::Free {
+                continue;
+            }
+            free += 1;
+            seen += (step.visual.get(x, y) != Cell::Unknown) as u32;
+        }
+    }
+    (seen, free, work)
+}
