@@ -22,6 +22,7 @@
 
 pub mod builtin;
 pub mod generate;
+pub mod oracle;
 pub mod geometry;
 pub mod reach;
 pub mod simulator;
