@@ -308,10 +308,10 @@ pub fn markdown_table(cells: &[CellSummary]) -> String {
             out.push_str(&format!("| {w} {s} | {oracle} | {} |\n", entries.join(" | ")));
         }
         out.push_str(
-            "\nMean time to find over the oracle's time (± its 95 % CI), per trial: the oracle drives the shortest path on the true \
+            "\nMean time to find over the oracle's time (± its 95 % CI), per trial: the oracle walks the shortest path on the true \
              world's free space (inflated by the body's radius) to the nearest pose from which the simulator's detector sees the \
-             target, at the robot's top speed, then turns to face it at its top turn rate (`host/sim/src/oracle.rs`). A failure \
-             counts at the time limit. 1 is the physical limit of the search.\n",
+             target, at the robot's top speed, turning to face it at its top turn rate on the way (the longer of the two; \
+             `host/sim/src/oracle.rs`). A failure counts at the time limit. 1 is the physical limit of the search.\n",
         );
     }
     out.push('\n');

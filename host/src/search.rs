@@ -812,6 +812,32 @@ fn round3(v: f64) -> f64 {
 mod tests {
     use super::*;
 
+    #[test]
+    fn a_named_robot_sets_the_simulated_camera_and_the_controllers_model_of_it() {
+        assert_eq!("calibrated".parse::<Robot>(), Ok(Robot::Calibrated));
+        assert_eq!("short".parse::<Robot>(), Ok(Robot::Short));
+        assert!("long".parse::<Robot>().unwrap_err().contains("calibrated or short"));
+        for r in Robot::ALL {
+            assert_eq!(r.to_string().parse::<Robot>(), Ok(r));
+        }
+        assert_eq!(Robot::Short.camera_range_m(), 4.0);
+        assert_ne!(Robot::Calibrated.camera_range_m(), Robot::Short.camera_range_m());
+        let w = World::builtin("apartment", Scenario::Easy).unwrap();
+        for r in Robot::ALL {
+            let mut spec = SearchSpec::new("apartment", w.clone(), Scenario::Easy, PlannerChoice::Multisensor, 1);
+            r.apply(&mut spec).unwrap();
+            assert_eq!(spec.sim.camera_range_m, r.camera_range_m(), "{r}");
+            assert_eq!(spec.controller.camera_range_m.to_num::<f64>(), r.camera_range_m(), "{r}: the controller follows");
+            // Nothing else changes: the rest is the default robot.
+            assert_eq!(SimConfig { camera_range_m: default_sim().camera_range_m, ..spec.sim.clone() }, default_sim());
+        }
+        // The short robot is the simulator's default (the 4 m of before), the calibrated one is not.
+        let mut spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::Multisensor, 1);
+        Robot::Short.apply(&mut spec).unwrap();
+        assert_eq!(spec.sim, default_sim());
+        assert_eq!(spec.controller, controller_model(&Config::DEFAULT, &default_sim()));
+    }
+
     /// The utility a candidate line prints, parsed back.
     fn printed_utility(line: &str) -> f64 {
         let u = line.split("U=").nth(1).unwrap_or_else(|| panic!("no utility in {line:?}"));

@@ -262,6 +262,10 @@ fn lives_refuses_a_setting_the_controller_cannot_work_with_naming_its_range() {
     for (args, says) in [
         (&["search", "--set", "viewpoint_snap_radius_m=3000"][..], "`viewpoint_snap_radius_m`: expected a value in [0, 5] m, got 3000"),
         (&["search", "--set", "camera_range_m=0"][..], "`camera_range_m`: expected a value in (0, 51.2] m, got 0"),
+        (&["search", "--robot", "long"][..], "unknown robot `long` (expected calibrated or short)"),
+        (&["eval", "--robot", "long"][..], "unknown robot `long` (expected calibrated or short)"),
+        (&["tune", "--grid", "w_dist_per_m=1", "--first-world", "1000050"][..], "overlap the held-out worlds 1000001..1001001"),
+        (&["dataset", "--out", "/tmp/never-written", "--seed", "999999", "--worlds", "5"][..], "overlap the held-out worlds"),
         (&["tune", "--grid", "robot_radius_m=0.35,5000"][..], "`robot_radius_m`: expected a value in [0, 1.5] m, got 5000"),
     ] {
         let out = std::process::Command::new(common::lives()).args(args).output().expect("lives runs");

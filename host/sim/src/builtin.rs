@@ -9,7 +9,7 @@
 //!
 //! | world | size | easy | hard | time limit (easy / hard) |
 //! |---|---|---|---|---|
-//! | `apartment` | 20 × 30 m | hard's start (the living room, facing north), fewer objects (2 of hard's 20 clutter objects, 1 of its 2 people), the target next to the start room (dining room, kitchen nook, bedroom 2, hallway), 10–16 m by path | start in the living room, target in a far room (bedroom 1, main bedroom, bathroom), 22–31 m by path, more clutter, two people | 120 / 180 s |
+//! | `apartment` | 20 × 30 m | hard's start (the living room, facing north), fewer objects (2 of hard's 20 clutter objects, 1 of its 2 people), the target next to the start room (dining room, kitchen nook, bedroom 2, hallway), 9.9–13.7 m by path | start in the living room, target in a far room (bathroom, bedroom 1, main bedroom), 14.8–29.5 m by path, 20 clutter objects, two people | 120 / 180 s |
 //! | `office` | 25 × 45 m | target in the southern half (y < 23.5, the middle of the bounds), where the robot starts | target in the northern half | 180 / 300 s |
 //! | `hallway` | 15 × 38 m | target behind the start, in the trunk's rooms | target up one of the two branches of the fork | 240 / 240 s |
 //!

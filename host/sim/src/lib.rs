@@ -22,8 +22,8 @@
 
 pub mod builtin;
 pub mod generate;
-pub mod oracle;
 pub mod geometry;
+pub mod oracle;
 pub mod reach;
 pub mod simulator;
 pub mod world;
