@@ -174,7 +174,7 @@ pub enum Robot {
 }
 
 /// The calibrated robot's camera reach (m): `docs/experiments/camera-calibration.md`.
-pub const CALIBRATED_CAMERA_RANGE_M: f64 = 8.0;
+pub const CALIBRATED_CAMERA_RANGE_M: f64 = 12.0;
 /// The short robot's camera reach (m).
 pub const SHORT_CAMERA_RANGE_M: f64 = 4.0;
 
