@@ -82,6 +82,15 @@ pub struct CellSummary {
     pub missed_in_reach: usize,
     /// Every trial's time (s), in seed order (for plots).
     pub times_s: Vec<f64>,
+    /// Trials with an oracle ([`SearchResult::oracle_s`]).
+    pub oracle_trials: usize,
+    /// Mean oracle time over them (s; NaN if none).
+    pub mean_oracle_s: f64,
+    /// Mean over them of time / oracle (a failure counted at the time limit; an oracle under one
+    /// controller period counted as one period): 1 is the physical limit of the search.
+    pub oracle_ratio: f64,
+    /// Its 95 % confidence half-width.
+    pub oracle_ratio_ci95: f64,
     /// The classifier's labels against the simulator's truth, pooled over the trials
     /// (`lives` on a classifier only).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -135,7 +144,14 @@ pub fn summarise(results: &[SearchResult]) -> Vec<CellSummary> {
             let found = rs.iter().filter(|r| r.found).count();
             let sightings: Vec<f64> = rs.iter().filter_map(|r| r.lidar_saw_target_s).collect();
             let scored: Vec<&LabelScore> = rs.iter().filter_map(|r| r.classifier.as_ref()).collect();
+            let oracles: Vec<f64> = rs.iter().filter_map(|r| r.oracle_s).collect();
+            let ratios: Vec<f64> = rs.iter().filter_map(|r| oracle_ratio(r)).collect();
+            let (oracle_ratio, oracle_ratio_ci95) = mean_ci(&ratios);
             CellSummary {
+                oracle_trials: oracles.len(),
+                mean_oracle_s: mean_ci(&oracles).0,
+                oracle_ratio,
+                oracle_ratio_ci95,
                 labels: (!scored.is_empty()).then(|| LabelScore::pooled(scored)),
                 missed_in_reach: rs.iter().filter(|r| !r.found && r.target_in_camera_reach_s.is_some()).count(),
                 lidar_sighted: sightings.len(),
@@ -154,6 +170,100 @@ pub fn summarise(results: &[SearchResult]) -> Vec<CellSummary> {
             }
         })
         .collect()
+}
+
+/// A trial's time / its oracle: the time to find, a failure counted as the time limit, over the
+/// oracle's time, at least one controller period (the first detection can come no sooner).
+/// `None` without an oracle.
+pub fn oracle_ratio(r: &SearchResult) -> Option<f64> {
+    let tick = search::TICK_US as f64 / 1e6;
+    let t = if r.found { r.time_s } else { r.time_limit_s };
+    r.oracle_s.map(|o| t / o.max(tick))
+}
+
+/// Fills in every result's [`SearchResult::oracle_s`] (`results[i]` is the run of `specs[i]`):
+/// the oracle of its world, robot and seed ([`crate::sim::oracle::oracle`]), computed once for
+/// all the planners that ran the same trial, on `threads` workers.
+pub fn attach_oracles(specs: &[SearchSpec], results: &mut [SearchResult], threads: usize) {
+    // The distinct trials: the oracle depends on the world, the simulated robot and the seed.
+    let mut trials: Vec<usize> = Vec::new();
+    let mut of: Vec<usize> = Vec::with_capacity(specs.len());
+    for (i, s) in specs.iter().enumerate() {
+        let same = |&j: &usize| {
+            let t: &SearchSpec = &specs[j];
+            t.seed == s.seed && t.world_name == s.world_name && t.scenario == s.scenario && t.sim == s.sim && t.world == s.world
+        };
+        match trials.iter().position(same) {
+            Some(k) => of.push(k),
+            None => {
+                of.push(trials.len());
+                trials.push(i);
+            }
+        }
+    }
+    let next = AtomicUsize::new(0);
+    let slots: Mutex<Vec<Option<f64>>> = Mutex::new(vec![None; trials.len()]);
+    std::thread::scope(|sc| {
+        for _ in 0..threads.clamp(1, trials.len().max(1)) {
+            sc.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::Relaxed);
+                let Some(&i) = trials.get(k) else { break };
+                let o = crate::sim::oracle::oracle(&specs[i].world, &specs[i].sim, specs[i].seed).map(|o| o.time_s);
+                if let Ok(mut v) = slots.lock() {
+                    v[k] = o;
+                }
+            });
+        }
+    });
+    let slots = slots.into_inner().unwrap_or_default();
+    for (r, k) in results.iter_mut().zip(of) {
+        r.oracle_s = slots.get(k).copied().flatten();
+    }
+}
+
+/// The world name of the held-out procedural set's rows.
+pub const HELDOUT_WORLD: &str = "heldout";
+/// The first seed of the held-out procedural worlds. Seeds
+/// `HELDOUT_FIRST_SEED..HELDOUT_FIRST_SEED + HELDOUT_MAX_WORLDS` are reserved for `lives eval
+/// --heldout` and refused by `lives tune` and `lives dataset`: no parameter or classifier is
+/// chosen on them. (Tuning has used worlds 1–384, the datasets 1–1200.)
+pub const HELDOUT_FIRST_SEED: u64 = 1_000_001;
+/// How many held-out worlds there can be.
+pub const HELDOUT_MAX_WORLDS: u64 = 1000;
+
+/// Does the seed range `first..=last` overlap the held-out seeds?
+pub fn overlaps_heldout(first: u64, last: u64) -> bool {
+    first < HELDOUT_FIRST_SEED + HELDOUT_MAX_WORLDS && last >= HELDOUT_FIRST_SEED
+}
+
+/// The specs of the held-out set: `n` procedural worlds, seeds `HELDOUT_FIRST_SEED..+n`, one
+/// trial each (simulator seed = world seed), every planner. World `k` (from 0) is generated in
+/// `easy` for even `k` and `hard` for odd `k` (`World::random_scenario`), so the set gives two
+/// rows, `heldout easy` and `heldout hard`, of `n / 2` worlds each (the extra one easy).
+pub fn heldout_specs(
+    n: u64,
+    planners: &[PlannerChoice],
+    model: &'static [u8],
+    configure: impl Fn(&mut SearchSpec) -> Result<(), String>,
+) -> Result<Vec<SearchSpec>, String> {
+    if n > HELDOUT_MAX_WORLDS {
+        return Err(format!("--heldout: at most {HELDOUT_MAX_WORLDS} worlds"));
+    }
+    let mut specs = Vec::new();
+    for k in 0..n {
+        let seed = HELDOUT_FIRST_SEED + k;
+        let scenario = if k % 2 == 0 { Scenario::Easy } else { Scenario::Hard };
+        let world = World::random_scenario(seed, scenario);
+        for &p in planners {
+            let mut spec = SearchSpec::new(HELDOUT_WORLD, world.clone(), scenario, p, seed);
+            if p.uses_classifier() {
+                spec.model = Some(model);
+            }
+            configure(&mut spec)?;
+            specs.push(spec);
+        }
+    }
+    Ok(specs)
 }
 
 /// The summary shaped like the paper's Table I: a row per setting, a column per planner, each
@@ -178,17 +288,42 @@ pub fn markdown_table(cells: &[CellSummary]) -> String {
                 None => "—".into(),
             })
             .collect();
-        out.push_str(&format!("| {w} {s} | {limit:.0} s | {} |\n", entries.join(" | ")));
+        let limit = if *w == HELDOUT_WORLD { "per world".to_string() } else { format!("{limit:.0} s") };
+        out.push_str(&format!("| {w} {s} | {limit} | {} |\n", entries.join(" | ")));
     }
-    out.push_str("\nMean time to find in seconds (a failure counts as the time limit) and success rate.\n\n");
+    out.push_str("\nMean time to find in seconds (a failure counts as the time limit) and success rate.\n");
+    if cells.iter().any(|c| c.oracle_trials > 0) {
+        out.push_str(&format!("\n| setting | oracle, mean | {} |\n", planners.join(" | ")));
+        out.push_str(&format!("|---|---|{}\n", "---|".repeat(planners.len())));
+        for (w, s, _) in &settings {
+            let oracle = planners.iter().find_map(|p| find(p, w, s)).filter(|c| c.oracle_trials > 0).map(|c| c.mean_oracle_s);
+            let entries: Vec<String> = planners
+                .iter()
+                .map(|p| match find(p, w, s) {
+                    Some(c) if c.oracle_trials > 0 => format!("{:.2} ± {:.2}", c.oracle_ratio, c.oracle_ratio_ci95),
+                    _ => "—".into(),
+                })
+                .collect();
+            let oracle = oracle.map_or("—".into(), |o| format!("{o:.1} s"));
+            out.push_str(&format!("| {w} {s} | {oracle} | {} |\n", entries.join(" | ")));
+        }
+        out.push_str(
+            "\nMean time to find over the oracle's time (± its 95 % CI), per trial: the oracle walks the shortest path on the true \
+             world's free space (inflated by the body's radius) to the nearest pose from which the simulator's detector sees the \
+             target, at the robot's top speed, turning to face it at its top turn rate on the way (the longer of the two; \
+             `host/sim/src/oracle.rs`). A failure counts at the time limit. 1 is the physical limit of the search.\n",
+        );
+    }
+    out.push('\n');
     out.push_str(
-        "| planner | setting | trials | found | mean time (s) | 95 % CI (s) | mean path (m) | LiDAR saw the target | its first sighting, mean (s) | missed within camera reach | classifier: right / non-map found |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| planner | setting | trials | found | mean time (s) | 95 % CI (s) | mean path (m) | LiDAR saw the target | its first sighting, mean (s) | missed within camera reach | classifier: right / non-map found | time / oracle |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for c in cells {
         let sighting = if c.lidar_sighted > 0 { format!("{:.1}", c.mean_lidar_sighting_s) } else { "—".into() };
         let labels = c.labels.map_or("—".into(), |l| format!("{:.1} % / {:.1} %", 100.0 * l.accuracy, 100.0 * l.nonmap_recall));
+        let ratio = if c.oracle_trials > 0 { format!("{:.2}", c.oracle_ratio) } else { "—".into() };
         out.push_str(&format!(
-            "| {} | {} {} | {} | {} | {:.1} | ± {:.1} | {:.1} | {} | {} | {} | {labels} |\n",
+            "| {} | {} {} | {} | {} | {:.1} | ± {:.1} | {:.1} | {} | {} | {} | {labels} | {ratio} |\n",
             c.planner,
             c.world,
             c.scenario,
@@ -231,6 +366,10 @@ fn settings_of(cells: &[CellSummary]) -> Vec<(&str, &str, f64)> {
 /// `nearest` and `explore-lite` in every setting. `None` unless `multisensor` and at least one
 /// of the two LIVES planners were run.
 pub fn claims(results: &[SearchResult]) -> Option<String> {
+    // The paper's claims are about its buildings: the held-out procedural rows are reported, not
+    // checked here.
+    let builtin: Vec<SearchResult> = results.iter().filter(|r| r.world != HELDOUT_WORLD).cloned().collect();
+    let results = &builtin[..];
     let cells = summarise(results);
     let has = |p: &str| results.iter().any(|r| r.planner == p);
     let subjects: Vec<&str> = ["lives", "lives-gt"].into_iter().filter(|p| has(p)).collect();
@@ -304,14 +443,19 @@ pub fn claims(results: &[SearchResult]) -> Option<String> {
 /// The summary as CSV (one line per planner and setting).
 pub fn csv(cells: &[CellSummary]) -> String {
     let mut out = String::from(
-        "planner,world,scenario,trials,found,success_rate,mean_time_s,ci95_s,mean_path_m,time_limit_s,lidar_sighted,mean_lidar_sighting_s,missed_in_reach,classifier_accuracy,classifier_nonmap_recall\n",
+        "planner,world,scenario,trials,found,success_rate,mean_time_s,ci95_s,mean_path_m,time_limit_s,lidar_sighted,mean_lidar_sighting_s,missed_in_reach,classifier_accuracy,classifier_nonmap_recall,oracle_trials,mean_oracle_s,oracle_ratio,oracle_ratio_ci95\n",
     );
     for c in cells {
         let sighting = if c.lidar_sighted > 0 { format!("{:.3}", c.mean_lidar_sighting_s) } else { String::new() };
         let (acc, recall) =
             c.labels.map_or((String::new(), String::new()), |l| (format!("{:.4}", l.accuracy), format!("{:.4}", l.nonmap_recall)));
+        let oracle = if c.oracle_trials > 0 {
+            format!("{},{:.3},{:.4},{:.4}", c.oracle_trials, c.mean_oracle_s, c.oracle_ratio, c.oracle_ratio_ci95)
+        } else {
+            "0,,,".into()
+        };
         out.push_str(&format!(
-            "{},{},{},{},{},{:.4},{:.3},{:.3},{:.3},{:.1},{},{},{},{acc},{recall}\n",
+            "{},{},{},{},{},{:.4},{:.3},{:.3},{:.3},{:.1},{},{},{},{acc},{recall},{oracle}\n",
             c.planner,
             c.world,
             c.scenario,
@@ -496,6 +640,7 @@ mod tests {
             target_in_camera_reach_s: None,
             classifier: None,
             sim: None,
+            oracle_s: None,
         }
     }
 
@@ -525,11 +670,71 @@ mod tests {
         assert_eq!((a.lidar_sighted, a.mean_lidar_sighting_s), (2, 6.5));
         assert_eq!((a.missed_in_reach, cells[1].missed_in_reach), (1, 0));
         assert!(md.contains("| 2 | 6.5 | 1 | 64.3 % / 50.0 % |") && md.contains("| 0 | — | 0 | — |"), "{md}");
-        assert!(csv(&cells).lines().nth(1).unwrap().ends_with(",2,6.500,1,0.6429,0.5000"));
-        assert!(csv(&cells).lines().nth(2).unwrap().ends_with(",0,,0,,"));
+        assert!(csv(&cells).lines().nth(1).unwrap().ends_with(",2,6.500,1,0.6429,0.5000,0,,,"));
+        assert!(csv(&cells).lines().nth(2).unwrap().ends_with(",0,,0,,,0,,,"));
+        assert!(!md.contains("oracle, mean"), "no oracle table without oracles");
         // The classifier's score pools the beams of the trials that have one.
         assert_eq!(a.labels.map(|l| l.beams), Some(14));
         assert_eq!(cells[1].labels, None);
+    }
+
+    #[test]
+    fn the_oracle_ratio_counts_failures_at_the_limit_and_floors_the_oracle_at_a_tick() {
+        let mut rs = [result("a", true, 30.0), result("a", false, 0.0), result("a", true, 1.0), result("b", true, 10.0)];
+        rs[0].oracle_s = Some(10.0); // 30 / 10 = 3
+        rs[1].oracle_s = Some(60.0); // a failure: the limit 120 / 60 = 2
+        rs[2].oracle_s = Some(0.0); // seen from the start: 1 / 0.2 = 5
+        let cells = summarise(&rs);
+        let a = &cells[0];
+        assert_eq!(a.oracle_trials, 3);
+        assert!((a.oracle_ratio - 10.0 / 3.0).abs() < 1e-12, "{}", a.oracle_ratio);
+        assert!((a.mean_oracle_s - 70.0 / 3.0).abs() < 1e-12);
+        assert_eq!((cells[1].oracle_trials, cells[1].oracle_ratio.is_nan()), (0, true));
+        let md = markdown_table(&cells);
+        assert!(md.contains("| setting | oracle, mean | a | b |"), "{md}");
+        assert!(md.contains("| apartment easy | 23.3 s | 3.33 ± "), "{md}");
+        assert!(md.contains(" | — |\n"), "{md}");
+        assert!(csv(&cells).lines().nth(1).unwrap().ends_with(",3,23.333,3.3333,3.7949"), "{}", csv(&cells));
+    }
+
+    #[test]
+    fn oracles_are_computed_once_per_trial_and_shared_by_the_planners() {
+        // Two planners, two seeds on one small world: four results, two oracles.
+        let world = World::random_scenario(3, Scenario::Easy);
+        let specs: Vec<SearchSpec> = [PlannerChoice::Nearest, PlannerChoice::Multisensor]
+            .into_iter()
+            .flat_map(|p| (1..=2).map(move |seed| (p, seed)))
+            .map(|(p, seed)| SearchSpec::new("random-3", world.clone(), Scenario::Easy, p, seed))
+            .collect();
+        let mut rs: Vec<SearchResult> = specs.iter().map(|_| result("x", true, 5.0)).collect();
+        attach_oracles(&specs, &mut rs, 2);
+        let o: Vec<f64> = rs.iter().map(|r| r.oracle_s.expect("every trial has one")).collect();
+        assert_eq!((o[0], o[1]), (o[2], o[3]), "the same trial, the same oracle, whatever the planner");
+        let direct = crate::sim::oracle::oracle(&specs[1].world, &specs[1].sim, 2).unwrap().time_s;
+        assert_eq!(o[1], direct);
+        assert!(o.iter().all(|&t| t >= 0.0 && t < world.time_limit_s), "{o:?}");
+    }
+
+    #[test]
+    fn heldout_seeds_are_disjoint_from_tunes_and_split_into_easy_and_hard() {
+        // `lives tune` has used worlds 1-384 and refuses the held-out range (main.rs); the
+        // datasets 1-1200.
+        assert!(!overlaps_heldout(1, 384) && !overlaps_heldout(1, 1200));
+        assert!(overlaps_heldout(1, HELDOUT_FIRST_SEED) && overlaps_heldout(HELDOUT_FIRST_SEED + 999, u64::MAX));
+        assert!(!overlaps_heldout(HELDOUT_FIRST_SEED + HELDOUT_MAX_WORLDS, u64::MAX));
+        // The default tune range (`--worlds 48 --first-world 1`) is outside.
+        assert!(!overlaps_heldout(1, 48));
+        let specs = heldout_specs(5, &[PlannerChoice::Nearest, PlannerChoice::Lives], firmware::classifier::EMBEDDED_GEO_MODEL, |_| Ok(()))
+            .unwrap();
+        assert_eq!(specs.len(), 10);
+        let seeds: Vec<u64> = specs.iter().step_by(2).map(|s| s.seed).collect();
+        assert_eq!(seeds, (HELDOUT_FIRST_SEED..HELDOUT_FIRST_SEED + 5).collect::<Vec<_>>());
+        let scen: Vec<&str> = specs.iter().step_by(2).map(|s| s.scenario_label()).collect();
+        assert_eq!(scen, ["easy", "hard", "easy", "hard", "easy"]);
+        assert!(specs.iter().all(|s| s.world_name == HELDOUT_WORLD));
+        assert_eq!(specs[0].world, World::random_scenario(HELDOUT_FIRST_SEED, Scenario::Easy));
+        assert!(specs[1].model.is_some() && specs[0].model.is_none(), "lives runs the classifier");
+        assert!(heldout_specs(HELDOUT_MAX_WORLDS + 1, &[PlannerChoice::Nearest], &[], |_| Ok(())).is_err());
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! `lives` — LiDAR Informed Visual Search: simulate, run and measure the controller.
 
 use clap::{Parser, Subcommand};
-use host::search::{self, PlannerChoice, SearchSpec};
+use host::search::{self, PlannerChoice, Robot, SearchSpec};
 use host::sim::{Scenario, World};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -66,6 +66,11 @@ enum Cmd {
         /// size also set the controller's model of them; a `--set` then changes the model alone.
         #[arg(long = "sim", value_name = "NAME=VALUE")]
         sim: Vec<String>,
+        /// The simulated robot: `calibrated` (the camera's reach calibrated on the paper's
+        /// multisensor baseline, docs/experiments/camera-calibration.md) or `short` (a 4 m
+        /// camera). `--sim` then changes it further.
+        #[arg(long, default_value = "calibrated")]
+        robot: Robot,
         /// Record the run (scans, pose, both grids, frontiers, candidates, goals, detection) to an
         /// MCAP file that Foxglove opens (docs/recording.md).
         #[arg(long, value_name = "FILE.mcap")]
@@ -377,8 +382,10 @@ enum Cmd {
         /// Scenarios, comma-separated.
         #[arg(long, value_delimiter = ',', default_value = "easy,hard")]
         scenarios: Vec<Scenario>,
-        /// Planners, comma-separated (`lives` runs the embedded int8 classifier).
-        #[arg(long, value_delimiter = ',', default_value = "rrt,explore-lite,nearest,multisensor,lives-gt,lives")]
+        /// Planners, comma-separated (`lives` runs the embedded int8 classifier). Default: every
+        /// planner `--planner` knows, the last first (today rrt, explore-lite, nearest,
+        /// multisensor, lives-gt, lives).
+        #[arg(long, value_delimiter = ',')]
         planners: Vec<PlannerChoice>,
         /// Worker threads (default: the machine's cores).
         #[arg(long)]
@@ -397,6 +404,16 @@ enum Cmd {
         /// size also set the controller's model of them; a `--set` then changes the model alone.
         #[arg(long = "sim", value_name = "NAME=VALUE")]
         sim: Vec<String>,
+        /// The simulated robot: `calibrated` (the camera's reach calibrated on the paper's
+        /// multisensor baseline, docs/experiments/camera-calibration.md) or `short` (a 4 m
+        /// camera). `--sim` then changes it further.
+        #[arg(long, default_value = "calibrated")]
+        robot: Robot,
+        /// Also run N held-out procedural worlds (seeds 1000001.., which `lives tune` and
+        /// `lives dataset` refuse), one trial each, alternately easy and hard: the rows
+        /// `heldout easy` and `heldout hard`. 0 runs none.
+        #[arg(long, default_value_t = 100)]
+        heldout: u64,
     },
     /// Tune planner parameters on procedurally generated worlds only (never the built-in ones):
     /// scores every combination of the `--grid` values by mean time to find / time limit.
@@ -595,9 +612,13 @@ fn write_file(path: &std::path::Path, text: &str) -> Result<(), String> {
     std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
-/// Applies `--sim` (the simulated robot, and the controller's model of its sensors), then `--set`
+/// Applies `--robot` (a named simulated robot), `--sim` (changes to it, and to the controller's
+/// model of its sensors), then `--set`
 /// (the controller alone, so it may still change that model).
-fn configure_spec(spec: &mut SearchSpec, set: &[String], sim: &[String]) -> Result<(), String> {
+fn configure_spec(spec: &mut SearchSpec, robot: Option<Robot>, set: &[String], sim: &[String]) -> Result<(), String> {
+    if let Some(r) = robot {
+        r.apply(spec)?;
+    }
     for a in sim {
         host::overrides::apply_sim(&mut spec.sim, &mut spec.controller, a)?;
     }
@@ -618,19 +639,26 @@ fn eval_cmd(
     no_pictures: bool,
     set: &[String],
     sim: &[String],
+    robot: Robot,
+    heldout: u64,
 ) -> Result<ExitCode, String> {
     use host::eval;
     if trials == 0 {
         return Err("--trials must be at least 1".into());
     }
-    let configure = |spec: &mut SearchSpec| configure_spec(spec, set, sim);
-    let specs = eval::eval_specs(worlds, scenarios, planners, trials, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?;
+    let configure = |spec: &mut SearchSpec| configure_spec(spec, Some(robot), set, sim);
+    let mut specs = eval::eval_specs(worlds, scenarios, planners, trials, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?;
+    specs.extend(eval::heldout_specs(heldout, planners, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?);
     let pb = count_bar();
     pb.set_length(specs.len() as u64);
     let t0 = Instant::now();
-    let results = eval::run_batch(&specs, threads.unwrap_or_else(cores), |n| pb.set_position(n as u64))?;
+    let threads_n = threads.unwrap_or_else(cores);
+    let mut results = eval::run_batch(&specs, threads_n, |n| pb.set_position(n as u64))?;
     pb.finish_and_clear();
+    let searches_s = t0.elapsed().as_secs_f64();
+    eval::attach_oracles(&specs, &mut results, threads_n);
     let wall = t0.elapsed().as_secs_f64();
+    let oracles_s = wall - searches_s;
     let cells = eval::summarise(&results);
     let commit = std::process::Command::new("git")
         .args(["rev-parse", "--short", "HEAD"])
@@ -642,15 +670,26 @@ fn eval_cmd(
     let command = std::env::args().map(|a| if a.contains(' ') { format!("'{a}'") } else { a }).collect::<Vec<_>>().join(" ");
     let table = eval::markdown_table(&cells);
     let claims = eval::claims(&results).unwrap_or_default();
+    let heldout_note = if heldout > 0 {
+        format!(
+            "The held-out rows: {heldout} procedural worlds (`World::random_scenario`, seeds {}–{}, alternately easy and hard; \
+             seeds `lives tune` and `lives dataset` refuse), one trial each; their limits are each world's own.\n\n",
+            eval::HELDOUT_FIRST_SEED,
+            eval::HELDOUT_FIRST_SEED + heldout - 1
+        )
+    } else {
+        String::new()
+    };
     let md = format!(
-        "{table}{claims}\nCommand: `{command}` · commit {commit} · {} searches in {wall:.0} s on {} threads.\n",
+        "Robot: `{robot}` (camera {} m).\n\n{table}\n{heldout_note}{claims}\nCommand: `{command}` · commit {commit} · {} searches in {searches_s:.0} s and their oracles in {oracles_s:.0} s on {threads_n} threads ({wall:.0} s).\n",
+        robot.camera_range_m(),
         results.len(),
-        threads.unwrap_or_else(cores)
     );
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     write_file(&out.join("table.md"), &md)?;
     write_file(&out.join("results.csv"), &eval::csv(&cells))?;
-    let json = serde_json::json!({ "command": command, "commit": commit, "wall_s": wall, "summary": cells, "trials": results });
+    let json =
+        serde_json::json!({ "command": command, "commit": commit, "robot": robot, "wall_s": wall, "summary": cells, "trials": results });
     write_file(&out.join("results.json"), &serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?)?;
     // Time-to-find distributions: one panel per setting, one column per planner.
     let mut panels = Vec::new();
@@ -715,11 +754,11 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<ExitCode, String> {
     match cli.command {
-        Cmd::Search { run, png, json, trace, trace_candidates, model, set, sim, record } => {
+        Cmd::Search { run, png, json, trace, trace_candidates, model, set, sim, robot, record } => {
             let mut spec = load_spec(&run)?;
             spec.trace = trace || trace_candidates.is_some();
             spec.trace_candidates = trace_candidates.unwrap_or(0);
-            configure_spec(&mut spec, &set, &sim)?;
+            configure_spec(&mut spec, Some(robot), &set, &sim)?;
             let pb = progress_bar(spec.world.time_limit_s as u64);
             let t0 = Instant::now();
             // The committed geometric classifier (docs/model-card-geo.md) unless `--model`; only
@@ -777,7 +816,8 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 }
                 if let Some(x) = &r.sim {
                     say!(
-                        "robot (--sim): {} m/s, {} rad/s; LiDAR {} m, noise {} m, dropouts {}; camera {} m, {}°, detects at {} of the outline; body {} m",
+                        "robot (--robot {robot}{}): {} m/s, {} rad/s; LiDAR {} m, noise {} m, dropouts {}; camera {} m, {}°, detects at {} of the outline; body {} m",
+                        if sim.is_empty() { "" } else { " --sim" },
                         x.speed_mps,
                         x.turn_rate_rps,
                         x.lidar_max_range_m,
@@ -837,6 +877,13 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Dataset { out, worlds, episodes_per_world, seed, min_episode_s, max_episode_s, labeller, threads, furniture_density } => {
             use host::dataset::{generate_with, DatasetSpec};
             use host::labeller::LabellerConfig;
+            if host::eval::overlaps_heldout(seed, seed.saturating_add(u64::from(worlds.max(1)) - 1)) {
+                return Err(format!(
+                    "worlds from seed {seed} overlap the held-out worlds {}..{} that `lives eval --heldout` reports; pick other seeds",
+                    host::eval::HELDOUT_FIRST_SEED,
+                    host::eval::HELDOUT_FIRST_SEED + host::eval::HELDOUT_MAX_WORLDS
+                ));
+            }
             let mut spec = DatasetSpec::new(&out, seed, worlds, episodes_per_world);
             spec.episode_min_s = min_episode_s;
             spec.episode_max_s = max_episode_s;
@@ -966,7 +1013,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 return Err(format!("unknown source `{source}` (`sim` or `robot`)"));
             }
             let mut spec = load_spec(&run)?;
-            configure_spec(&mut spec, &set, &sim)?;
+            configure_spec(&mut spec, None, &set, &sim)?;
             if spec.planner.uses_classifier() {
                 // As `lives search`: the scans go without labels and the node's classifier (the
                 // committed geometric one unless `lives node --model` says otherwise) labels
@@ -1243,8 +1290,9 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 None => Ok(ExitCode::SUCCESS),
             }
         }
-        Cmd::Eval { trials, worlds, scenarios, planners, threads, out, no_pictures, set, sim } => {
-            eval_cmd(trials, &worlds, &scenarios, &planners, threads, &out, no_pictures, &set, &sim)
+        Cmd::Eval { trials, worlds, scenarios, planners, threads, out, no_pictures, set, sim, robot, heldout } => {
+            let planners = if planners.is_empty() { PlannerChoice::ALL.into_iter().rev().collect() } else { planners };
+            eval_cmd(trials, &worlds, &scenarios, &planners, threads, &out, no_pictures, &set, &sim, robot, heldout)
         }
         Cmd::Tune { worlds, first_world, planners, scenarios, grid, threads, out } => {
             let grid: Vec<(String, Vec<String>)> = grid.iter().map(|g| host::eval::parse_grid_axis(g)).collect::<Result<_, _>>()?;
@@ -1259,6 +1307,13 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 return Err("--worlds must be at least 1".into());
             }
             let last_world = first_world.checked_add(worlds - 1).ok_or("--first-world + --worlds is past the last seed")?;
+            if host::eval::overlaps_heldout(first_world, last_world) {
+                return Err(format!(
+                    "worlds {first_world}..={last_world} overlap the held-out worlds {}..{} that `lives eval --heldout` reports; tune on others",
+                    host::eval::HELDOUT_FIRST_SEED,
+                    host::eval::HELDOUT_FIRST_SEED + host::eval::HELDOUT_MAX_WORLDS
+                ));
+            }
             if scenarios.is_empty() || planners.is_empty() {
                 return Err("--scenarios and --planners need at least one value each".into());
             }

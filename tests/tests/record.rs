@@ -182,8 +182,9 @@ fn a_bridge_recording_holds_the_protocol_messages_and_changes_nothing() {
     use host::record::SharedRecording;
     use std::sync::atomic::{AtomicBool, Ordering};
 
-    let w = World::builtin("apartment", Scenario::Easy).unwrap();
-    let spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, 1);
+    // A short search: the built-in `apartment easy` of 2026-11-25, kept as an example.
+    let w = World::load(&root().join("examples/worlds/apartment-easy-bedroom-start.toml")).unwrap();
+    let spec = SearchSpec::new("apartment-easy-bedroom-start", w, Scenario::Easy, PlannerChoice::LivesGt, 1);
     let inproc = host::search::run(&spec, |_| {});
     let file = tmp("bridge.mcap");
     let recording = SharedRecording::create(&file).unwrap();

@@ -23,8 +23,17 @@ fn spec(world: &str, scenario: Scenario, planner: PlannerChoice, seed: u64) -> S
     SearchSpec::new(world, World::builtin(world, scenario).expect("built-in world"), scenario, planner, seed)
 }
 
+/// A short search: `examples/worlds/apartment-easy-bedroom-start.toml` (the built-in `apartment
+/// easy` of 2026-11-25, kept when the built-in was defined again from the paper's words), which
+/// ends within 10-40 s.
+fn short_spec(planner: PlannerChoice, seed: u64) -> SearchSpec {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/worlds/apartment-easy-bedroom-start.toml");
+    let world = World::load(&path).expect("the example world");
+    SearchSpec::new("apartment-easy-bedroom-start", world, Scenario::Easy, planner, seed)
+}
+
 /// A search long enough to be interrupted mid-way: `office easy`, `lives-gt`, seed 1 (found at
-/// 70.0 s, 351 ticks, clean; limit 180 s). `apartment easy` ends within 10-40 s.
+/// 70.0 s, 351 ticks, clean; limit 180 s).
 fn long_spec() -> SearchSpec {
     spec("office", Scenario::Easy, PlannerChoice::LivesGt, 1)
 }
@@ -158,7 +167,7 @@ fn figures(label: &str, r: &BridgeResult, n: &NodeReport) {
 #[test]
 fn node_and_bridge_on_a_pty_pair_find_the_target_and_change_nothing() {
     let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
-    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    let sp = short_spec(PlannerChoice::LivesGt, 1);
     let t0 = Instant::now();
     let inproc = search::run(&sp, |_| {});
     let inproc_wall = t0.elapsed().as_secs_f64();
@@ -188,7 +197,7 @@ fn lives_over_the_link_runs_the_nodes_classifier_and_decides_as_the_in_process_s
     // What `lives node` + `lives bridge --source sim --planner lives` run: unlabelled scans, the
     // node's (default) geometric classifier labels them, as `lives search --planner lives` does
     // in process.
-    let mut sp = spec("apartment", Scenario::Easy, PlannerChoice::Lives, 2);
+    let mut sp = short_spec(PlannerChoice::Lives, 2);
     sp.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
     let inproc = search::try_run(&sp, |_| {}).expect("the committed model validates");
     assert!(inproc.result.found && inproc.result.labels == "int8-classifier", "{:?}", inproc.result);
@@ -206,7 +215,7 @@ fn lives_over_the_link_runs_the_nodes_classifier_and_decides_as_the_in_process_s
 
 #[test]
 fn lives_refuses_a_node_without_a_classifier_instead_of_searching_as_multisensor() {
-    let mut sp = spec("apartment", Scenario::Easy, PlannerChoice::Lives, 2);
+    let mut sp = short_spec(PlannerChoice::Lives, 2);
     sp.model = Some(firmware::classifier::EMBEDDED_GEO_MODEL);
     for mode in [TimeMode::Lockstep, TimeMode::RealTime] {
         let bopts = BridgeOptions { max_wall: Some(Duration::from_secs(60)), ..BridgeOptions::new(mode) };
@@ -230,7 +239,7 @@ fn lives_refuses_a_node_without_a_classifier_instead_of_searching_as_multisensor
 fn a_configuration_out_of_range_is_refused_by_the_node_and_the_bridge_stops_naming_the_field() {
     // A 5 km robot: sent by a bridge before `--set` checked its values, it stopped the node (an
     // overflow on its first plan), and the bridge then waited for the node for ever.
-    let mut sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    let mut sp = short_spec(PlannerChoice::LivesGt, 1);
     sp.controller.robot_radius_m = fixed_point::Meters::from_num(5000);
     for mode in [TimeMode::Lockstep, TimeMode::RealTime] {
         let bopts = BridgeOptions { max_wall: Some(Duration::from_secs(60)), ..BridgeOptions::new(mode) };
@@ -270,7 +279,7 @@ fn one_node_serves_search_after_search_each_as_the_in_process_run() {
             p.report()
         });
         for seed in [2, 3, 2] {
-            let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, seed);
+            let sp = short_spec(PlannerChoice::LivesGt, seed);
             let inproc = search::run(&sp, |_| {});
             let r = run_bridge(&mut b, Source::Sim(sp), &bopts, &AtomicBool::new(false)).expect("a session");
             assert_eq!(r.goals, inproc.goals, "seed {seed}: the goal sequence differs from the in-process run");
@@ -289,7 +298,7 @@ fn a_real_time_bridge_ticks_a_lockstep_node_on_every_batch() {
     // A node started with `--lockstep` behind a bridge without it: every batch closes with a
     // heartbeat, so the node ticks each one at the bridge's time (it ticked once a second, on the
     // bridge's link probes, and the watchdog saw a silent link in between).
-    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 2);
+    let sp = short_spec(PlannerChoice::LivesGt, 2);
     let bopts = BridgeOptions { max_wall: Some(Duration::from_secs(3)), ..BridgeOptions::new(TimeMode::RealTime) };
     let (r, n, _) = mem_node_and_bridge(&sp, &bopts, TimeMode::Lockstep);
     let r = r.expect("a session");
@@ -301,7 +310,7 @@ fn a_real_time_bridge_ticks_a_lockstep_node_on_every_batch() {
 
 #[test]
 fn a_lockstep_bridge_refuses_a_node_on_its_own_clock_and_no_node_is_an_error_not_a_wait() {
-    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 2);
+    let sp = short_spec(PlannerChoice::LivesGt, 2);
     // A node in real time behind a lockstep bridge: it ticks on its own clock and never at the
     // bridge's times.
     let bopts = BridgeOptions { max_wall: Some(Duration::from_secs(30)), ..BridgeOptions::new(TimeMode::Lockstep) };
@@ -387,7 +396,7 @@ fn assert_every_damaged_frame_rejected(r: &BridgeResult, n: &NodeReport, ns: &Fa
 
 #[test]
 fn segmented_scans_on_a_clean_line_change_nothing() {
-    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    let sp = short_spec(PlannerChoice::LivesGt, 1);
     let inproc = search::run(&sp, |_| {});
     let (r, n, ns, _) = mem_run(&sp, FaultConfig::default(), 16, node_opts(TimeMode::Lockstep), Duration::from_secs(120));
     figures("clean mem, 16-beam segments", &r, &n);
@@ -446,7 +455,7 @@ fn under_one_percent_byte_corruption_and_five_percent_dropped_frames_the_search_
 #[test]
 fn whole_scans_do_not_survive_one_percent_byte_corruption_and_every_damaged_frame_is_rejected() {
     let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
-    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    let sp = short_spec(PlannerChoice::LivesGt, 1);
     let faults = FaultConfig { corrupt_byte_prob: 0.01, line_noise: true, drop_frame_prob: 0.05, ..FaultConfig::default() };
     let (r, n, ns, bs) = faulty_run(&sp, faults.clone(), faults, Duration::from_secs(4));
     figures("1% bytes, whole scans, pty", &r, &n);
@@ -603,7 +612,7 @@ fn a_silent_link_stops_the_base_within_one_watchdog_period_and_the_search_resume
 #[test]
 fn real_time_node_and_bridge_drive_the_base_and_stop_it_when_the_link_is_lost() {
     let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
-    let sp = spec("apartment", Scenario::Easy, PlannerChoice::LivesGt, 1);
+    let sp = short_spec(PlannerChoice::LivesGt, 1);
     let (master, slave) = SerialLink::pty_pair().expect("a pseudo-terminal pair");
     let cable = FaultHandle::new();
     let node_end = FaultyLink::new(slave, FaultConfig::default(), 1).with_handle(cable.clone());

@@ -23,6 +23,7 @@
 pub mod builtin;
 pub mod generate;
 pub mod geometry;
+pub mod oracle;
 pub mod reach;
 pub mod simulator;
 pub mod world;

@@ -931,6 +931,49 @@ impl Sim {
         visible as f64 / samples.len().max(1) as f64
     }
 
+    /// The world bearings (radians) of target `i`'s outline samples ([`DETECT_SAMPLES`] of them)
+    /// that a camera at `from` would see if it faced them: within the camera's range and in line
+    /// of sight through the walls, obstacles and other targets, as [`Sim::visible_fraction`]
+    /// checks them, but without the people (who move). The detector fires at a heading that has
+    /// at least `detect_min_visible_fraction` of the samples within half the field of view
+    /// ([`crate::oracle`]). A sample at `from` itself has bearing NaN (seen at every heading).
+    pub fn static_sightlines(&self, i: usize, from: P2) -> Vec<f64> {
+        let Some(shape) = self.target_shapes.get(i) else {
+            return Vec::new();
+        };
+        let owner = TARGET_OWNER_BASE + i as u32;
+        let mut out = Vec::new();
+        for p in &shape.outline_samples(DETECT_SAMPLES) {
+            let v = sub(*p, from);
+            let r = norm(v);
+            if r.is_nan() || r > self.config.camera_range_m {
+                continue;
+            }
+            if r > 1e-9 {
+                let d = [v[0] / r, v[1] / r];
+                if self.scene.raycast(from, d, r - 1e-6, owner).is_some() {
+                    continue;
+                }
+                out.push(v[1].atan2(v[0]));
+            } else {
+                out.push(f64::NAN);
+            }
+        }
+        out
+    }
+
+    /// Walls, obstacles and the placed targets (no people).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Puts the robot at `pose` (world frame) without driving there: for tests that check what
+    /// the sensors report from a given pose. Odometry, the path and the clock are left as they
+    /// are.
+    pub fn place_robot(&mut self, pose: [f64; 3]) {
+        self.pose = [pose[0], pose[1], wrap_angle(pose[2])];
+    }
+
     /// The target the camera sees now: inside the cone (field of view, range) along the robot's
     /// heading, with at least `detect_min_visible_fraction` of its outline sample points in
     /// line of sight (walls, obstacles, other targets and people block; the target itself does
@@ -1422,7 +1465,9 @@ rect = { center = [8.0, 3.0], size = [0.5, 0.35] }
     }
 
     fn apartment_scan_digest_seeded(cfg: SimConfig, n: usize, seed: u64) -> u64 {
-        let w = World::builtin("apartment", Scenario::Easy).unwrap();
+        // The built-in `apartment easy` the digests were taken on (2026-11-25), kept as an example.
+        let text = include_str!("../../../examples/worlds/apartment-easy-bedroom-start.toml");
+        let w = World::from_toml_str(text, "apartment-easy-bedroom-start.toml").unwrap();
         let mut sim = Sim::new(w, cfg, seed);
         let p = sim.pose();
         sim.set_path(&[[p[0] + 1.0, p[1]], [p[0] + 1.0, p[1] + 1.0]], Some(1.0));

@@ -926,6 +926,7 @@ pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, sto
         // The core's labels stay in the node: the link carries no per-beam labels back.
         classifier: None,
         sim: crate::search::SimSettings::changed(&spec.sim),
+        oracle_s: None,
     };
     Ok(BridgeResult {
         result,

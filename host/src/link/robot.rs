@@ -616,6 +616,7 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
         // The core's labels stay in the node: the link carries no per-beam labels back.
         classifier: None,
         sim: None,
+        oracle_s: None,
     };
     // Every goal the client was given a path for, once per `seq` (as the simulator's decisions).
     let origin = origin_used.map_or([0.0; 2], |o| o);
