@@ -201,8 +201,6 @@ pub struct Planner {
     last_goal: Option<((i32, i32), (i32, i32), schedule::TaskKind)>,
     /// The room of the task the last structured step chose.
     last_goal_room: Option<u8>,
-    /// The destination of the last structured step's tour: (anchor, kind, room).
-    last_dest: Option<((i32, i32), schedule::TaskKind, Option<u8>)>,
     /// Counters of the last structured step.
     pub sched: schedule::ScheduleStats,
 }
@@ -270,8 +268,15 @@ impl Planner {
             last_tour: heapless::Vec::new(),
             last_goal: None,
             last_goal_room: None,
-            last_dest: None,
-            sched: schedule::ScheduleStats { tasks: [0; 4], dropped: 0, rooms: 0, tour_units: 0, solved: false, kept: false, pursued: false },
+            sched: schedule::ScheduleStats {
+                tasks: [0; 4],
+                dropped: 0,
+                rooms: 0,
+                tour_units: 0,
+                solved: false,
+                kept: false,
+                pursued: false,
+            },
         }
     }
 
@@ -285,7 +290,6 @@ impl Planner {
         self.tasks.clear();
         self.last_tour.clear();
         self.last_goal = None;
-        self.last_dest = None;
         self.sched = schedule::ScheduleStats::default();
     }
 
@@ -323,7 +327,6 @@ impl Planner {
         });
         self.tasks.clear();
         self.last_goal = self.last_goal.map(|(c, a, k)| ((c.0 - sx, c.1 - sy), (a.0 - sx, a.1 - sy), k));
-        self.last_dest = self.last_dest.map(|(a, k, r)| ((a.0 - sx, a.1 - sy), k, r));
         work += self.rooms.shift(sx, sy);
         let (w, d) = self.rrt.shift(sx, sy);
         (work + w, dropped + d)

@@ -46,17 +46,17 @@ pub const PROPOSAL_REACH_CAMERA_RANGES: i64 = 1;
 pub const TURN_UNITS_PER_QUARTER: u32 = 40;
 /// The goal being pursued stays first unless a tour starting elsewhere is shorter by this
 /// much (units of 0.02 m: 2 m).
-pub const TOUR_SWITCH_UNITS: u64 = 100;
+pub const TOUR_SWITCH_UNITS: u64 = 1000;
 /// A task of the last step and one of this step are the same when their anchors (or the goal's
 /// viewpoint and the task's) are within this many cells (1.5 m).
 pub const TASK_MATCH_CELLS: i32 = 15;
 /// Tasks the tour orders: the proposals, the room tasks, then the frontier tasks of best
 /// greedy utility.
 pub const TOUR_TASKS: usize = 16;
+/// A task's view must offer at least 1/GAIN_SHARE of the best view's gain to join the tour.
+pub const GAIN_SHARE: i64 = 2;
 /// Tasks of the current room come before those of other rooms (Gao et al.).
 pub const ROOM_PRECEDENCE: bool = false;
-/// The tour runs to the greedy choice, picking up on the way what pays for its detour.
-pub const DESTINATION: bool = true;
 /// Proposals within reach come before everything else (Gao et al.).
 pub const PROPOSAL_PRECEDENCE: bool = false;
 /// How far [`room_near`] looks for a labelled cell around an unlabelled one (cells: 0.6 m).
@@ -176,7 +176,8 @@ impl Planner {
         let already_there = |cell: (i32, i32), h: BinaryAngle, d: u16| {
             (cell == robot || (d as i64) <= here) && (h - pose.theta).unsigned_abs() <= cfg.goal_heading_tolerance.unsigned_abs()
         };
-        let dist_term = |units: u16| (cfg.w_dist_per_m.to_bits() as i64 * units as i64 * (crate::capacity::CELL_MM / STEP_STRAIGHT as i64)) / 1000;
+        let dist_term =
+            |units: u16| (cfg.w_dist_per_m.to_bits() as i64 * units as i64 * (crate::capacity::CELL_MM / STEP_STRAIGHT as i64)) / 1000;
 
         // Proposals.
         self.task_pool.clear();
@@ -196,7 +197,17 @@ impl Planner {
             let (view, w) = self.view(cfg, step.lidar, step.visual, p.viewpoint, p.heading, w_nonmap);
             work += w;
             let class = if PROPOSAL_PRECEDENCE && d <= reach { 0 } else { u8::MAX };
-            let t = Task { anchor: p.cell, cell: p.viewpoint, room: room_near(&self.rooms, p.viewpoint), heading: p.heading, kind: TaskKind::Proposal, class, path_units: d, view, utility: view.gain - dist_term(d) };
+            let t = Task {
+                anchor: p.cell,
+                cell: p.viewpoint,
+                room: room_near(&self.rooms, p.viewpoint),
+                heading: p.heading,
+                kind: TaskKind::Proposal,
+                class,
+                path_units: d,
+                view,
+                utility: view.gain - dist_term(d),
+            };
             let _ = self.task_pool.push(t);
         }
         let n_props = self.task_pool.len();
@@ -224,7 +235,17 @@ impl Planner {
                 // Nothing worth a look there (a shadow behind furniture, a sliver).
                 continue;
             }
-            let t = Task { anchor: f.anchor, cell: c, room: None, heading: h, kind, class: u8::MAX, path_units: d, view, utility: view.gain - dist_term(d) };
+            let t = Task {
+                anchor: f.anchor,
+                cell: c,
+                room: None,
+                heading: h,
+                kind,
+                class: u8::MAX,
+                path_units: d,
+                view,
+                utility: view.gain - dist_term(d),
+            };
             let _ = self.task_pool.push(t);
         }
         self.stats.unreachable += unreachable;
@@ -278,7 +299,17 @@ impl Planner {
             let (best, w) = self.best_heading(step, c, d, w_nonmap, &already_there);
             work += w;
             if let Some((view, h)) = best.filter(|(v, _)| v.gain >= cfg.gaze_min_gain.to_bits() as i64) {
-                let t = Task { anchor, cell: c, room: room_near(&self.rooms, c), heading: h, kind: TaskKind::Room, class: u8::MAX, path_units: d, view, utility: view.gain - dist_term(d) };
+                let t = Task {
+                    anchor,
+                    cell: c,
+                    room: room_near(&self.rooms, c),
+                    heading: h,
+                    kind: TaskKind::Room,
+                    class: u8::MAX,
+                    path_units: d,
+                    view,
+                    utility: view.gain - dist_term(d),
+                };
                 if self.task_pool.push(t).is_ok() {
                     room_tasks += 1;
                 }
@@ -296,9 +327,16 @@ impl Planner {
                 work += 1;
             }
         }
+        // Only views worth a tour stop: at least 1/GAIN_SHARE of the best view's gain (a small
+        // pocket is not worth visiting first when a large room waits, nor is a chair).
+        let best_gain = self.task_pool.iter().map(|t| t.view.gain).max().unwrap_or(0);
         let order = (0..n_props).chain(f0 + n_frontiers..self.task_pool.len()).chain(f0..f0 + n_frontiers);
         for k in order {
             let t = self.task_pool[k];
+            if t.view.gain.saturating_mul(GAIN_SHARE) < best_gain {
+                self.sched.dropped += 1;
+                continue;
+            }
             if self.tasks.len() >= TOUR_TASKS || self.tasks.push(t).is_err() {
                 self.sched.dropped += 1;
             }
@@ -328,7 +366,6 @@ impl Planner {
         if self.tasks.is_empty() {
             self.last_tour.clear();
             self.last_goal = None;
-            self.last_dest = None;
             return (None, work);
         }
 
@@ -341,40 +378,6 @@ impl Planner {
 
         // Costs.
         work += self.tour_costs(pose.theta);
-        if DESTINATION {
-            // The destination is the greedy choice (the best utility); the tour picks up, before
-            // it, every task whose view pays for its detour (gain ≥ w_dist · detour), in the
-            // order of a shortest path; the rest come after it.
-            let n = self.tasks.len();
-            let mut g = 0;
-            for i in 1..n {
-                if self.tasks[i].utility > self.tasks[g].utility {
-                    g = i;
-                }
-            }
-            // Hysteresis, as the greedy planner's: the last destination stays unless another
-            // beats it by `switch_margin`.
-            if let Some(d) = self.last_dest.and_then(|(a, kind, room)| self.find_task(a, kind, room, None)) {
-                if self.tasks[d].utility.saturating_add(cfg.switch_margin.to_bits() as i64) >= self.tasks[g].utility {
-                    g = d;
-                }
-            }
-            self.last_dest = Some((self.tasks[g].anchor, self.tasks[g].kind, self.tasks[g].room));
-            let c = &self.problem.cost;
-            for j in 0..n {
-                let t = &mut self.tasks[j];
-                if j == g {
-                    t.class = t.class.min(2);
-                    continue;
-                }
-                let detour = (c[0][j + 1] as u64).saturating_add(c[j + 1][g + 1] as u64).saturating_sub(c[0][g + 1] as u64);
-                let pays = detour < u16::MAX as u64 && t.view.gain >= dist_term(detour as u16);
-                t.class = if t.class == 0 { 0 } else if pays { 1 } else { 3 };
-            }
-            for j in 0..n {
-                self.problem.class[j + 1] = self.tasks[j].class;
-            }
-        }
 
         // Warm start: the last tour's tasks, matched by place and kind, the current goal first.
         let mut warm: heapless::Vec<u8, MAX_TASKS> = heapless::Vec::new();
@@ -456,7 +459,13 @@ impl Planner {
             .iter()
             .enumerate()
             .filter(|(_, t)| t.kind == kind)
-            .map(|(i, t)| (((t.anchor.0 - a.0).pow(2) + (t.anchor.1 - a.1).pow(2)).min((t.cell.0 - goal_cell.0).pow(2) + (t.cell.1 - goal_cell.1).pow(2)), i))
+            .map(|(i, t)| {
+                (
+                    ((t.anchor.0 - a.0).pow(2) + (t.anchor.1 - a.1).pow(2))
+                        .min((t.cell.0 - goal_cell.0).pow(2) + (t.cell.1 - goal_cell.1).pow(2)),
+                    i,
+                )
+            })
             .filter(|&(d2, _)| d2 <= TASK_MATCH_CELLS * TASK_MATCH_CELLS)
             .min()
             .map(|(_, i)| i)
