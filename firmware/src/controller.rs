@@ -205,6 +205,9 @@ pub struct Controller {
     last_pose_us: Option<u64>,
     last_scan_us: Option<u64>,
     last_plan_us: Option<u64>,
+    /// The first half of a planning step ran on the last tick ([`Planner::prepare`]); this
+    /// tick finishes it ([`Planner::select`]).
+    plan_prepared: bool,
     goal: Option<Goal>,
     goal_best_dist: Meters,
     goal_progress_us: u64,
@@ -236,6 +239,7 @@ impl Controller {
             last_pose_us: None,
             last_scan_us: None,
             last_plan_us: None,
+            plan_prepared: false,
             goal: None,
             goal_best_dist: Meters::MAX,
             goal_progress_us: 0,
@@ -344,6 +348,7 @@ impl Controller {
         self.last_pose_us = None;
         self.last_scan_us = None;
         self.last_plan_us = None;
+        self.plan_prepared = false;
         self.goal = None;
     }
 
@@ -373,6 +378,7 @@ impl Controller {
             Some(Command::Start) if matches!(self.mode, Mode::Idle | Mode::Exhausted) => {
                 self.mode = Mode::Exploring;
                 self.last_plan_us = None;
+                self.plan_prepared = false;
             }
             Some(Command::Stop) => {
                 self.mode = Mode::Idle;
@@ -402,6 +408,7 @@ impl Controller {
                 };
                 if crate::rolling::follow(maps, &p, self.cfg.nonmap_pool_radius_m) {
                     self.last_plan_us = None;
+                    self.plan_prepared = false;
                 }
             } else {
                 self.status.poses_rejected += 1;
@@ -484,6 +491,7 @@ impl Controller {
             Mode::Stopped if !data_stale => {
                 self.mode = Mode::Exploring;
                 self.last_plan_us = None;
+                self.plan_prepared = false;
             }
             _ => {}
         }
@@ -594,10 +602,10 @@ impl Controller {
             }
         }
         let due = self.last_plan_us.is_none_or(|t| now_us.saturating_sub(t) >= self.cfg.replan_interval_us);
-        if !force && !due {
+        if !self.plan_prepared && !force && !due {
             return false;
         }
-        if !force && self.cfg.planner == crate::PlannerKind::Rrt {
+        if !self.plan_prepared && !force && self.cfg.planner == crate::PlannerKind::Rrt {
             // The `rrt` baseline's assigner gives only an idle robot a new goal; its trees keep
             // growing meanwhile.
             self.last_plan_us = Some(now_us);
@@ -608,13 +616,26 @@ impl Controller {
             self.status.cost.plan = work;
             return false;
         }
-        self.last_plan_us = Some(now_us);
+        if !self.plan_prepared {
+            // A planning step is spread over two ticks (issue 28, real time): this one finds
+            // the frontiers and the path distances, the next chooses on them.
+            self.last_plan_us = Some(now_us);
+            obs.begin(Stage::Plan);
+            let work = self.frontiers.compute(&self.lidar, &self.visual, self.cfg.min_frontier_cells)
+                + self.planner.prepare(&self.cfg, &self.lidar, pose);
+            obs.end(Stage::Plan);
+            self.plan_prepared = true;
+            self.status.cost.plan = work;
+            self.budget_check(3, work);
+            return false;
+        }
+        self.plan_prepared = false;
         obs.begin(Stage::Plan);
-        let mut work = self.frontiers.compute(&self.lidar, &self.visual, self.cfg.min_frontier_cells);
         let current = self.goal.as_ref().map(|g| (g.viewpoint.cell, g.viewpoint.heading));
-        let (best, current_utility) = self.planner.plan(&self.cfg, &self.lidar, &self.visual, &self.frontiers, &self.nonmap, pose, current);
+        let (best, current_utility) =
+            self.planner.select(&self.cfg, &self.lidar, &self.visual, &self.frontiers, &self.nonmap, pose, current);
         obs.end(Stage::Plan);
-        work += self.planner.stats.work;
+        let work = self.planner.stats.work;
         self.status.plans += 1;
         self.status.heap_overflows += self.planner.stats.heap_overflows;
         self.status.cost.plan = work;

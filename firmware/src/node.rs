@@ -611,6 +611,8 @@ mod tests {
         assert_eq!(ticks, 1);
         let s = statuses(&out);
         assert_eq!((s[0].t_us, s[0].ticks, s[0].mode), (0, 1, WireMode::Exploring), "a new search: its first tick");
+        // Its first goal on its second tick (a planning step spans two).
+        let (_, out) = r.rx(&batch(T, &[]));
         assert_eq!(goals(&out)[0].seq, 1);
     }
 
@@ -621,40 +623,46 @@ mod tests {
         let (ticks, out) = r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)]));
         assert_eq!(ticks, 1);
         assert_eq!(r.ctl.mode(), Mode::Exploring);
-        // Goal, Status(0), then the echo last.
-        let g = goals(&out);
-        assert_eq!(g.len(), 1, "{out:?}");
-        assert_eq!(g[0].seq, 1);
+        // A planning step spans two ticks: the first finds the path distances, no goal yet.
+        assert!(goals(&out).is_empty(), "{out:?}");
         assert_eq!(statuses(&out)[0].t_us, 0);
         assert_eq!(statuses(&out)[0].mode, WireMode::Exploring);
         assert_eq!(out.last(), Some(&CoreToHost::Heartbeat(Heartbeat { t_us: 0, seq: 0 })));
-
-        // The same goal is not sent again on the next tick.
+        // The second: Goal, Status(T), then the echo last.
         let (ticks, out) = r.rx(&batch(T, &[]));
         assert_eq!(ticks, 1);
-        assert!(goals(&out).is_empty(), "{out:?}");
+        let g = goals(&out);
+        assert_eq!(g.len(), 1, "{out:?}");
+        assert_eq!(g[0].seq, 1);
         assert_eq!(statuses(&out)[0].t_us, T);
+        assert_eq!(out.last(), Some(&CoreToHost::Heartbeat(Heartbeat { t_us: T, seq: T as u32 })));
 
-        // A batch that lost its scan is not ticked: echo only, so the host retries.
-        let mut b = frame(&pose(2 * T));
-        b.extend(frame(&beat(2 * T, 7)));
-        let (ticks, out) = r.rx(&b);
-        assert_eq!(ticks, 0);
-        assert_eq!(out, [CoreToHost::Heartbeat(Heartbeat { t_us: 2 * T, seq: 7 })]);
-        assert_eq!(r.node.counters().lockstep_incomplete, 1);
-        // The retry ticks.
+        // The same goal is not sent again on the next tick.
         let (ticks, out) = r.rx(&batch(2 * T, &[]));
         assert_eq!(ticks, 1);
+        assert!(goals(&out).is_empty(), "{out:?}");
         assert_eq!(statuses(&out)[0].t_us, 2 * T);
+
+        // A batch that lost its scan is not ticked: echo only, so the host retries.
+        let mut b = frame(&pose(3 * T));
+        b.extend(frame(&beat(3 * T, 7)));
+        let (ticks, out) = r.rx(&b);
+        assert_eq!(ticks, 0);
+        assert_eq!(out, [CoreToHost::Heartbeat(Heartbeat { t_us: 3 * T, seq: 7 })]);
+        assert_eq!(r.node.counters().lockstep_incomplete, 1);
+        // The retry ticks.
+        let (ticks, out) = r.rx(&batch(3 * T, &[]));
+        assert_eq!(ticks, 1);
+        assert_eq!(statuses(&out)[0].t_us, 3 * T);
 
         // A retry of a batch already ticked (its answer was lost): nothing ticks, the outputs,
         // goal included, come again.
         let ticks_before = r.ctl_ticks();
-        let (ticks, out) = r.rx(&batch(2 * T, &[]));
+        let (ticks, out) = r.rx(&batch(3 * T, &[]));
         assert_eq!(ticks, 0);
         assert_eq!(r.ctl_ticks(), ticks_before);
         assert_eq!(goals(&out).len(), 1);
-        assert_eq!(statuses(&out)[0].t_us, 2 * T);
+        assert_eq!(statuses(&out)[0].t_us, 3 * T);
         assert_eq!(r.node.counters().lockstep_repeats, 1);
         // An old heartbeat is ignored (echoed only).
         let (_, out) = r.rx(&frame(&beat(T, 9)));
@@ -771,7 +779,8 @@ mod tests {
         // One goal first, then again only after a second (goal_refresh_us), not every tick.
         let g = goals(&flat);
         assert!((1..=3).contains(&g.len()), "{} goals in 8 ticks", g.len());
-        assert!(goals(&all[0]).len() == 1 && goals(&all[1]).is_empty());
+        // (A planning step spans two ticks: the first goal comes on the second.)
+        assert!(goals(&all[0]).is_empty() && goals(&all[1]).len() == 1 && goals(&all[2]).is_empty());
         // Own heartbeat about once a second (the echo counted as the first).
         let beats = flat.iter().filter(|m| matches!(m, CoreToHost::Heartbeat(_))).count();
         assert!((2..=4).contains(&beats), "{beats} heartbeats in 3.2 s");
@@ -820,10 +829,11 @@ mod tests {
         assert_eq!(r.node.last_config_error().map(|e| e.field), Some("robot_radius_m"));
         let c = r.node.counters();
         assert_eq!((c.configs_applied, c.configs_invalid, c.configs_refused), (1, 1, 0));
-        // And the node searches on with it.
-        let (ticks, out) = r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)]));
+        // And the node searches on with it (its first goal on the second tick).
+        let (ticks, _) = r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)]));
         assert_eq!(ticks, 1);
         assert_eq!(r.ctl.mode(), Mode::Exploring);
+        let (_, out) = r.rx(&batch(T, &[]));
         assert_eq!(goals(&out).len(), 1);
     }
 

@@ -742,6 +742,13 @@ fn eval_cmd(
 }
 
 fn main() -> ExitCode {
+    // A controller core is 1.4 MiB (docs/architecture.md, "Memory budget"), built by value
+    // before it is boxed; the worker threads of `eval`, `tune`, `dataset` and the bridge need
+    // more stack than Rust's 2 MiB default for that. Set before any thread is spawned (the
+    // standard library reads it once); a value the user set is kept.
+    if std::env::var_os("RUST_MIN_STACK").is_none() {
+        std::env::set_var("RUST_MIN_STACK", (32usize << 20).to_string());
+    }
     let cli = Cli::parse();
     match run(cli) {
         Ok(code) => code,

@@ -380,12 +380,43 @@ impl Planner {
         pose: &Pose2,
         current: Option<((i32, i32), BinaryAngle)>,
     ) -> (Option<Goal>, Option<i64>) {
+        let work = self.prepare(cfg, lidar, pose);
+        let (goal, current_utility) = self.select(cfg, lidar, visual, frontiers, nonmap, pose, current);
+        self.stats.work += work;
+        (goal, current_utility)
+    }
+
+    /// The first half of a planning step: which cells the robot may stand on and the path
+    /// distance to each, from the robot's cell now. The controller runs it on one tick and
+    /// [`Planner::select`] on the next, so that no tick carries a whole step (issue 28, real
+    /// time). Returns the work.
+    pub fn prepare(&mut self, cfg: &Config, lidar: &LidarGrid, pose: &Pose2) -> u32 {
         self.stats = PlanStats::default();
         self.candidates.clear();
         let robot = lidar.geom.cell_of(pose.x, pose.y);
         self.robot_cell = robot;
-        let mut work = self.inflate(lidar, cfg.robot_radius_m, robot);
-        work += self.distances(robot);
+        let work = self.inflate(lidar, cfg.robot_radius_m, robot);
+        work + self.distances(robot)
+    }
+
+    /// The second half of a planning step, on the distance field of the last
+    /// [`Planner::prepare`]: the rule's choice and its goal. `pose` is the robot's pose now (its
+    /// heading decides which views it already has); paths start from the cell `prepare` saw.
+    /// Returns `(best, current_utility)`; its work is in [`PlanStats::work`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn select(
+        &mut self,
+        cfg: &Config,
+        lidar: &LidarGrid,
+        visual: &VisualGrid,
+        frontiers: &FrontierSet,
+        nonmap: &NonMapStore,
+        pose: &Pose2,
+        current: Option<((i32, i32), BinaryAngle)>,
+    ) -> (Option<Goal>, Option<i64>) {
+        self.candidates.clear();
+        let robot = self.robot_cell;
+        let mut work = 0;
         let step = Step { cfg, lidar, visual, frontiers, nonmap, pose, robot, snap: GridGeometry::cells(cfg.viewpoint_snap_radius_m) };
         let mut sites = Sites::new();
         let score = match cfg.planner {
