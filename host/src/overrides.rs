@@ -465,7 +465,7 @@ mod tests {
             assert!(e.contains(bad.split('=').next().unwrap()) || e.contains("name=value"), "{bad}: {e}");
         }
         assert_eq!((sim, c), before, "a rejected setting changes nothing");
-        let e = apply_sim(&mut SimConfig::default(), &mut Config::DEFAULT, "lidar=rplidar").unwrap_err();
+        let e = apply_sim(&mut SimConfig::default(), &mut Config { ..Config::DEFAULT }, "lidar=rplidar").unwrap_err();
         assert_eq!(e, "`lidar`: unknown LiDAR profile `rplidar`, expected one of ideal, rplidar-a2, rplidar-a3, hokuyo-utm30lx, vlp16");
         let (mut sim, mut c) = (SimConfig::default(), Config::DEFAULT);
         for (name, _) in SIM_NAMES {

@@ -220,11 +220,7 @@ impl Planner {
                 self.stats.blacklisted += 1;
                 continue;
             }
-            let d = self.distance(c.0, c.1);
-            if w_nonmap != Weight::ZERO {
-                work += self.visible_nonmap(step.lidar, step.nonmap, c, range_cells);
-            }
-            let (best, w) = self.best_heading(step, c, d, w_nonmap, &already_there);
+            let (best, d, w) = self.look_from(step, c, w_nonmap, &already_there);
             work += w;
             let Some((view, h)) = best else { continue };
             let kind = match f.source {
@@ -292,11 +288,7 @@ impl Planner {
             if self.is_blacklisted(c, bl) {
                 continue;
             }
-            let d = self.distance(c.0, c.1);
-            if w_nonmap != Weight::ZERO {
-                work += self.visible_nonmap(step.lidar, step.nonmap, c, range_cells);
-            }
-            let (best, w) = self.best_heading(step, c, d, w_nonmap, &already_there);
+            let (best, d, w) = self.look_from(step, c, w_nonmap, &already_there);
             work += w;
             if let Some((view, h)) = best.filter(|(v, _)| v.gain >= cfg.gaze_min_gain.to_bits() as i64) {
                 let t = Task {
@@ -469,6 +461,25 @@ impl Planner {
             .filter(|&(d2, _)| d2 <= TASK_MATCH_CELLS * TASK_MATCH_CELLS)
             .min()
             .map(|(_, i)| i)
+    }
+
+    /// What the camera would gain standing at `c`: the best heading's view
+    /// ([`Planner::best_heading`], after collecting the non-map points visible from `c` when
+    /// they count), the path distance to `c`, and the work.
+    fn look_from(
+        &mut self,
+        step: &Step,
+        c: (i32, i32),
+        w_nonmap: Weight,
+        already_there: &impl Fn((i32, i32), BinaryAngle, u16) -> bool,
+    ) -> (Option<(super::view::View, BinaryAngle)>, u16, u32) {
+        let d = self.distance(c.0, c.1);
+        let mut work = 0;
+        if w_nonmap != Weight::ZERO {
+            work += self.visible_nonmap(step.lidar, step.nonmap, c, GridGeometry::cells(step.cfg.camera_range_m));
+        }
+        let (best, w) = self.best_heading(step, c, d, w_nonmap, already_there);
+        (best, d, work + w)
     }
 
     /// The best of the four headings at `c` by the view's gain, skipping those the robot already

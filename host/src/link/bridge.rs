@@ -971,7 +971,7 @@ mod tests {
             hellos
         });
         let spec =
-            SearchSpec::new("apartment", World::builtin("apartment", Scenario::Easy).unwrap(), Scenario::Easy, PlannerChoice::LivesGt, 1);
+            SearchSpec::new("apartment", World::builtin("apartment", Scenario::Easy).unwrap(), Scenario::Easy, crate::search::PlannerChoice::LivesGt, 1);
         let opts = BridgeOptions {
             hello_interval: Duration::from_millis(50),
             max_wall: Some(Duration::from_secs(5)),
