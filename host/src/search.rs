@@ -214,6 +214,11 @@ impl Robot {
         }
     }
 
+    /// This robot's simulator settings.
+    pub fn sim(self) -> SimConfig {
+        SimConfig { camera_range_m: self.camera_range_m(), ..default_sim() }
+    }
+
     /// Makes `spec`'s simulated robot this one: the simulator's camera and the controller's model
     /// of it (apply before `--sim` and `--set`, which may then change either).
     pub fn apply(self, spec: &mut SearchSpec) -> Result<(), String> {
@@ -260,8 +265,8 @@ pub fn controller_model(base: &Config, sim: &SimConfig) -> Config {
     }
 }
 
-/// The simulated robot's settings, in a result only when `--sim` changed them from
-/// [`default_sim`] (so that a result says what robot it was measured on).
+/// The simulated robot's settings, in a result only when they differ from the default robot's
+/// (`--robot calibrated`; so that a result says what robot it was measured on).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SimSettings {
     /// The LiDAR profile.
@@ -293,9 +298,10 @@ pub struct SimSettings {
 }
 
 impl SimSettings {
-    /// `Some` when `sim` differs from [`default_sim`].
+    /// `Some` when `sim` differs from the default robot's ([`Robot::Calibrated`], what `lives
+    /// search` and `lives eval` run unless told otherwise).
     pub fn changed(sim: &SimConfig) -> Option<Self> {
-        (*sim != default_sim()).then(|| SimSettings {
+        (*sim != Robot::Calibrated.sim()).then(|| SimSettings {
             lidar: sim.lidar.as_str().to_string(),
             mount: [sim.mount[0], sim.mount[1], round3(sim.mount[2].to_degrees())],
             odom_slip_per_m: sim.odom_slip_per_m,

@@ -124,6 +124,7 @@ fn eval_writes_the_table_json_csv_and_plots() {
     let dir = std::env::temp_dir().join(format!("lives-eval-{}", std::process::id()));
     let out = lives()
         .args(["eval", "--trials", "2", "--worlds", "apartment", "--scenarios", "easy", "--planners", "nearest,lives-gt", "--threads", "2"])
+        .args(["--heldout", "2"])
         .arg("--out")
         .arg(&dir)
         .output()
@@ -133,10 +134,16 @@ fn eval_writes_the_table_json_csv_and_plots() {
     assert!(table.contains("| setting | limit | nearest | lives-gt |"), "{table}");
     assert!(table.contains("| apartment easy | 120 s |"), "{table}");
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("results.json")).unwrap()).unwrap();
-    assert_eq!(json["trials"].as_array().unwrap().len(), 4);
-    assert_eq!(json["summary"].as_array().unwrap().len(), 2);
+    // Two held-out worlds (one easy, one hard), one trial each, per planner: 4 more searches and
+    // two more rows; every trial has an oracle.
+    assert!(table.contains("| heldout easy | per world |") && table.contains("| heldout hard | per world |"), "{table}");
+    assert!(table.contains("| setting | oracle, mean | nearest | lives-gt |"), "{table}");
+    assert!(table.contains("Robot: `calibrated`"), "{table}");
+    assert_eq!(json["trials"].as_array().unwrap().len(), 8);
+    assert!(json["trials"].as_array().unwrap().iter().all(|t| t["oracle_s"].as_f64().is_some_and(|o| o >= 0.0)), "{json}");
+    assert_eq!(json["summary"].as_array().unwrap().len(), 6);
     let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 3, "{csv}");
+    assert_eq!(csv.lines().count(), 7, "{csv}");
     for png in ["times.png", "trajectories/apartment-easy-nearest.png", "trajectories/apartment-easy-lives-gt.png"] {
         assert_eq!(&std::fs::read(dir.join(png)).unwrap()[..8], b"\x89PNG\r\n\x1a\n", "{png}");
     }
@@ -155,6 +162,8 @@ fn eval_writes_the_table_json_csv_and_plots() {
             "--threads",
             "1",
             "--no-pictures",
+            "--heldout",
+            "2",
         ])
         .arg("--out")
         .arg(dir.join("again"))
@@ -217,6 +226,9 @@ fn sim_settings_change_the_simulated_robot_and_bad_ones_are_refused() {
     };
     let default = search(&[]);
     assert!(default.get("sim").is_none(), "the default robot is not echoed: {default}");
+    // The short robot is not the default: its 4 m camera is echoed.
+    let short = search(&["--robot", "short"]);
+    assert_eq!(short["sim"]["camera_range_m"], 4.0, "{short}");
     // `nearest` seed 1 walks for the whole limit (52.7 m at the default 0.5 m/s); at 0.2 m/s the
     // base cannot cover more than 0.2 m/s × the time it ran.
     let slow = search(&["--sim", "speed_mps=0.2", "--sim", "camera_range_m=6"]);
