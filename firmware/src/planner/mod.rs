@@ -198,7 +198,7 @@ pub struct Planner {
     pub tour: crate::tour::TourSolver,
     last_tour: heapless::Vec<((i32, i32), schedule::TaskKind), MAX_TASKS>,
     /// The task the last structured step chose: (its viewpoint cell, its anchor, its kind).
-    last_goal: Option<((i32, i32), (i32, i32), schedule::TaskKind)>,
+    last_goal: Option<schedule::Pursued>,
     /// The room of the task the last structured step chose.
     last_goal_room: Option<u8>,
     /// Counters of the last structured step.

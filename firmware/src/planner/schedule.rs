@@ -1,34 +1,39 @@
 //! The structured search (`lives`, and its ablation `lives-no-nonmap`): tasks, rooms and a
-//! global tour with precedence, after Gao et al. (object proposals, room segmentation, a
-//! travelling-salesman tour with precedence) and FUEL (Zhou et al. 2021: a global tour over
-//! frontier clusters, replanned as they change).
+//! global tour, after Gao et al. (object proposals, room segmentation, a travelling-salesman
+//! tour) and FUEL (Zhou et al. 2021: a global tour over frontier clusters, replanned as they
+//! change). docs/experiments/structured-search.md says how each choice below was measured.
 //!
-//! Each planning step:
+//! Each planning step ([`Planner::schedule`], on the distance field of
+//! [`Planner::prepare`]):
 //! 1. **Rooms**: the LiDAR map segmented into rooms, corridors and doorways ([`crate::rooms`]).
-//! 2. **Tasks** (at most [`MAX_TASKS`]):
-//!    - object proposals ([`super::proposals`]; `lives` only), each looked at from its viewpoint;
+//! 2. **Tasks**:
+//!    - object proposals ([`super::proposals`]; `lives` only), each looked at from its
+//!      viewpoint;
 //!    - frontier viewpoints of both maps: at each frontier's (snapped) anchor, the best of the
-//!      four headings by the view utility ([`super::view`]); every LiDAR frontier is a task, a
-//!      camera frontier only if its view offers at least `gaze_min_gain`;
-//!    - rooms not yet seen by the camera (at most half their free cells seen, no other task
-//!      inside), looked at from their most open cell with the best of four headings.
-//!    When there are more, proposals and rooms are kept first, then frontier tasks by the
-//!    greedy utility (view gain minus `w_dist`·path).
-//! 3. **Precedence classes** (Gao et al.): 0 — proposals within [`PROPOSAL_REACH_CAMERA_RANGES`]
-//!    camera ranges of path; 1 — tasks in the room the robot stands in (when it stands in a
-//!    room, not a corridor); 2 — tasks in other rooms; 3 — tasks in corridors or outside any
-//!    room.
-//! 4. **Costs**: from the robot, the exact path distance (the step's Dijkstra); between two
+//!      four headings by the view utility ([`super::view`]), if it offers at least
+//!      `gaze_min_gain`; per room only its best by the greedy utility (view gain minus
+//!      `w_dist`·path), so the tour orders rooms, not a room's gaps;
+//!    - rooms the camera has seen less than half of, with no task inside, looked into from
+//!      their most open cell.
+//!
+//!    A task joins the tour only if its view offers at least 1/[`GAIN_SHARE`] of the best
+//!    view's gain; at most [`TOUR_TASKS`]: proposals and rooms first, then frontier tasks by
+//!    utility.
+//! 3. **Costs**: from the robot, the exact path distance (the step's Dijkstra); between two
 //!    tasks, the straight line if every cell on it is reachable, else the distance through the
 //!    shortest-path tree rooted at the robot (down both paths to where they meet: an upper bound
 //!    that is exact when the paths share their way, as they do through a building's doors);
 //!    each leg costs `max(distance, turn)` (FUEL's time lower bound, with a quarter turn worth
 //!    [`TURN_UNITS_PER_QUARTER`] of distance).
-//! 5. **Tour**: an open asymmetric TSP path from the robot through every task, classes in order
-//!    ([`crate::tour`]: cheapest insertion, 2-opt, Or-opt), warm-started from the last step's
-//!    tour so it does not thrash; the robot goes to the tour's first task. Hysteresis: the goal
-//!    being pursued stays first unless the best tour that starts elsewhere is shorter by
-//!    [`TOUR_SWITCH_UNITS`].
+//! 4. **Tour**: an open asymmetric TSP path from the robot through every task ([`crate::tour`]:
+//!    cheapest insertion, 2-opt, Or-opt), warm-started from the last step's tour. Every task is
+//!    in one precedence class: Gao et al.'s classes (proposals in reach, the current room, other
+//!    rooms, corridors) lost on the development seeds ([`ROOM_PRECEDENCE`],
+//!    [`PROPOSAL_PRECEDENCE`] keep them selectable at build time).
+//! 5. **Commitment**: the robot goes to the tour's first task. The task being pursued (matched
+//!    across steps by its room, or by what it looks at within [`TASK_MATCH_CELLS`]) stays first
+//!    unless the best tour that starts elsewhere is shorter by [`TOUR_SWITCH_UNITS`]: a tour
+//!    re-solved from a moving robot otherwise changes its first task every step.
 
 use super::{Planner, Site, Step, Viewpoint, HEADINGS, STEP_STRAIGHT, UNREACHABLE};
 use crate::capacity::MAX_TASKS;
@@ -45,7 +50,7 @@ pub const PROPOSAL_REACH_CAMERA_RANGES: i64 = 1;
 /// 1 rad/s and walks at about 0.5 m/s).
 pub const TURN_UNITS_PER_QUARTER: u32 = 40;
 /// The goal being pursued stays first unless a tour starting elsewhere is shorter by this
-/// much (units of 0.02 m: 2 m).
+/// much (units of 0.02 m: 20 m).
 pub const TOUR_SWITCH_UNITS: u64 = 1000;
 /// A task of the last step and one of this step are the same when their anchors (or the goal's
 /// viewpoint and the task's) are within this many cells (1.5 m).
@@ -67,6 +72,9 @@ pub const MAX_ROOM_TASKS: usize = 8;
 pub const TOUR_WORK_BUDGET: u32 = 2_000_000;
 /// Longest walk down the shortest-path tree when costing a pair of tasks, cells per side.
 const TREE_WALK_LIMIT: u32 = 4096;
+
+/// The task a step chose, remembered for the next: its viewpoint cell, its anchor, its kind.
+pub(crate) type Pursued = ((i32, i32), (i32, i32), TaskKind);
 
 /// What a task is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -544,7 +552,7 @@ impl Planner {
             return (u32::MAX, 1);
         }
         let (dx, dy) = ((a.0 - b.0) as i64, (a.1 - b.1) as i64);
-        let euclid = (fixed_point::isqrt_u64(((dx * dx + dy * dy) as u64) << 16) as i64 * STEP_STRAIGHT as i64 >> 8) as u32;
+        let euclid = ((fixed_point::isqrt_u64(((dx * dx + dy * dy) as u64) << 16) as i64 * STEP_STRAIGHT as i64) >> 8) as u32;
         let mut work = (dx.abs().max(dy.abs())) as u32;
         if Line::new(a.0, a.1, b.0, b.1).all(|(x, y)| self.distance(x, y) != UNREACHABLE) {
             return (euclid, work);

@@ -970,8 +970,13 @@ mod tests {
             std::thread::sleep(Duration::from_millis(200));
             hellos
         });
-        let spec =
-            SearchSpec::new("apartment", World::builtin("apartment", Scenario::Easy).unwrap(), Scenario::Easy, crate::search::PlannerChoice::LivesGt, 1);
+        let spec = SearchSpec::new(
+            "apartment",
+            World::builtin("apartment", Scenario::Easy).unwrap(),
+            Scenario::Easy,
+            crate::search::PlannerChoice::LivesGt,
+            1,
+        );
         let opts = BridgeOptions {
             hello_interval: Duration::from_millis(50),
             max_wall: Some(Duration::from_secs(5)),
