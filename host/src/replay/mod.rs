@@ -177,6 +177,25 @@ pub enum ReplayError {
         /// Why.
         reason: String,
     },
+    /// An MCAP chunk that does not decompress, or whose records do not parse, skipped (the
+    /// records after it are read).
+    McapChunk {
+        /// The file.
+        file: PathBuf,
+        /// Byte offset of the Chunk record.
+        offset: u64,
+        /// Why.
+        reason: String,
+    },
+    /// A `messages` row of a sqlite3 bag whose columns are not of their types, skipped.
+    SqliteRow {
+        /// The file.
+        file: PathBuf,
+        /// Its position among the rows in id order (1-based): its id may be what is wrong.
+        row: u64,
+        /// sqlite's message.
+        reason: String,
+    },
     /// sqlite could not read the bag.
     Sqlite {
         /// The file.
@@ -249,6 +268,8 @@ impl ReplayError {
             ReplayError::CarmenLine { error, .. } => error.reason(),
             ReplayError::NotText { .. } => "not_text",
             ReplayError::Message { .. } => "undecodable_message",
+            ReplayError::McapChunk { .. } => "damaged_chunk",
+            ReplayError::SqliteRow { .. } => "bad_row",
             _ => "damage",
         }
     }
@@ -276,7 +297,12 @@ impl fmt::Display for ReplayError {
             }
             ReplayError::NotText { file, line } => write!(f, "{}:{line}: not UTF-8 text", file.display()),
             ReplayError::CarmenLine { file, line, error } => write!(f, "{}:{line}: {error}", file.display()),
-            ReplayError::Mcap { file, offset, reason } => write!(f, "{}: byte {offset}: {reason}", file.display()),
+            ReplayError::Mcap { file, offset, reason } | ReplayError::McapChunk { file, offset, reason } => {
+                write!(f, "{}: byte {offset}: {reason}", file.display())
+            }
+            ReplayError::SqliteRow { file, row, reason } => {
+                write!(f, "{}: messages row {row} (in id order) skipped: {reason}", file.display())
+            }
             ReplayError::Sqlite { file, after_row, reason } => match after_row {
                 Some(r) => write!(f, "{}: sqlite error after messages row {r}: {reason}", file.display()),
                 None => write!(f, "{}: sqlite error before any message: {reason}", file.display()),
@@ -534,8 +560,12 @@ fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -> LogData {
     if !contents.skipped_encodings.is_empty() {
         warnings.push(format!("skipped topics not encoded as CDR: {}", contents.skipped_encodings.join(", ")));
     }
-    let scans = rosbag::scans_from_messages(file, contents.messages);
+    let mut scans = rosbag::scans_from_messages(file, contents.messages);
     warnings.extend(scans.warnings);
+    // Damaged chunks and bad rows first: they come before any message decoding in the file's
+    // own order of reading.
+    let mut bad_records = contents.bad;
+    bad_records.append(std::mem::take(&mut scans.bad_records));
     LogData {
         file: file.to_path_buf(),
         format,
@@ -549,7 +579,7 @@ fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -> LogData {
         span_s: contents.span_ns.map(|(a, b)| (a as f64 / 1e9, b as f64 / 1e9)),
         sources: contents.topics.iter().map(|(t, ty)| format!("{t} ({ty})")).collect(),
         warnings,
-        bad_records: scans.bad_records,
+        bad_records,
         error: contents.error,
     }
 }
