@@ -241,6 +241,36 @@ fn bad_lines_are_skipped_counted_by_reason_and_the_rest_of_the_log_replays() {
     assert!((r.duration_s - 1365.63).abs() < 0.01, "{}", r.duration_s);
 }
 
+/// Issue 29: a NUL byte in the first 4 KiB of a CARMEN log rejected the whole file ("not a CARMEN
+/// log ..."); anywhere, it costs its line only, named with its line and column, plain or gzip.
+#[test]
+fn a_nul_byte_anywhere_in_a_carmen_log_costs_its_line_only() {
+    let text = gunzip(&carmen("aces-corrected.log.gz"));
+    let clean = tmp("aces-clean-nul.log");
+    std::fs::write(&clean, &text).unwrap();
+    let whole = replay::replay(&clean, &no_classifier()).unwrap().report;
+    let lines: Vec<&str> = text.lines().collect();
+    let first_flaser = lines.iter().position(|l| l.starts_with("FLASER ")).unwrap();
+    assert!(lines[..4].iter().map(|l| l.len() + 1).sum::<usize>() < 4096, "line 4 is in the first 4 KiB");
+    for (name, line) in [("head", 3), ("deep", first_flaser + 2000)] {
+        let mut bytes: Vec<Vec<u8>> = lines.iter().map(|l| l.as_bytes().to_vec()).collect();
+        let is_scan = bytes[line].starts_with(b"FLASER ");
+        bytes[line][12] = 0;
+        let joined = bytes.join(&b'\n');
+        for gz in [false, true] {
+            let path = tmp(&format!("aces-nul-{name}{}", if gz { ".log.gz" } else { ".log" }));
+            std::fs::write(&path, if gz { gzip(std::str::from_utf8(&joined).unwrap()) } else { joined.clone() }).unwrap();
+            let run = replay::replay(&path, &no_classifier()).unwrap();
+            assert!(run.error.is_none(), "{name}: {:?}", run.error);
+            let r = &run.report;
+            assert_eq!(r.scans_read, whole.scans_read - is_scan as u32, "{name} gz={gz}");
+            assert_eq!(r.skipped_records.by_reason, BTreeMap::from([("not_text", 1)]), "{name} gz={gz}");
+            let shown = &r.skipped_records.first[0];
+            assert!(shown.ends_with(&format!(":{}: not text: a NUL byte at column 13", line + 1)), "{shown}");
+        }
+    }
+}
+
 #[test]
 fn lives_replay_reports_skipped_lines_and_exits_1_with_everything_written() {
     let (bytes, at) = aces_with_bad_lines(false);

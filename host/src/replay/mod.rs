@@ -158,6 +158,9 @@ pub enum ReplayError {
         file: PathBuf,
         /// The line (1-based).
         line: usize,
+        /// The first control byte in it (a NUL, ...) and its column (1-based, in bytes); `None`
+        /// when the line is not UTF-8.
+        control: Option<(usize, u8)>,
     },
     /// A CARMEN line could not be read.
     CarmenLine {
@@ -295,7 +298,11 @@ impl fmt::Display for ReplayError {
             ReplayError::Gzip { file, lines, offset, reason } => {
                 write!(f, "{}: gzip stream damaged at compressed byte {offset} (after line {lines}): {reason}", file.display())
             }
-            ReplayError::NotText { file, line } => write!(f, "{}:{line}: not UTF-8 text", file.display()),
+            ReplayError::NotText { file, line, control: None } => write!(f, "{}:{line}: not UTF-8 text", file.display()),
+            ReplayError::NotText { file, line, control: Some((column, byte)) } => {
+                let name = if *byte == 0 { "a NUL byte".to_string() } else { format!("the control byte 0x{byte:02x}") };
+                write!(f, "{}:{line}: not text: {name} at column {column}", file.display())
+            }
             ReplayError::CarmenLine { file, line, error } => write!(f, "{}:{line}: {error}", file.display()),
             ReplayError::Mcap { file, offset, reason } | ReplayError::McapChunk { file, offset, reason } => {
                 write!(f, "{}: byte {offset}: {reason}", file.display())
@@ -510,8 +517,13 @@ fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
             }
         }
         line_no += 1;
+        // A NUL (or other control byte) costs its line only, wherever it is in the file.
+        if let Some(k) = buf.iter().position(|&b| is_control(b)) {
+            log.bad_records.add(ReplayError::NotText { file: file.to_path_buf(), line: line_no, control: Some((k + 1, buf[k])) });
+            continue;
+        }
         let Ok(text) = std::str::from_utf8(&buf) else {
-            log.bad_records.add(ReplayError::NotText { file: file.to_path_buf(), line: line_no });
+            log.bad_records.add(ReplayError::NotText { file: file.to_path_buf(), line: line_no, control: None });
             continue;
         };
         match carmen::parse_line(text) {
@@ -588,6 +600,21 @@ fn io_err(file: &Path) -> impl Fn(std::io::Error) -> ReplayError + '_ {
     move |source| ReplayError::Io { file: file.to_path_buf(), source }
 }
 
+/// A control byte in a text log: below 0x20 except tab, line feed and carriage return, or DEL.
+fn is_control(b: u8) -> bool {
+    (b < 0x20 && b != b'\t' && b != b'\n' && b != b'\r') || b == 0x7f
+}
+
+/// Whether the first bytes of a file are text, give or take some damage: at most 1 in 64 control
+/// bytes other than NUL and fewer NULs than anything else. A NUL or a stray control byte in a
+/// CARMEN log costs its line (`read_carmen`), not the file; binary data (about one byte in eight
+/// a control byte) is not text.
+fn looks_like_text(head: &[u8]) -> bool {
+    let nul = head.iter().filter(|&&b| b == 0).count();
+    let other = head.iter().filter(|&&b| b != 0 && is_control(b)).count();
+    !head.is_empty() && other * 64 <= head.len() && nul * 2 < head.len()
+}
+
 /// The format of a file from its first bytes.
 pub fn detect(head: &[u8]) -> Option<LogFormat> {
     if head.starts_with(&[0x1f, 0x8b]) {
@@ -598,7 +625,7 @@ pub fn detect(head: &[u8]) -> Option<LogFormat> {
         Some(LogFormat::Ros2Sqlite3)
     } else if crate::sensors::pcap::looks_like_pcap(head) || crate::sensors::vlp16::frames_packet(head) {
         Some(LogFormat::Vlp16)
-    } else if head.iter().take(4096).all(|&b| b == b'\t' || b == b'\n' || b == b'\r' || (0x20..0x7f).contains(&b) || b >= 0x80) {
+    } else if looks_like_text(&head[..head.len().min(4096)]) {
         Some(LogFormat::Carmen)
     } else {
         None
@@ -1388,6 +1415,15 @@ mod tests {
         assert_eq!(detect(&[0xff, 0xee, 0x10, 0x27]), Some(LogFormat::Vlp16), "a raw VLP-16 payload");
         assert_eq!(detect(b"# CARMEN\nODOM 0 0 0 0 0 0 1 h 1\n"), Some(LogFormat::Carmen));
         assert_eq!(detect(&[0u8, 1, 2, 3]), None);
+        assert_eq!(detect(&[0u8; 64]), None, "zeros");
+        // Issue 29: one NUL (or a few) in the first 4 KiB no longer makes a log "not a CARMEN log".
+        assert_eq!(detect(b"# CARMEN\nODOM 0 0\x00 0 0 0 0 1 h 1\n"), Some(LogFormat::Carmen));
+        let mut damaged = b"ODOM 1.0 2.0 0.5 0 0 0 1 h 1\n".repeat(100);
+        damaged[40..552].fill(0);
+        assert_eq!(detect(&damaged), Some(LogFormat::Carmen), "a zeroed 512-byte block");
+        // Binary: about one byte in eight is a control byte.
+        let binary: Vec<u8> = (0..4096u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8).collect();
+        assert_eq!(detect(&binary), None);
     }
 
     #[test]

@@ -239,12 +239,14 @@ fn chunk_records<'a>(
                 .map_err(|e| format!("its lz4 data (byte {data_at}, {} bytes) does not decompress: {e}", data.len()))?;
             std::borrow::Cow::Owned(out)
         }
-        other => return Err(match missing_codec(other) {
-            Some(feature) => format!(
+        other => {
+            return Err(match missing_codec(other) {
+                Some(feature) => format!(
                 "chunk compressed with {other}, which this `lives` was built without (rebuild with `--features {feature}`, or `ros-bags`)"
             ),
-            None => format!("unknown chunk compression {other:?} (MCAP knows zstd and lz4)"),
-        }),
+                None => format!("unknown chunk compression {other:?} (MCAP knows zstd and lz4)"),
+            })
+        }
     };
     if records.len() as u64 != claimed {
         return Err(format!("its {} data decompresses to {} bytes, not the {claimed} it claims", header.compression, records.len()));
