@@ -1,6 +1,6 @@
 //! `lives` — LiDAR Informed Visual Search: simulate, run and measure the controller.
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use host::search::{self, PlannerChoice, SearchSpec};
 use host::sim::{Scenario, World};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -702,8 +702,16 @@ fn eval_cmd(
     Ok(ExitCode::SUCCESS)
 }
 
+/// Every option or positional that takes a value accepts a negative number as its value
+/// (`--max-range -1`, `--seed -3`), which the command then range-checks like any other; without
+/// this clap took `-1` for an unknown flag (issue 29).
+fn negatives_as_values(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|a| if a.get_action().takes_values() { a.allow_negative_numbers(true) } else { a }).mut_subcommands(negatives_as_values)
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let matches = negatives_as_values(Cli::command()).get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     match run(cli) {
         Ok(code) => code,
         Err(e) => {

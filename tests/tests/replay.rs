@@ -1054,3 +1054,23 @@ fn bad_scans_in_a_bag_are_named_rejections_and_lose_nothing_good() {
     // The good scans still drew the wall ahead of the laser.
     assert!(occupied_near(&run, 1.5, 5.2));
 }
+
+/// Issue 29: a negative number given as a separate argument (`--max-range -1`) was refused as
+/// an unexpected argument; it is read as the value and range-checked like any other.
+#[test]
+fn a_negative_value_is_read_and_range_checked() {
+    let log = carmen("aces-corrected.log.gz");
+    for (value, shown) in [("-1", "-1"), ("-1e3", "-1000"), ("-0.5", "-0.5")] {
+        let out = std::process::Command::new(common::lives()).args(["replay", "--max-range", value]).arg(&log).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{value}: {err}");
+        assert!(
+            err.contains(&format!("error: --max-range {shown}: expected metres above the minimum range and at most")),
+            "{value}: {err}"
+        );
+        assert!(!err.contains("unexpected argument"), "{err}");
+    }
+    // `--flag=-1` was always read; a separate positive value still is.
+    let out = std::process::Command::new(common::lives()).args(["replay", "--max-range", "100"]).arg(&log).output().unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--max-range 100: expected metres"));
+}
