@@ -5,6 +5,7 @@ pub mod bench;
 pub mod dataset;
 pub mod eval;
 pub mod export_bag;
+pub mod fuzz;
 pub mod labeller;
 pub mod link;
 pub mod mapcheck;
