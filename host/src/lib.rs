@@ -18,6 +18,7 @@ pub mod render;
 pub mod replay;
 pub mod search;
 pub mod sensors;
+pub mod soak;
 pub use lives_sim as sim;
 pub mod trace;
 #[cfg(feature = "train")]
