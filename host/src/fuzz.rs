@@ -171,7 +171,7 @@ fn check_scans(scans: &vlp16::PcapScans, beams: usize) {
 pub fn vlp16_packets(data: &[u8]) {
     let cfg = vlp16::Vlp16Config::default();
     let beams = cfg.beams;
-    let mut asm = vlp16::ScanAssembler::new(cfg.clone()).expect("the default configuration is valid");
+    let mut asm = vlp16::ScanAssembler::new(cfg).expect("the default configuration is valid");
     for packet in data.chunks(vlp16::PACKET_LEN) {
         if let Ok(Some(scan)) = asm.push_bytes(packet) {
             assert_eq!(scan.ranges_m.len(), beams);

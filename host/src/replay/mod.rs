@@ -27,9 +27,10 @@
 //! with its time.
 //!
 //! Bad input loses nothing that was good. A bad record whose boundaries are known (a CARMEN line
-//! that does not read, a bag message that does not decode) is skipped and counted by reason
-//! ([`BadRecords`]), and reading goes on. Damage that loses the framing (a truncated or corrupt
-//! gzip stream, a cut or unparsable MCAP record or chunk, a bad sqlite page) stops reading;
+//! that does not read or holds a NUL, a bag message that does not decode, an MCAP chunk that does
+//! not decompress or parse, a sqlite3 row of the wrong column type) is skipped and counted by
+//! reason ([`BadRecords`]), and reading goes on. Damage that loses the framing (a truncated or
+//! corrupt gzip stream, a cut or unparsable top-level MCAP record, a bad sqlite page) stops reading;
 //! everything before it is replayed. Both are reported with the file and the line, byte offset
 //! or row.
 //!

@@ -6,9 +6,11 @@
 //!
 //! 1. [`read_mcap`] / [`read_db3`] pull the messages of those three types out of the container
 //!    in file order, with where each came from ([`Location`]): the byte offset of its MCAP record
-//!    (for a message inside a chunk, the chunk's offset) or its `messages` row id. They stop at
-//!    the first damaged record or row (the framing after it is lost) and hand back what came
-//!    before, plus the error.
+//!    (for a message inside a chunk, the chunk's offset) or its `messages` row id. A damaged
+//!    chunk (its own length intact) or a row of the wrong column type is skipped and counted
+//!    ([`BagContents::bad`]); they stop at the first damage that loses the framing (a top-level
+//!    record cut off or unparsable, an unreadable sqlite page) and hand back what came before,
+//!    plus the error.
 //! 2. [`scans_from_messages`] decodes them (CDR, [`super::cdr`]; a message that does not decode
 //!    is skipped and counted, the messages around it are used), sorts them by the bag's receive
 //!    time, and builds the frame tree: `tf_static` transforms apply to the whole bag, `tf`
