@@ -298,6 +298,8 @@ pub fn real_time(opts: &SoakOptions, failures: &mut Vec<String>, say: &mut dyn F
     let deadline = start + opts.wall;
     let progress = Arc::new(AtomicU32::new(0));
     let pulling = Arc::new(AtomicBool::new(false));
+    // A search is under way (the puller pulls only mid-search, never between two).
+    let searching = Arc::new(AtomicBool::new(false));
     let over = Arc::new(AtomicBool::new(false));
     let pulls: Arc<Mutex<Vec<(Pull, Instant, Instant)>>> = Arc::default();
     let samples: Arc<Mutex<(Vec<Sample>, Vec<Sample>)>> = Arc::default();
@@ -310,7 +312,7 @@ pub fn real_time(opts: &SoakOptions, failures: &mut Vec<String>, say: &mut dyn F
             let mut k = 0;
             while !over.load(Ordering::Relaxed) {
                 std::thread::sleep(Duration::from_millis(20));
-                if Instant::now() < next || progress.load(Ordering::Relaxed) < 10 {
+                if Instant::now() < next || !searching.load(Ordering::SeqCst) || progress.load(Ordering::SeqCst) < 10 {
                     continue;
                 }
                 if Instant::now() + opts.pull_for + WATCHDOG * 2 > deadline {
@@ -368,7 +370,8 @@ pub fn real_time(opts: &SoakOptions, failures: &mut Vec<String>, say: &mut dyn F
             while pulling.load(Ordering::SeqCst) {
                 std::thread::sleep(Duration::from_millis(20));
             }
-            progress.store(0, Ordering::Relaxed);
+            progress.store(0, Ordering::SeqCst);
+            searching.store(true, Ordering::SeqCst);
             let sp = soak_spec(k, opts.seed);
             let bopts = BridgeOptions {
                 max_wall: Some(deadline.saturating_duration_since(Instant::now())),
@@ -376,7 +379,9 @@ pub fn real_time(opts: &SoakOptions, failures: &mut Vec<String>, say: &mut dyn F
                 scan_segment_beams: 128,
                 ..BridgeOptions::new(TimeMode::RealTime)
             };
-            match run_bridge(&mut link, Source::Sim(sp.clone()), &bopts, &stop) {
+            let result = run_bridge(&mut link, Source::Sim(sp.clone()), &bopts, &stop);
+            searching.store(false, Ordering::SeqCst);
+            match result {
                 Ok(r) => {
                     rep.searches += 1;
                     rep.found += r.result.found as u32;
