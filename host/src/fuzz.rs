@@ -133,6 +133,7 @@ pub fn world(data: &[u8]) {
         if let Some(line) = e.line() {
             assert!(line >= 1 && line <= lines, "line {line} of {lines}: {s}");
         }
+        // (A name the file itself holds may be quoted back, as in the key `walt RawRectls`.)
         for internal in [
             "RawRect",
             "RawCircle",
@@ -146,7 +147,7 @@ pub fn world(data: &[u8]) {
             "i128",
             "struct ",
         ] {
-            assert!(!s.contains(internal), "internal name {internal:?} in: {s}");
+            assert!(text.contains(internal) || !s.contains(internal), "internal name {internal:?} in: {s}");
         }
     }
 }
