@@ -1074,3 +1074,21 @@ fn a_negative_value_is_read_and_range_checked() {
     let out = std::process::Command::new(common::lives()).args(["replay", "--max-range", "100"]).arg(&log).output().unwrap();
     assert!(String::from_utf8_lossy(&out.stderr).contains("--max-range 100: expected metres"));
 }
+
+/// Found by the coverage-guided campaign (issue 29): an Attachment record whose declared lengths
+/// exceed its body made the `mcap` crate's parser panic ("slice index starts at 34 but ends at
+/// 31"). Replay reads nothing from attachments: it steps over them by their length, and the file
+/// is an error at its missing footer like any other truncated bag.
+#[test]
+fn a_damaged_attachment_record_is_stepped_over_not_a_panic() {
+    let path = common::root().join("fuzz/corpus/mcap/regression-attachment-slice-panic.mcap");
+    let bytes = std::fs::read(&path).unwrap();
+    assert_eq!(bytes[8], 0x09, "an Attachment record first");
+    let c = host::replay::rosbag::read_mcap(&path, &bytes);
+    assert!(c.messages.is_empty());
+    let shown = c.error.as_ref().map(|e| e.to_string()).unwrap_or_default();
+    assert!(shown.contains("regression-attachment-slice-panic.mcap: byte"), "{shown}");
+    let out = std::process::Command::new(common::lives()).args(["replay", "--no-classifier"]).arg(&path).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
+}

@@ -160,6 +160,16 @@ fn unparsable(op: u8, len: usize, e: &mcap::McapError) -> String {
     }
 }
 
+/// The records replay reads (Header, Schema, Channel, Message, Chunk); the others (indexes,
+/// attachments, metadata, statistics, private records) are stepped over by their length without
+/// being parsed. The `mcap` crate's parser panics on some damaged ones (an Attachment whose
+/// declared lengths exceed its body: "slice index starts at 34 but ends at 31", found by the
+/// fuzzer; `fuzz/corpus/mcap/regression-attachment-slice-panic.mcap`), and replay needs nothing
+/// from them.
+fn read_here(op: u8) -> bool {
+    matches!(op, 0x01 | 0x03..=0x06)
+}
+
 /// Walks the records of a chunk (`records`, uncompressed), handing each that parses to `take`.
 /// On the first that does not (its framing or its fields), returns its offset in `records` and
 /// why; the records after it are lost (their framing is).
@@ -181,9 +191,11 @@ fn walk_records<'a>(records: &'a [u8], mut take: impl FnMut(mcap::records::Recor
             ));
         }
         let body = &records[pos + 9..pos + 9 + len as usize];
-        match mcap::parse_record(op, body) {
-            Ok(rec) => take(rec),
-            Err(e) => return Err((pos, unparsable(op, body.len(), &e))),
+        if read_here(op) {
+            match mcap::parse_record(op, body) {
+                Ok(rec) => take(rec),
+                Err(e) => return Err((pos, unparsable(op, body.len(), &e))),
+            }
         }
         pos += 9 + len as usize;
     }
@@ -328,6 +340,11 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
                 out.error = Some(damage(next, "no closing magic after the footer".into()));
             }
             return out;
+        }
+        if !read_here(op) {
+            prev = Some((op, pos));
+            pos = next;
+            continue;
         }
         let record = match mcap::parse_record(op, body) {
             Ok(r) => r,
