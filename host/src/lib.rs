@@ -5,6 +5,7 @@ pub mod bench;
 pub mod dataset;
 pub mod eval;
 pub mod export_bag;
+pub mod fuzz;
 pub mod labeller;
 pub mod link;
 pub mod mapcheck;
@@ -17,6 +18,7 @@ pub mod render;
 pub mod replay;
 pub mod search;
 pub mod sensors;
+pub mod soak;
 pub use lives_sim as sim;
 pub mod trace;
 #[cfg(feature = "train")]

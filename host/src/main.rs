@@ -1,6 +1,6 @@
 //! `lives` — LiDAR Informed Visual Search: simulate, run and measure the controller.
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use host::search::{self, PlannerChoice, Robot, SearchSpec};
 use host::sim::{Scenario, World};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -106,6 +106,40 @@ enum Cmd {
         /// probability d, d uniform in the range by a hash of the world seed (default 1,1 = `World::random`).
         #[arg(long, value_delimiter = ',', num_args = 1..=2, default_values_t = [1.0, 1.0])]
         furniture_density: Vec<f64>,
+    },
+    /// Soak: `lives node` as a process on a pseudo-terminal in real time, the bridge here running
+    /// searches back to back over a noisy line with the link pulled every few minutes, then node
+    /// and bridge in lockstep for hours of simulated time; memory, descriptors, overruns, link
+    /// losses and recoveries recorded; exit 1 on growth, a panic, or a pull not answered by a stop
+    /// within one watchdog period (docs/reliability.md).
+    Soak {
+        /// Wall time of the real-time part, minutes.
+        #[arg(long, default_value_t = 30.0)]
+        minutes: f64,
+        /// Simulated time of the lockstep part, hours.
+        #[arg(long, default_value_t = 8.0)]
+        sim_hours: f64,
+        /// Seconds between link pulls.
+        #[arg(long, default_value_t = 180.0)]
+        pull_every: f64,
+        /// Seconds each pull lasts.
+        #[arg(long, default_value_t = 2.5)]
+        pull_for: f64,
+        /// Probability that a byte on the line is replaced by a random one, each direction.
+        #[arg(long, default_value_t = 2e-5)]
+        noise: f64,
+        /// Seconds between memory samples.
+        #[arg(long, default_value_t = 5.0)]
+        sample_every: f64,
+        /// Memory growth allowed, KiB.
+        #[arg(long, default_value_t = 2048)]
+        growth_kib: u64,
+        /// Seed (noise, searches).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Write the whole report (every sample, every pull) as JSON to this file.
+        #[arg(long)]
+        json: Option<PathBuf>,
     },
     /// The controller core as a process on a serial device (the deployment on the onboard
     /// computer, or a workstation for testing): sensor frames in, goals out.
@@ -741,6 +775,13 @@ fn eval_cmd(
     Ok(ExitCode::SUCCESS)
 }
 
+/// Every option or positional that takes a value accepts a negative number as its value
+/// (`--max-range -1`, `--seed -3`), which the command then range-checks like any other; without
+/// this clap took `-1` for an unknown flag (issue 29).
+fn negatives_as_values(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|a| if a.get_action().takes_values() { a.allow_negative_numbers(true) } else { a }).mut_subcommands(negatives_as_values)
+}
+
 fn main() -> ExitCode {
     // A controller core is 1.4 MiB (docs/architecture.md, "Memory budget"), built by value
     // before it is boxed; the worker threads of `eval`, `tune`, `dataset` and the bridge need
@@ -749,7 +790,8 @@ fn main() -> ExitCode {
     if std::env::var_os("RUST_MIN_STACK").is_none() {
         std::env::set_var("RUST_MIN_STACK", (32usize << 20).to_string());
     }
-    let cli = Cli::parse();
+    let matches = negatives_as_values(Cli::command()).get_matches();
+    let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     match run(cli) {
         Ok(code) => code,
         Err(e) => {
@@ -940,6 +982,43 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
                 a.non_map_recall() * 100.0
             );
             Ok(ExitCode::SUCCESS)
+        }
+        Cmd::Soak { minutes, sim_hours, pull_every, pull_for, noise, sample_every, growth_kib, seed, json } => {
+            let positive = |name: &str, v: f64| match v.is_finite() && v > 0.0 {
+                true => Ok(std::time::Duration::from_secs_f64(v)),
+                false => Err(format!("--{name} {v}: expected a positive number")),
+            };
+            if !(0.0..=0.5).contains(&noise) {
+                return Err(format!("--noise {noise}: expected a probability from 0 to 0.5"));
+            }
+            if !(sim_hours.is_finite() && sim_hours >= 0.0) {
+                return Err(format!("--sim-hours {sim_hours}: expected hours, 0 or more"));
+            }
+            let opts = host::soak::SoakOptions {
+                wall: positive("minutes", minutes * 60.0)?,
+                sim_hours,
+                pull_every: positive("pull-every", pull_every)?,
+                pull_for: positive("pull-for", pull_for)?,
+                noise,
+                sample_every: positive("sample-every", sample_every)?,
+                lives: std::env::current_exe().map_err(|e| format!("cannot find this program: {e}"))?,
+                seed,
+                growth_kib,
+            };
+            let report = host::soak::run(&opts, &mut |line| eprintln!("{line}")).map_err(|e| format!("soak: {e}"))?;
+            if let Some(path) = &json {
+                let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+                std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+            }
+            println!("{}", host::soak::summary(&report));
+            if report.failures.is_empty() {
+                Ok(ExitCode::SUCCESS)
+            } else {
+                for f in &report.failures {
+                    eprintln!("FAIL: {f}");
+                }
+                Ok(ExitCode::from(1))
+            }
         }
         Cmd::Node { port, baud, lockstep, seconds, model, no_model } => {
             use host::link::{run_node, NodeOptions, SerialLink, TimeMode};

@@ -241,6 +241,36 @@ fn bad_lines_are_skipped_counted_by_reason_and_the_rest_of_the_log_replays() {
     assert!((r.duration_s - 1365.63).abs() < 0.01, "{}", r.duration_s);
 }
 
+/// Issue 29: a NUL byte in the first 4 KiB of a CARMEN log rejected the whole file ("not a CARMEN
+/// log ..."); anywhere, it costs its line only, named with its line and column, plain or gzip.
+#[test]
+fn a_nul_byte_anywhere_in_a_carmen_log_costs_its_line_only() {
+    let text = gunzip(&carmen("aces-corrected.log.gz"));
+    let clean = tmp("aces-clean-nul.log");
+    std::fs::write(&clean, &text).unwrap();
+    let whole = replay::replay(&clean, &no_classifier()).unwrap().report;
+    let lines: Vec<&str> = text.lines().collect();
+    let first_flaser = lines.iter().position(|l| l.starts_with("FLASER ")).unwrap();
+    assert!(lines[..4].iter().map(|l| l.len() + 1).sum::<usize>() < 4096, "line 4 is in the first 4 KiB");
+    for (name, line) in [("head", 3), ("deep", first_flaser + 2000)] {
+        let mut bytes: Vec<Vec<u8>> = lines.iter().map(|l| l.as_bytes().to_vec()).collect();
+        let is_scan = bytes[line].starts_with(b"FLASER ");
+        bytes[line][12] = 0;
+        let joined = bytes.join(&b'\n');
+        for gz in [false, true] {
+            let path = tmp(&format!("aces-nul-{name}{}", if gz { ".log.gz" } else { ".log" }));
+            std::fs::write(&path, if gz { gzip(std::str::from_utf8(&joined).unwrap()) } else { joined.clone() }).unwrap();
+            let run = replay::replay(&path, &no_classifier()).unwrap();
+            assert!(run.error.is_none(), "{name}: {:?}", run.error);
+            let r = &run.report;
+            assert_eq!(r.scans_read, whole.scans_read - is_scan as u32, "{name} gz={gz}");
+            assert_eq!(r.skipped_records.by_reason, BTreeMap::from([("not_text", 1)]), "{name} gz={gz}");
+            let shown = &r.skipped_records.first[0];
+            assert!(shown.ends_with(&format!(":{}: not text: a NUL byte at column 13", line + 1)), "{shown}");
+        }
+    }
+}
+
 #[test]
 fn lives_replay_reports_skipped_lines_and_exits_1_with_everything_written() {
     let (bytes, at) = aces_with_bad_lines(false);
@@ -577,6 +607,33 @@ fn a_sqlite3_bag_replays_with_the_laser_mount_applied() {
     assert_mounted_scan(&run);
 }
 
+/// Issue 29: a `messages` row whose `topic_id` is a REAL (or whose `data` is TEXT) stopped
+/// reading ("Invalid column type Real at index: 1, name: topic_id"); it is skipped and counted,
+/// and the rows after it are read.
+#[test]
+fn a_sqlite3_row_of_the_wrong_type_is_skipped_and_counted() {
+    let path = tmp("wrong-type.db3");
+    let msgs = bag_messages(YAW_90);
+    write_db3(&path, &msgs);
+    let scan_rows: Vec<i64> = msgs.iter().enumerate().filter(|(_, m)| m.0 == "/scan").map(|(i, _)| i as i64 + 1).collect();
+    let conn = rusqlite::Connection::open(&path).unwrap();
+    conn.execute("UPDATE messages SET topic_id = 1.5 WHERE id = ?1", [scan_rows[7]]).unwrap();
+    conn.execute("UPDATE messages SET data = 'text' WHERE id = ?1", [scan_rows[20]]).unwrap();
+    drop(conn);
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    assert!(run.error.is_none(), "{:?}", run.error);
+    assert_eq!(run.report.scans_read, SCANS - 2);
+    assert_eq!(run.report.skipped_records.by_reason, BTreeMap::from([("bad_row", 2)]));
+    let [ReplayError::SqliteRow { row: a, reason: why_a, .. }, ReplayError::SqliteRow { row: b, .. }] = &run.bad_records.first[..] else {
+        panic!("{:?}", run.bad_records)
+    };
+    assert_eq!((*a, *b), (scan_rows[7] as u64, scan_rows[20] as u64));
+    assert!(why_a.contains("topic_id"), "{why_a}");
+    let shown = run.bad_records.first[0].to_string();
+    assert!(shown.contains(&format!("wrong-type.db3: messages row {a} (in id order) skipped")), "{shown}");
+    assert!(occupied_near(&run, 1.5, 5.2), "the rows around them are used");
+}
+
 #[test]
 fn an_upside_down_laser_sees_the_world_mirrored() {
     // Rolled by π about x (z down): a beam at +a in the laser frame points to −a in the world.
@@ -614,8 +671,8 @@ fn a_truncated_mcap_bag_names_the_offset_and_keeps_the_scans_before() {
     assert_eq!(r.scans_used, r.scans_read);
     assert!(occupied_near(&run, 1.5, 5.2), "the scans before the damage were used");
     assert!(r.error.as_deref().unwrap().contains(&format!("cut.mcap: byte {offset}")));
-    // Corrupt bytes inside a compressed chunk after the first third: an error at that chunk's
-    // offset, the scans before it kept.
+    // Corrupt bytes inside a compressed chunk after the first third: that chunk is skipped and
+    // counted at its offset, the scans before and after it kept (before: reading stopped there).
     let (chunk_at, chunk_len) =
         records(&bytes).into_iter().find(|&(op, at, _)| op == 0x06 && at > bytes.len() / 3).map(|(_, at, len)| (at, len)).unwrap();
     let mut bad = bytes.clone();
@@ -626,8 +683,74 @@ fn a_truncated_mcap_bag_names_the_offset_and_keeps_the_scans_before() {
     let bad_path = tmp("corrupt.mcap");
     std::fs::write(&bad_path, &bad).unwrap();
     let run = replay::replay(&bad_path, &no_classifier()).unwrap();
-    assert!(matches!(run.error, Some(ReplayError::Mcap { offset, .. }) if offset == chunk_at as u64), "{:?}", run.error);
-    assert!(run.report.scans_read > 0 && run.report.scans_read < SCANS, "{}", run.report.scans_read);
+    assert!(run.error.is_none(), "{:?}", run.error);
+    let [ReplayError::McapChunk { offset, reason, .. }] = &run.bad_records.first[..] else { panic!("{:?}", run.bad_records) };
+    assert_eq!(*offset, chunk_at as u64);
+    assert!(reason.starts_with("damaged Chunk record, skipped: its zstd data"), "{reason}");
+    assert_eq!(run.report.skipped_records.by_reason, BTreeMap::from([("damaged_chunk", 1)]));
+    let in_chunk = scans_in_chunk(&path, &bytes, chunk_at);
+    assert!(in_chunk > 0);
+    assert_eq!(run.report.scans_read, SCANS - in_chunk, "every scan outside the damaged chunk is read");
+}
+
+/// How many `/scan` messages of the MCAP file `bytes` (at `path`) are in the chunk at byte `at`.
+fn scans_in_chunk(path: &Path, bytes: &[u8], at: usize) -> u32 {
+    let c = host::replay::rosbag::read_mcap(path, bytes);
+    assert!(c.error.is_none() && c.bad.total == 0, "{:?} {:?}", c.error, c.bad);
+    c.messages.iter().filter(|m| m.topic == "/scan" && m.at == Location::Offset(at as u64)).count() as u32
+}
+
+/// Issue 29: one bit flipped inside a zstd chunk's compressed bytes made the `mcap` crate's chunk
+/// reader allocate what the damaged stream said ("memory allocation of 3835153973647651646 bytes
+/// failed", SIGABRT, or "capacity overflow"). Every single-bit flip of one chunk's compressed
+/// bytes: no panic, the chunk either reads as before or is skipped and named by its offset, and
+/// every message outside it is kept.
+#[test]
+fn any_bit_flipped_in_a_zstd_chunk_costs_that_chunk_at_most() {
+    let path = tmp("flips.mcap");
+    write_mcap(&path, &bag_messages(YAW_90), 2048);
+    let bytes = std::fs::read(&path).unwrap();
+    let whole = host::replay::rosbag::read_mcap(&path, &bytes);
+    assert!(whole.error.is_none() && whole.bad.total == 0);
+    let chunks: Vec<(u8, usize, usize)> = records(&bytes).into_iter().filter(|r| r.0 == 0x06).collect();
+    assert!(chunks.len() >= 3, "{} chunks", chunks.len());
+    let (_, chunk_at, chunk_len) = chunks[1];
+    let compression_len = u32::from_le_bytes(bytes[chunk_at + 9 + 28..chunk_at + 9 + 32].try_into().unwrap()) as usize;
+    let data_at = chunk_at + 9 + 40 + compression_len;
+    let outside = |c: &host::replay::rosbag::BagContents| c.messages.iter().filter(|m| m.at != Location::Offset(chunk_at as u64)).count();
+    let (mut skipped, mut same) = (0, 0);
+    for byte in data_at..chunk_at + 9 + chunk_len {
+        for bit in 0..8 {
+            let mut b = bytes.clone();
+            b[byte] ^= 1 << bit;
+            let c = host::replay::rosbag::read_mcap(&path, &b);
+            assert!(c.error.is_none(), "byte {byte} bit {bit}: {:?}", c.error);
+            assert_eq!(outside(&c), outside(&whole), "byte {byte} bit {bit}");
+            match &c.bad.first[..] {
+                [] => {
+                    assert_eq!(c.messages.len(), whole.messages.len(), "byte {byte} bit {bit}");
+                    same += 1;
+                }
+                [ReplayError::McapChunk { offset, .. }] => {
+                    assert_eq!(*offset, chunk_at as u64);
+                    skipped += 1;
+                }
+                other => panic!("byte {byte} bit {bit}: {other:?}"),
+            }
+        }
+    }
+    assert!(skipped > 0, "{skipped} flips skipped the chunk, {same} changed nothing");
+}
+
+/// The input that aborted `lives replay` before (issue 29), kept in the fuzz corpus: it reads
+/// with its damaged chunk named and skipped.
+#[test]
+fn the_mcap_that_aborted_replay_reads_with_the_chunk_skipped() {
+    let path = common::root().join("fuzz/corpus/mcap/regression-zstd-bitflip-alloc.mcap");
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    assert!(run.error.is_none(), "{:?}", run.error);
+    assert_eq!(run.report.skipped_records.by_reason, BTreeMap::from([("damaged_chunk", 1)]));
+    assert!(run.report.scans_read > 0);
 }
 
 #[test]
@@ -712,12 +835,21 @@ fn a_wrong_mcap_record_length_names_the_record_and_what_it_needed() {
     assert_eq!(bytes[inner], 0x05, "the chunk's second record is a message");
     let mut bad = with_record_length(&bytes, inner, 10);
     bad[chunk_at + 9 + 24..chunk_at + 9 + 28].fill(0);
-    let (offset, reason) = replay_of("short-chunked-message.mcap", &bad);
-    assert_eq!(offset, chunk_at as u64);
+    // The chunk's own length is intact: the rest of it is skipped, the chunks after it read.
+    let p = tmp("short-chunked-message.mcap");
+    std::fs::write(&p, &bad).unwrap();
+    let run = replay::replay(&p, &no_classifier()).unwrap();
+    assert!(run.error.is_none(), "{:?}", run.error);
+    let [ReplayError::McapChunk { offset, reason, .. }] = &run.bad_records.first[..] else { panic!("{:?}", run.bad_records) };
+    assert_eq!(*offset, chunk_at as u64);
     assert!(
-        reason.starts_with(&format!("damaged Chunk record: its record at byte {inner}: Message record of 10 bytes is shorter than the 22")),
+        reason.starts_with(&format!(
+            "damaged Chunk record, the rest of it skipped: its record at byte {inner}: Message record of 10 bytes is shorter than the 22"
+        )),
         "{reason}"
     );
+    let lost = scans_in_chunk(&chunked, &bytes, chunk_at);
+    assert!(run.report.scans_read >= SCANS - lost && run.report.scans_read < SCANS, "{}", run.report.scans_read);
 }
 
 /// The top-level records of an MCAP file: (opcode, offset, body length).
@@ -921,4 +1053,42 @@ fn bad_scans_in_a_bag_are_named_rejections_and_lose_nothing_good() {
     assert_eq!(r.controller_rejections, want);
     // The good scans still drew the wall ahead of the laser.
     assert!(occupied_near(&run, 1.5, 5.2));
+}
+
+/// Issue 29: a negative number given as a separate argument (`--max-range -1`) was refused as
+/// an unexpected argument; it is read as the value and range-checked like any other.
+#[test]
+fn a_negative_value_is_read_and_range_checked() {
+    let log = carmen("aces-corrected.log.gz");
+    for (value, shown) in [("-1", "-1"), ("-1e3", "-1000"), ("-0.5", "-0.5")] {
+        let out = std::process::Command::new(common::lives()).args(["replay", "--max-range", value]).arg(&log).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{value}: {err}");
+        assert!(
+            err.contains(&format!("error: --max-range {shown}: expected metres above the minimum range and at most")),
+            "{value}: {err}"
+        );
+        assert!(!err.contains("unexpected argument"), "{err}");
+    }
+    // `--flag=-1` was always read; a separate positive value still is.
+    let out = std::process::Command::new(common::lives()).args(["replay", "--max-range", "100"]).arg(&log).output().unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--max-range 100: expected metres"));
+}
+
+/// Found by the coverage-guided campaign (issue 29): an Attachment record whose declared lengths
+/// exceed its body made the `mcap` crate's parser panic ("slice index starts at 34 but ends at
+/// 31"). Replay reads nothing from attachments: it steps over them by their length, and the file
+/// is an error at its missing footer like any other truncated bag.
+#[test]
+fn a_damaged_attachment_record_is_stepped_over_not_a_panic() {
+    let path = common::root().join("fuzz/corpus/mcap/regression-attachment-slice-panic.mcap");
+    let bytes = std::fs::read(&path).unwrap();
+    assert_eq!(bytes[8], 0x09, "an Attachment record first");
+    let c = host::replay::rosbag::read_mcap(&path, &bytes);
+    assert!(c.messages.is_empty());
+    let shown = c.error.as_ref().map(|e| e.to_string()).unwrap_or_default();
+    assert!(shown.contains("regression-attachment-slice-panic.mcap: byte"), "{shown}");
+    let out = std::process::Command::new(common::lives()).args(["replay", "--no-classifier"]).arg(&path).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
 }

@@ -460,3 +460,26 @@ fn a_million_random_and_mutated_frames_never_panic_and_are_all_accounted_for() {
         r
     );
 }
+
+/// Writes the seeds of the coverage-guided frame targets (`fuzz/corpus/frames_to_core/` and
+/// `fuzz/corpus/frames_to_host/`, `host::fuzz`): each message of [`host_corpus`] and
+/// [`core_corpus`] as one frame, and each direction's whole corpus as one stream. Run by hand
+/// when the protocol changes: `cargo test -p firmware --lib write_fuzz_seeds -- --ignored`.
+#[test]
+#[ignore]
+fn write_fuzz_seeds() {
+    fn write<M: Serialize>(dir: &str, msgs: &[M]) {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus").join(dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut buf = std::vec![0u8; MAX_FRAME_LEN];
+        let mut all = Vec::new();
+        for (i, m) in msgs.iter().enumerate() {
+            let f = encode(m, &mut buf).unwrap();
+            std::fs::write(dir.join(std::format!("seed-{i:02}.bin")), f).unwrap();
+            all.extend_from_slice(f);
+        }
+        std::fs::write(dir.join("seed-stream.bin"), &all).unwrap();
+    }
+    write("frames_to_core", &host_corpus());
+    write("frames_to_host", &core_corpus());
+}

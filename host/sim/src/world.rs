@@ -293,6 +293,142 @@ fn one_line(message: &str) -> String {
     message.split('\n').map(str::trim).filter(|s| !s.is_empty()).collect::<Vec<_>>().join("; ")
 }
 
+/// What a value must hold, in the world format's words, for what serde calls it (`struct
+/// RawRect`, `f64`, `a sequence`, ...).
+fn expected_in_format_words(expected: &str) -> String {
+    let e = expected.trim();
+    // `struct RawRect with 4 elements`: serde's wording when an array stands for a table.
+    let e = e.split(" with ").next().unwrap_or(e);
+    let words = match e {
+        "struct RawRect" => "a rectangle: an inline table `{ center = [x, y], size = [width, height] }`, optionally with `yaw_deg` or `yaw_rad`",
+        "struct RawCircle" => "a circle: an inline table `{ center = [x, y], radius = r }`",
+        "struct RawStart" => "a table `[start]` with `position = [x, y]`, optionally `yaw_deg` or `yaw_rad`, `jitter_m`, `jitter_yaw_deg` or `jitter_yaw_rad`",
+        "struct RawWall" => "a table `[[walls]]` with `points = [[x, y], ...]`, optionally `closed = true` and `material`",
+        "struct RawObstacle" => "a table `[[obstacles]]` with `kind` and one shape: `rect`, `circle` or `polygon`",
+        "struct RawTarget" => "a table `[[targets]]` with one shape (`rect`, `circle` or `polygon`), optionally `name` and `candidates`",
+        "struct RawPerson" => "a table `[[people]]` with `path = [[x, y], ...]` and `speed_mps`, optionally `radius_m`",
+        "struct RawWorld" => "a world file: `time_limit_s`, `[start]`, `[[walls]]`, `[[obstacles]]`, `[[targets]]`, `[[people]]`",
+        "enum RawKind" => "`furniture` or `clutter`",
+        "f64" | "f32" | "a float" => "a number",
+        "i64" | "u64" | "usize" | "u32" | "i32" | "an integer" => "a whole number",
+        "a sequence" | "a seq" => "an array",
+        "a map" => "a table",
+        "any valid TOML value" => "a TOML value",
+        other => return other.to_string(),
+    };
+    words.to_string()
+}
+
+/// What serde says was found (`floating point `50.9``, `integer `3``, `sequence`, `map`), in
+/// the format's words.
+fn found_in_format_words(found: &str) -> String {
+    let f = found.trim();
+    let quoted = |prefix: &str| f.strip_prefix(prefix).map(|v| v.trim().trim_matches('`').to_string());
+    if let Some(v) = quoted("floating point").or_else(|| quoted("integer")) {
+        return format!("the number {v}");
+    }
+    if let Some(v) = quoted("boolean") {
+        return format!("the boolean {v}");
+    }
+    if let Some(v) = f.strip_prefix("string ") {
+        return format!("the string {v}");
+    }
+    match f {
+        "sequence" => "an array".to_string(),
+        "map" => "a table".to_string(),
+        other => other.to_string(),
+    }
+}
+
+/// The key whose value starts at byte `at` of `text` (the last `key =` before it on its line, or
+/// the table header it is in), and the table it is in (`[[obstacles]]`), if any.
+fn key_at(text: &str, at: usize) -> (Option<String>, Option<String>) {
+    let at = at.min(text.len());
+    let at = (0..=at).rev().find(|&i| text.is_char_boundary(i)).unwrap_or(0);
+    let line_start = text[..at].rfind('\n').map(|i| i + 1).unwrap_or(0);
+    let before = &text[line_start..at];
+    let key_char = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
+    let key = before.rfind('=').and_then(|eq| {
+        let k: String = before[..eq].trim_end().chars().rev().take_while(|&c| key_char(c)).collect::<Vec<_>>().into_iter().rev().collect();
+        (!k.is_empty()).then_some(k)
+    });
+    let table = text[..line_start]
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| l.starts_with('['))
+        .map(|l| l.split('#').next().unwrap_or(l).trim().to_string());
+    // A value that starts a line is a table header's (`[[walls]]` given as something else).
+    let header = text[line_start..].lines().next().map(str::trim).filter(|l| l.starts_with('[') && key.is_none());
+    match header {
+        Some(h) => (Some(h.trim_matches(|c| c == '[' || c == ']').to_string()), None),
+        None => (key, table),
+    }
+}
+
+/// A toml or serde message (`invalid type: floating point `50.9`, expected struct RawRect`,
+/// `invalid length 0, expected struct RawRect with 4 elements`, `invalid value: integer `…` as
+/// i128, expected any valid TOML value`) in the world format's words: which key, what it must
+/// hold, what it holds. Messages that already speak the format's words pass unchanged.
+fn in_format_words(message: &str, text: &str, at: usize) -> String {
+    let (key, table) = key_at(text, at);
+    let whose = match (&key, &table) {
+        (Some(k), Some(t)) => format!("`{k}` (in {t})"),
+        (Some(k), None) => format!("`{k}`"),
+        (None, Some(t)) => format!("this value (in {t})"),
+        (None, None) => "this value".to_string(),
+    };
+    let (head, expected) = match message.split_once(", expected ") {
+        Some((h, e)) => (h, Some(e)),
+        None => (message, None),
+    };
+    // An integer beyond i64, which toml hands to serde as an i128.
+    if let Some(v) = head.strip_suffix("as i128").and_then(|h| h.split('`').nth(1)) {
+        return format!(
+            "{whose} holds the integer {v}, beyond TOML's 64-bit integers (−9223372036854775808 to 9223372036854775807); write a float (1e20) for a large number"
+        );
+    }
+    if let (Some(found), Some(exp)) = (head.strip_prefix("invalid type:"), expected) {
+        return format!("{whose} must be {}, found {}", expected_in_format_words(exp), found_in_format_words(found));
+    }
+    if let (Some(n), Some(exp)) = (head.strip_prefix("invalid length "), expected) {
+        let exp_words = expected_in_format_words(exp);
+        let n = n.trim();
+        return match exp.contains(" with ") || exp.starts_with("struct ") {
+            true => format!("{whose} must be {exp_words}, found an array of {n} elements"),
+            false => format!("{whose} must be {exp_words}, found {n} elements"),
+        };
+    }
+    if let (Some(v), Some(exp)) = (head.strip_prefix("invalid value:"), expected) {
+        return format!("{whose} must be {}, found {}", expected_in_format_words(exp), found_in_format_words(v));
+    }
+    // An enum given a number or an array: toml's own words.
+    if message.contains("wanted string or table") && key.as_deref() == Some("kind") {
+        return format!("{whose} must be `furniture` or `clutter`");
+    }
+    // `missing field`, `unknown field`, `unknown variant`, `expected two numbers [x, y]`, ...:
+    // serde's own words are the format's; the internal names go.
+    let mut out = message.to_string();
+    for (from, to) in [
+        ("struct RawWorld", "the world file"),
+        ("struct RawStart", "[start]"),
+        ("struct RawWall", "[[walls]]"),
+        ("struct RawObstacle", "[[obstacles]]"),
+        ("struct RawTarget", "[[targets]]"),
+        ("struct RawPerson", "[[people]]"),
+        ("struct RawRect", "a rect"),
+        ("struct RawCircle", "a circle"),
+    ] {
+        out = out.replace(from, to);
+    }
+    match key {
+        Some(k) if !out.contains(&format!("`{k}`")) && !out.starts_with("missing field") && !out.starts_with("unknown field") => {
+            format!("{whose}: {out}")
+        }
+        _ => out,
+    }
+}
+
 struct Ctx<'a> {
     text: &'a str,
     file: &'a str,
@@ -413,17 +549,21 @@ impl World {
         let ctx = Ctx { text, file: file_name };
         // Pass 1: syntax.
         if let Err(e) = text.parse::<toml::Table>() {
+            let at = e.span().map(|s| s.start).unwrap_or(0);
             return Err(WorldError::Syntax {
                 file: file_name.to_string(),
-                line: line_of(text, e.span().map(|s| s.start).unwrap_or(0)),
-                message: one_line(e.message()),
+                line: line_of(text, at),
+                message: in_format_words(&one_line(e.message()), text, at),
             });
         }
         // Pass 2: schema.
-        let raw: RawWorld = toml::from_str(text).map_err(|e| WorldError::Schema {
-            file: file_name.to_string(),
-            line: line_of(text, e.span().map(|s| s.start).unwrap_or(0)),
-            message: one_line(e.message()),
+        let raw: RawWorld = toml::from_str(text).map_err(|e| {
+            let at = e.span().map(|s| s.start).unwrap_or(0);
+            WorldError::Schema {
+                file: file_name.to_string(),
+                line: line_of(text, at),
+                message: in_format_words(&one_line(e.message()), text, at),
+            }
         })?;
         // Pass 3: meaning.
         let name = raw.name.map(|n| n.trim().to_string()).filter(|n| !n.is_empty()).unwrap_or_else(|| {
@@ -976,7 +1116,11 @@ speed_mps = 0.5
             ("position = [1.0, 1.0]", "position = [1.0, 1.0, 7.0]", "expected two numbers [x, y], found 3"),
             ("center = [2.5, 1.0]", "center = [2.5]", "expected two numbers [x, y], found 1"),
             ("points = [[0, 0], [6, 0], [6, 4], [0, 4]]", "points = [[0, 0], [6, 0, 1], [6, 4]]", "found 3"),
-            ("path = [[1.0, 2.2], [5.0, 3.5]]", "path = [[1.0, 2.2], [5.0, 3.5, \"junk\"]]", "invalid type"),
+            (
+                "path = [[1.0, 2.2], [5.0, 3.5]]",
+                "path = [[1.0, 2.2], [5.0, 3.5, \"junk\"]]",
+                "`path` (in [[people]]) must be a number, found the string \"junk\"",
+            ),
             ("points = [[0, 0], [6, 0], [6, 4], [0, 4]]", "points = []", "at least 2 points, got 0"),
             ("points = [[0, 0], [6, 0], [6, 4], [0, 4]]", "points = [[0, 0], [0, 0], [6, 4]]", "zero length"),
             ("points = [[0, 0], [6, 0], [6, 4], [0, 4]]", "points = [[0, 0], [60, 0], [6, 4]]", "outside the world area"),
@@ -1032,6 +1176,53 @@ speed_mps = 0.5
         std::fs::write(&big, b"name = \"\xff\"").unwrap();
         assert!(World::load(&big).unwrap_err().to_string().contains("not UTF-8 text (byte 8)"));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Issue 29: world-file errors quoted serde's internal names ("invalid type: floating point
+    /// `50.99999`, expected struct RawRect", "invalid length 0, expected struct RawRect with 4
+    /// elements", "... as i128, expected any valid TOML value"). Every key of the tiny world given
+    /// each wrong kind of value: the message names the key (or its table) and the line, in the
+    /// format's words.
+    #[test]
+    fn schema_errors_speak_the_format_not_the_code() {
+        let cases: &[(&str, &str, &str)] = &[
+            ("rect = { center = [4.0, 2.0], size = [1.2, 0.8], yaw_deg = 10 }", "rect = 50.99999", "`rect` (in [[obstacles]]) must be a rectangle: an inline table `{ center = [x, y], size = [width, height] }`, optionally with `yaw_deg` or `yaw_rad`, found the number 50.99999"),
+            ("rect = { center = [4.0, 2.0], size = [1.2, 0.8], yaw_deg = 10 }", "rect = []", "`rect` (in [[obstacles]]) must be a rectangle: an inline table `{ center = [x, y], size = [width, height] }`, optionally with `yaw_deg` or `yaw_rad`, found an array of 0 elements"),
+            ("time_limit_s = 60", "time_limit_s = 99999999999999999999", "`time_limit_s` holds the integer 99999999999999999999, beyond TOML's 64-bit integers"),
+            ("circle = { center = [2.0, 3.0], radius = 0.2 }", "circle = \"round\"", "`circle` (in [[obstacles]]) must be a circle: an inline table `{ center = [x, y], radius = r }`, found the string \"round\""),
+            ("speed_mps = 0.5", "speed_mps = \"fast\"", "`speed_mps` (in [[people]]) must be a number, found the string \"fast\""),
+            ("closed = true", "closed = 1", "`closed` (in [[walls]]) must be a boolean, found the number 1"),
+            ("points = [[0, 0], [6, 0], [6, 4], [0, 4]]", "points = 3", "`points` (in [[walls]]) must be an array, found the number 3"),
+            ("kind = \"clutter\"", "kind = 3", "`kind` (in [[obstacles]]) must be `furniture` or `clutter`"),
+        ];
+        for (from, to, expect) in cases {
+            let text = tiny_with(from, to);
+            let e = err(&text);
+            let line = line_of_str(&text, to.lines().next().unwrap());
+            assert!(
+                e.to_string().starts_with(&format!("bad.toml:{line}: {expect}")),
+                "{to}:\n  got  {e}\n  want bad.toml:{line}: {expect}"
+            );
+        }
+        // Every value of every key replaced by each kind of wrong value: no internal names.
+        let wrong = ["50.99999", "[]", "[1, 2, 3, 4]", "\"x\"", "true", "{}", "{ a = 1 }", "99999999999999999999", "-1", "[[1, \"a\"]]"];
+        let mut n = 0;
+        for (i, line) in TINY.lines().enumerate() {
+            let Some((key, _)) = line.split_once(" = ") else { continue };
+            for w in wrong {
+                let mut lines: Vec<String> = TINY.lines().map(String::from).collect();
+                lines[i] = format!("{key} = {w}");
+                let text = lines.join("\n");
+                let Err(e) = World::from_toml_str(&text, "bad.toml") else { continue };
+                let s = e.to_string();
+                for internal in ["Raw", "struct ", "i128", "f64", "sequence", " map", "Xy"] {
+                    assert!(!s.contains(internal), "{key} = {w}: {s}");
+                }
+                assert!(s.starts_with("bad.toml:"), "{s}");
+                n += 1;
+            }
+        }
+        assert!(n > 100, "{n} errors checked");
     }
 
     #[test]

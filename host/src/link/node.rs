@@ -6,7 +6,7 @@
 //! port fails (unplugged, peer gone) it drops the partial frame, backs off and reopens it; the
 //! controller keeps its maps and goal, so a replugged cable resumes the search.
 
-use super::{Link, Summary};
+use super::{Link, Summary, Timings};
 use firmware::classifier::ModelError;
 use firmware::config::ConfigError;
 use firmware::node::{Node, NodeConfig, NodeCounters, TimeMode};
@@ -84,7 +84,7 @@ pub struct NodeProcess {
     tx: Vec<u8>,
     tx_log: HostDecoder,
     goals_sent: Vec<GoalMsg>,
-    tick_us: Vec<f64>,
+    tick_us: Timings,
     overruns: u32,
     io_errors: u32,
     reconnects: u32,
@@ -106,7 +106,7 @@ impl NodeProcess {
             tx: Vec::with_capacity(8192),
             tx_log: HostDecoder::new(),
             goals_sent: Vec::new(),
-            tick_us: Vec::new(),
+            tick_us: Timings::default(),
             overruns: 0,
             io_errors: 0,
             reconnects: 0,
@@ -195,7 +195,7 @@ impl NodeProcess {
             mode: self.ctl.mode(),
             config_error: self.node.last_config_error(),
             goals_sent: self.goals_sent.clone(),
-            tick_us: Summary::of(&self.tick_us),
+            tick_us: self.tick_us.summary(),
             overruns: self.overruns,
             io_errors: self.io_errors,
             reconnects: self.reconnects,

@@ -27,9 +27,10 @@
 //! with its time.
 //!
 //! Bad input loses nothing that was good. A bad record whose boundaries are known (a CARMEN line
-//! that does not read, a bag message that does not decode) is skipped and counted by reason
-//! ([`BadRecords`]), and reading goes on. Damage that loses the framing (a truncated or corrupt
-//! gzip stream, a cut or unparsable MCAP record or chunk, a bad sqlite page) stops reading;
+//! that does not read or holds a NUL, a bag message that does not decode, an MCAP chunk that does
+//! not decompress or parse, a sqlite3 row of the wrong column type) is skipped and counted by
+//! reason ([`BadRecords`]), and reading goes on. Damage that loses the framing (a truncated or
+//! corrupt gzip stream, a cut or unparsable top-level MCAP record, a bad sqlite page) stops reading;
 //! everything before it is replayed. Both are reported with the file and the line, byte offset
 //! or row.
 //!
@@ -158,6 +159,9 @@ pub enum ReplayError {
         file: PathBuf,
         /// The line (1-based).
         line: usize,
+        /// The first control byte in it (a NUL, ...) and its column (1-based, in bytes); `None`
+        /// when the line is not UTF-8.
+        control: Option<(usize, u8)>,
     },
     /// A CARMEN line could not be read.
     CarmenLine {
@@ -175,6 +179,25 @@ pub enum ReplayError {
         /// Byte offset of the record (or of where the file ends).
         offset: u64,
         /// Why.
+        reason: String,
+    },
+    /// An MCAP chunk that does not decompress, or whose records do not parse, skipped (the
+    /// records after it are read).
+    McapChunk {
+        /// The file.
+        file: PathBuf,
+        /// Byte offset of the Chunk record.
+        offset: u64,
+        /// Why.
+        reason: String,
+    },
+    /// A `messages` row of a sqlite3 bag whose columns are not of their types, skipped.
+    SqliteRow {
+        /// The file.
+        file: PathBuf,
+        /// Its position among the rows in id order (1-based): its id may be what is wrong.
+        row: u64,
+        /// sqlite's message.
         reason: String,
     },
     /// sqlite could not read the bag.
@@ -249,6 +272,8 @@ impl ReplayError {
             ReplayError::CarmenLine { error, .. } => error.reason(),
             ReplayError::NotText { .. } => "not_text",
             ReplayError::Message { .. } => "undecodable_message",
+            ReplayError::McapChunk { .. } => "damaged_chunk",
+            ReplayError::SqliteRow { .. } => "bad_row",
             _ => "damage",
         }
     }
@@ -274,9 +299,18 @@ impl fmt::Display for ReplayError {
             ReplayError::Gzip { file, lines, offset, reason } => {
                 write!(f, "{}: gzip stream damaged at compressed byte {offset} (after line {lines}): {reason}", file.display())
             }
-            ReplayError::NotText { file, line } => write!(f, "{}:{line}: not UTF-8 text", file.display()),
+            ReplayError::NotText { file, line, control: None } => write!(f, "{}:{line}: not UTF-8 text", file.display()),
+            ReplayError::NotText { file, line, control: Some((column, byte)) } => {
+                let name = if *byte == 0 { "a NUL byte".to_string() } else { format!("the control byte 0x{byte:02x}") };
+                write!(f, "{}:{line}: not text: {name} at column {column}", file.display())
+            }
             ReplayError::CarmenLine { file, line, error } => write!(f, "{}:{line}: {error}", file.display()),
-            ReplayError::Mcap { file, offset, reason } => write!(f, "{}: byte {offset}: {reason}", file.display()),
+            ReplayError::Mcap { file, offset, reason } | ReplayError::McapChunk { file, offset, reason } => {
+                write!(f, "{}: byte {offset}: {reason}", file.display())
+            }
+            ReplayError::SqliteRow { file, row, reason } => {
+                write!(f, "{}: messages row {row} (in id order) skipped: {reason}", file.display())
+            }
             ReplayError::Sqlite { file, after_row, reason } => match after_row {
                 Some(r) => write!(f, "{}: sqlite error after messages row {r}: {reason}", file.display()),
                 None => write!(f, "{}: sqlite error before any message: {reason}", file.display()),
@@ -484,8 +518,13 @@ fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
             }
         }
         line_no += 1;
+        // A NUL (or other control byte) costs its line only, wherever it is in the file.
+        if let Some(k) = buf.iter().position(|&b| is_control(b)) {
+            log.bad_records.add(ReplayError::NotText { file: file.to_path_buf(), line: line_no, control: Some((k + 1, buf[k])) });
+            continue;
+        }
         let Ok(text) = std::str::from_utf8(&buf) else {
-            log.bad_records.add(ReplayError::NotText { file: file.to_path_buf(), line: line_no });
+            log.bad_records.add(ReplayError::NotText { file: file.to_path_buf(), line: line_no, control: None });
             continue;
         };
         match carmen::parse_line(text) {
@@ -534,8 +573,12 @@ fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -> LogData {
     if !contents.skipped_encodings.is_empty() {
         warnings.push(format!("skipped topics not encoded as CDR: {}", contents.skipped_encodings.join(", ")));
     }
-    let scans = rosbag::scans_from_messages(file, contents.messages);
+    let mut scans = rosbag::scans_from_messages(file, contents.messages);
     warnings.extend(scans.warnings);
+    // Damaged chunks and bad rows first: they come before any message decoding in the file's
+    // own order of reading.
+    let mut bad_records = contents.bad;
+    bad_records.append(std::mem::take(&mut scans.bad_records));
     LogData {
         file: file.to_path_buf(),
         format,
@@ -549,13 +592,28 @@ fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -> LogData {
         span_s: contents.span_ns.map(|(a, b)| (a as f64 / 1e9, b as f64 / 1e9)),
         sources: contents.topics.iter().map(|(t, ty)| format!("{t} ({ty})")).collect(),
         warnings,
-        bad_records: scans.bad_records,
+        bad_records,
         error: contents.error,
     }
 }
 
 fn io_err(file: &Path) -> impl Fn(std::io::Error) -> ReplayError + '_ {
     move |source| ReplayError::Io { file: file.to_path_buf(), source }
+}
+
+/// A control byte in a text log: below 0x20 except tab, line feed and carriage return, or DEL.
+fn is_control(b: u8) -> bool {
+    (b < 0x20 && b != b'\t' && b != b'\n' && b != b'\r') || b == 0x7f
+}
+
+/// Whether the first bytes of a file are text, give or take some damage: at most 1 in 64 control
+/// bytes other than NUL and fewer NULs than anything else. A NUL or a stray control byte in a
+/// CARMEN log costs its line (`read_carmen`), not the file; binary data (about one byte in eight
+/// a control byte) is not text.
+fn looks_like_text(head: &[u8]) -> bool {
+    let nul = head.iter().filter(|&&b| b == 0).count();
+    let other = head.iter().filter(|&&b| b != 0 && is_control(b)).count();
+    !head.is_empty() && other * 64 <= head.len() && nul * 2 < head.len()
 }
 
 /// The format of a file from its first bytes.
@@ -568,7 +626,7 @@ pub fn detect(head: &[u8]) -> Option<LogFormat> {
         Some(LogFormat::Ros2Sqlite3)
     } else if crate::sensors::pcap::looks_like_pcap(head) || crate::sensors::vlp16::frames_packet(head) {
         Some(LogFormat::Vlp16)
-    } else if head.iter().take(4096).all(|&b| b == b'\t' || b == b'\n' || b == b'\r' || (0x20..0x7f).contains(&b) || b >= 0x80) {
+    } else if looks_like_text(&head[..head.len().min(4096)]) {
         Some(LogFormat::Carmen)
     } else {
         None
@@ -1358,6 +1416,15 @@ mod tests {
         assert_eq!(detect(&[0xff, 0xee, 0x10, 0x27]), Some(LogFormat::Vlp16), "a raw VLP-16 payload");
         assert_eq!(detect(b"# CARMEN\nODOM 0 0 0 0 0 0 1 h 1\n"), Some(LogFormat::Carmen));
         assert_eq!(detect(&[0u8, 1, 2, 3]), None);
+        assert_eq!(detect(&[0u8; 64]), None, "zeros");
+        // Issue 29: one NUL (or a few) in the first 4 KiB no longer makes a log "not a CARMEN log".
+        assert_eq!(detect(b"# CARMEN\nODOM 0 0\x00 0 0 0 0 1 h 1\n"), Some(LogFormat::Carmen));
+        let mut damaged = b"ODOM 1.0 2.0 0.5 0 0 0 1 h 1\n".repeat(100);
+        damaged[40..552].fill(0);
+        assert_eq!(detect(&damaged), Some(LogFormat::Carmen), "a zeroed 512-byte block");
+        // Binary: about one byte in eight is a control byte.
+        let binary: Vec<u8> = (0..4096u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8).collect();
+        assert_eq!(detect(&binary), None);
     }
 
     #[test]

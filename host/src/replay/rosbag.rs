@@ -6,9 +6,11 @@
 //!
 //! 1. [`read_mcap`] / [`read_db3`] pull the messages of those three types out of the container
 //!    in file order, with where each came from ([`Location`]): the byte offset of its MCAP record
-//!    (for a message inside a chunk, the chunk's offset) or its `messages` row id. They stop at
-//!    the first damaged record or row (the framing after it is lost) and hand back what came
-//!    before, plus the error.
+//!    (for a message inside a chunk, the chunk's offset) or its `messages` row id. A damaged
+//!    chunk (its own length intact) or a row of the wrong column type is skipped and counted
+//!    ([`BagContents::bad`]); they stop at the first damage that loses the framing (a top-level
+//!    record cut off or unparsable, an unreadable sqlite page) and hand back what came before,
+//!    plus the error.
 //! 2. [`scans_from_messages`] decodes them (CDR, [`super::cdr`]; a message that does not decode
 //!    is skipped and counted, the messages around it are used), sorts them by the bag's receive
 //!    time, and builds the frame tree: `tf_static` transforms apply to the whole bag, `tf`
@@ -87,6 +89,9 @@ pub struct BagContents {
     pub skipped_encodings: Vec<String>,
     /// The first damage, after which nothing was read.
     pub error: Option<ReplayError>,
+    /// Damage whose extent is known, skipped: a chunk that does not decompress or whose records
+    /// do not parse (the records after it are read), a `messages` row of the wrong type.
+    pub bad: BadRecords,
 }
 
 impl BagContents {
@@ -155,13 +160,24 @@ fn unparsable(op: u8, len: usize, e: &mcap::McapError) -> String {
     }
 }
 
-/// The first record in `records` (an uncompressed chunk's, starting at byte `at` of the file)
-/// that does not parse, described with its byte offset.
-fn bad_inner_record(records: &[u8], at: usize) -> Option<String> {
+/// The records replay reads (Header, Schema, Channel, Message, Chunk); the others (indexes,
+/// attachments, metadata, statistics, private records) are stepped over by their length without
+/// being parsed. The `mcap` crate's parser panics on some damaged ones (an Attachment whose
+/// declared lengths exceed its body: "slice index starts at 34 but ends at 31", found by the
+/// fuzzer; `fuzz/corpus/mcap/regression-attachment-slice-panic.mcap`), and replay needs nothing
+/// from them.
+fn read_here(op: u8) -> bool {
+    matches!(op, 0x01 | 0x03..=0x06)
+}
+
+/// Walks the records of a chunk (`records`, uncompressed), handing each that parses to `take`.
+/// On the first that does not (its framing or its fields), returns its offset in `records` and
+/// why; the records after it are lost (their framing is).
+fn walk_records<'a>(records: &'a [u8], mut take: impl FnMut(mcap::records::Record<'a>)) -> Result<(), (usize, String)> {
     let mut pos = 0;
     while pos < records.len() {
         if records.len() - pos < 9 {
-            return Some(format!("a record header at byte {} is cut off by the end of the chunk", at + pos));
+            return Err((pos, format!("a record header cut off by the end of the chunk ({} of 9 bytes)", records.len() - pos)));
         }
         let op = records[pos];
         let mut len_bytes = [0u8; 8];
@@ -169,19 +185,97 @@ fn bad_inner_record(records: &[u8], at: usize) -> Option<String> {
         let len = u64::from_le_bytes(len_bytes);
         let left = (records.len() - pos - 9) as u64;
         if len > left {
-            return Some(format!(
-                "its {} record (opcode 0x{op:02x}) at byte {} of {len} bytes runs past the end of the chunk, {left} bytes left",
-                op_name(op),
-                at + pos
+            return Err((
+                pos,
+                format!("its {} record (opcode 0x{op:02x}) of {len} bytes runs past the end of the chunk, {left} bytes left", op_name(op)),
             ));
         }
         let body = &records[pos + 9..pos + 9 + len as usize];
-        if let Err(e) = mcap::parse_record(op, body) {
-            return Some(format!("its record at byte {}: {}", at + pos, unparsable(op, body.len(), &e)));
+        if read_here(op) {
+            match mcap::parse_record(op, body) {
+                Ok(rec) => take(rec),
+                Err(e) => return Err((pos, unparsable(op, body.len(), &e))),
+            }
         }
         pos += 9 + len as usize;
     }
-    None
+    Ok(())
+}
+
+/// The most a chunk may claim to hold uncompressed, whatever the file's size: 1 GiB.
+pub const MAX_CHUNK_UNCOMPRESSED: u64 = 1 << 30;
+/// The most a chunk may claim to hold uncompressed per byte of the file it is in: 1024 (zstd
+/// reaches a few hundred on runs of zeros; rosbag2's chunks of scans reach 3 to 10).
+pub const MAX_CHUNK_RATIO: u64 = 1024;
+
+/// The uncompressed records of a chunk whose data (`data`, at byte `data_at` of a file of
+/// `file_len` bytes) is compressed as `header` says, decompressed here with a bound on the
+/// output: the claimed `uncompressed_size` must be within [`MAX_CHUNK_UNCOMPRESSED`] and
+/// [`MAX_CHUNK_RATIO`] × the file's size, the decoder may not write more than it, must write
+/// all of it, and the result must match the chunk's CRC (when it has one). Nothing is allocated
+/// beyond the claimed size, so damaged compressed bytes cannot make the reader allocate what
+/// they like (the `mcap` crate's own chunk reader sized its buffer from the damaged stream).
+fn chunk_records<'a>(
+    header: &mcap::records::ChunkHeader,
+    data: &'a [u8],
+    data_at: usize,
+    file_len: usize,
+) -> Result<std::borrow::Cow<'a, [u8]>, String> {
+    let claimed = header.uncompressed_size;
+    let limit = MAX_CHUNK_UNCOMPRESSED.min((file_len as u64).saturating_mul(MAX_CHUNK_RATIO));
+    if header.compression.is_empty() {
+        if claimed != data.len() as u64 {
+            return Err(format!("its uncompressed size field says {claimed} bytes, its records take {} (byte {data_at})", data.len()));
+        }
+    } else if claimed > limit {
+        return Err(format!(
+            "it claims {claimed} bytes uncompressed from {} compressed, more than this reader allows for a file of {file_len} bytes ({limit}: {MAX_CHUNK_RATIO} × the file's size, at most {MAX_CHUNK_UNCOMPRESSED})",
+            data.len()
+        ));
+    }
+    let records: std::borrow::Cow<'a, [u8]> = match header.compression.as_str() {
+        "" => std::borrow::Cow::Borrowed(data),
+        #[cfg(feature = "zstd")]
+        "zstd" => {
+            let out = zstd::bulk::decompress(data, claimed as usize).map_err(|e| {
+                format!("its zstd data (byte {data_at}, {} bytes) does not decompress to the {claimed} bytes it claims: {e}", data.len())
+            })?;
+            std::borrow::Cow::Owned(out)
+        }
+        #[cfg(feature = "lz4")]
+        "lz4" => {
+            use std::io::Read;
+            let mut out = Vec::new();
+            let decoder = lz4::Decoder::new(data).map_err(|e| format!("its lz4 data (byte {data_at}) does not start a frame: {e}"))?;
+            decoder
+                .take(claimed + 1)
+                .read_to_end(&mut out)
+                .map_err(|e| format!("its lz4 data (byte {data_at}, {} bytes) does not decompress: {e}", data.len()))?;
+            std::borrow::Cow::Owned(out)
+        }
+        other => {
+            return Err(match missing_codec(other) {
+                Some(feature) => format!(
+                "chunk compressed with {other}, which this `lives` was built without (rebuild with `--features {feature}`, or `ros-bags`)"
+            ),
+                None => format!("unknown chunk compression {other:?} (MCAP knows zstd and lz4)"),
+            })
+        }
+    };
+    if records.len() as u64 != claimed {
+        return Err(format!("its {} data decompresses to {} bytes, not the {claimed} it claims", header.compression, records.len()));
+    }
+    if header.uncompressed_crc != 0 {
+        let crc = crc32fast::hash(&records);
+        if crc != header.uncompressed_crc {
+            return Err(format!(
+                "its {} bytes of records fail their CRC (0x{crc:08x}, the chunk says 0x{:08x})",
+                records.len(),
+                header.uncompressed_crc
+            ));
+        }
+    }
+    Ok(records)
 }
 
 /// Channel id → (topic, type name, message encoding).
@@ -192,6 +286,7 @@ type Channels = HashMap<u16, (String, String, String)>;
 pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
     let mut out = BagContents::default();
     let damage = |offset: usize, reason: String| ReplayError::Mcap { file: file.to_path_buf(), offset: offset as u64, reason };
+    let chunk_damage = |offset: usize, reason: String| ReplayError::McapChunk { file: file.to_path_buf(), offset: offset as u64, reason };
     if buf.len() < MCAP_MAGIC.len() || &buf[..8] != MCAP_MAGIC {
         out.error = Some(damage(0, "no MCAP magic at the start".into()));
         return out;
@@ -246,6 +341,11 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
             }
             return out;
         }
+        if !read_here(op) {
+            prev = Some((op, pos));
+            pos = next;
+            continue;
+        }
         let record = match mcap::parse_record(op, body) {
             Ok(r) => r,
             Err(e) => {
@@ -254,44 +354,32 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
             }
         };
         let result = match record {
-            mcap::records::Record::Chunk { header, data } => match mcap::read::ChunkReader::new(header.clone(), &data) {
-                Ok(reader) => {
-                    let mut r = Ok(());
-                    for (k, inner) in reader.enumerate() {
-                        match inner {
-                            Ok(rec) => take_record(rec, &mut schemas, &mut channels, &mut out, Location::Offset(pos as u64)),
-                            Err(e) => {
-                                // Uncompressed records are in the file: name the bad one's byte.
-                                let records_at = body_start + 40 + header.compression.len();
-                                let detail = match header.compression.is_empty() {
-                                    true => bad_inner_record(&data, records_at),
-                                    false => None,
-                                };
-                                r = Err(format!(
-                                    "damaged Chunk record: {}",
-                                    detail.unwrap_or_else(|| format!(
-                                        "after {k} good records (of its {} uncompressed bytes): {e}{}",
-                                        header.uncompressed_size,
-                                        std::error::Error::source(&e).map(|w| format!(": {w}")).unwrap_or_default()
-                                    ))
-                                ));
-                                break;
-                            }
+            mcap::records::Record::Chunk { header, data } => {
+                match chunk_records(&header, &data, body_start + 40 + header.compression.len(), buf.len()) {
+                    Ok(records) => {
+                        // Records inside an uncompressed chunk are at known bytes of the file;
+                        // inside a compressed one only the chunk's offset means anything.
+                        let at = |k: usize| match header.compression.is_empty() {
+                            true => format!("byte {}", body_start + 40 + header.compression.len() + k),
+                            false => format!("byte {k} of its {} uncompressed bytes", records.len()),
+                        };
+                        if let Err((k, why)) = walk_records(&records, |rec| {
+                            take_record(rec, &mut schemas, &mut channels, &mut out, Location::Offset(pos as u64))
+                        }) {
+                            out.bad.add(chunk_damage(
+                                pos,
+                                format!("damaged Chunk record, the rest of it skipped: its record at {}: {why}", at(k)),
+                            ));
                         }
                     }
-                    r
+                    // The chunk's own length is intact: skip it, read on after it.
+                    Err(reason) => out.bad.add(chunk_damage(pos, format!("damaged Chunk record, skipped: {reason}"))),
                 }
-                Err(e) => Err(match missing_codec(&header.compression) {
-                    Some(feature) => format!(
-                        "chunk compressed with {}, which this `lives` was built without (rebuild with `--features {feature}`, or `ros-bags`)",
-                        header.compression
-                    ),
-                    None => format!("cannot read Chunk record: {e}"),
-                }),
-            },
+                Ok(())
+            }
             rec => {
                 take_record(rec, &mut schemas, &mut channels, &mut out, Location::Offset(pos as u64));
-                Ok(())
+                Ok::<(), String>(())
             }
         };
         if let Err(reason) = result {
@@ -409,18 +497,34 @@ pub fn read_db3(file: &Path) -> BagContents {
     let mut read_messages = || -> rusqlite::Result<()> {
         let mut st = conn.prepare("SELECT id, topic_id, timestamp, data FROM messages ORDER BY id")?;
         let mut rows = st.query([])?;
+        let mut n = 0u64;
+        // A row's boundaries are sqlite's: a column of the wrong type (a REAL topic id, a TEXT
+        // time stamp) costs that row only. What stops reading is sqlite failing to step to the
+        // next row (a damaged page).
         while let Some(r) = rows.next()? {
-            let id: i64 = r.get(0)?;
-            let topic_id: i64 = r.get(1)?;
-            let t: i64 = r.get(2)?;
+            n += 1;
+            let row = || -> rusqlite::Result<(i64, i64, i64)> { Ok((r.get(0)?, r.get(1)?, r.get(2)?)) };
+            let (id, topic_id, t) = match row() {
+                Ok(v) => v,
+                Err(e) => {
+                    out.bad.add(ReplayError::SqliteRow { file: file.to_path_buf(), row: n, reason: e.to_string() });
+                    continue;
+                }
+            };
             let t_ns = t.max(0) as u64;
-            out.saw(t_ns);
             if let Some((name, ty, fmt)) = topics.get(&topic_id) {
                 if let (Some(kind), "cdr") = (MsgType::of(ty, name), fmt.as_str()) {
-                    let data: Vec<u8> = r.get(3)?;
+                    let data: Vec<u8> = match r.get(3) {
+                        Ok(d) => d,
+                        Err(e) => {
+                            out.bad.add(ReplayError::SqliteRow { file: file.to_path_buf(), row: n, reason: e.to_string() });
+                            continue;
+                        }
+                    };
                     out.messages.push(BagMessage { t_ns, topic: name.clone(), kind, data, at: Location::Row(id) });
                 }
             }
+            out.saw(t_ns);
             last_row = Some(id);
         }
         Ok(())
@@ -965,7 +1069,9 @@ mod tests {
             file.extend_from_slice(&(body.len() as u64).to_le_bytes());
             file.extend_from_slice(&body);
             let c = read_mcap(Path::new("c.mcap"), &file);
-            let Some(ReplayError::Mcap { offset: 8, reason, .. }) = &c.error else { panic!("{codec}: {:?}", c.error) };
+            // The chunk is skipped (its length is intact); the file then ends without a footer.
+            let [ReplayError::McapChunk { offset: 8, reason, .. }] = &c.bad.first[..] else { panic!("{codec}: {:?}", c.bad) };
+            assert!(matches!(&c.error, Some(ReplayError::Mcap { reason, .. }) if reason.contains("truncated")), "{:?}", c.error);
             // Constant in any one build (both `true` with the default features), not in general.
             #[allow(clippy::needless_bool)]
             let built_with = if codec == "zstd" { cfg!(feature = "zstd") } else { cfg!(feature = "lz4") };
