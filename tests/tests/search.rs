@@ -72,19 +72,22 @@ fn every_planner_finds_the_target_in_the_bedroom_start_apartment_seeds_1_to_10()
 }
 
 #[test]
-fn a_walking_persons_trail_no_longer_draws_lives_away_from_the_suitcase_behind_it() {
+fn the_suitcase_the_lidar_sees_at_once_behind_the_start_is_found_despite_a_walking_persons_trail() {
     // The paper's showcase (examples/worlds/apartment-suitcase-behind.toml): the LiDAR sees the
-    // suitcase at once, 6 m behind the start. With the non-map points a person left where they
-    // no longer stand, `lives-gt` walked to that trail and never came back; with them dropped
-    // (`nonmap_drop_vacated`, the default) seed 2 finds the suitcase.
+    // suitcase at once, 6 m behind the start, while a person walks past. With the non-map
+    // points a person left where they no longer stand, the greedy `lives-gt` once walked to that
+    // trail and never came back (its seed 2); the rule that drops them (`nonmap_drop_vacated`,
+    // the default; unit-tested in `firmware::nonmap`) fixed it. Since a planning step spans two
+    // ticks (issue 28) that seed no longer walks to the trail even without the rule, so only the
+    // outcome is checked, for the structured and the greedy planner.
     let world = example_world("apartment-suitcase-behind");
-    let mut s = SearchSpec::new("apartment-suitcase-behind", world, Scenario::Easy, PlannerChoice::LivesGt, 2);
-    let with_rule = search::run(&s, |_| {}).result;
-    s.controller.nonmap_drop_vacated = false;
-    let without = search::run(&s, |_| {}).result;
-    assert_eq!(with_rule.lidar_saw_target_s, Some(0.0), "{with_rule:?}");
-    assert!(with_rule.found, "{with_rule:?}");
-    assert!(!without.found && without.outcome == "time-limit", "{without:?}");
+    for kind in [firmware::PlannerKind::Lives, firmware::PlannerKind::LivesGreedy] {
+        let mut s = SearchSpec::new("apartment-suitcase-behind", world.clone(), Scenario::Easy, PlannerChoice::LivesGt, 2);
+        s.controller.planner = kind;
+        let r = search::run(&s, |_| {}).result;
+        assert_eq!(r.lidar_saw_target_s, Some(0.0), "{kind:?}: {r:?}");
+        assert!(r.found, "{kind:?}: {r:?}");
+    }
 }
 
 fn example_world(name: &str) -> World {
