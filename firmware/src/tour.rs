@@ -703,7 +703,7 @@ mod tests {
         for a in 0..=n {
             for b in 0..=n {
                 let (dx, dy) = (pts[b].0 - pts[a].0, pts[b].1 - pts[a].1);
-                let d = ((dx * dx + dy * dy) as f64).sqrt() as u32;
+                let d = fixed_point::isqrt_u64((dx * dx + dy * dy) as u64) as u32;
                 let uphill = dy.max(0) as u32 / 2;
                 p.cost[a][b] = if a != b && rng.below(100) < unreachable_percent { u32::MAX } else { d + uphill };
             }
@@ -803,7 +803,8 @@ mod tests {
         // of the first local optimum (insertion + 2-opt + Or-opt) and of the final tour (kicks).
         let mut rng = Rng(12345);
         let mut s = TourSolver::new();
-        let (mut worst, mut sum, mut worst_first, mut sum_first, mut optimal) = (1.0f64, 0.0, 1.0f64, 0.0, 0);
+        // Ratios in parts per million (the core's sources hold no floats, tests included).
+        let (mut worst, mut sum, mut worst_first, mut sum_first, mut optimal) = (PPM, 0u64, PPM, 0u64, 0);
         let count = 1200;
         for round in 0..count {
             let n = 2 + round % 7;
@@ -818,27 +819,28 @@ mod tests {
             check(&p, t);
             let opt = brute_force(&p);
             assert!(t.cost >= opt);
-            let (r, rf) = (t.cost as f64 / opt.max(1) as f64, first as f64 / opt.max(1) as f64);
+            let (r, rf) = (t.cost * PPM / opt.max(1), first * PPM / opt.max(1));
             worst = worst.max(r);
             sum += r;
             worst_first = worst_first.max(rf);
             sum_first += rf;
             optimal += (t.cost == opt) as u32;
         }
-        let (mean, mean_first) = (sum / count as f64, sum_first / count as f64);
+        let (mean, mean_first) = (sum / count as u64, sum_first / count as u64);
         std::println!(
-            "n 2..=8, {count} instances: final worst {worst:.4} mean {mean:.5} optimal {optimal}/{count}; \
-             first local optimum worst {worst_first:.4} mean {mean_first:.5}"
+            "n 2..=8, {count} instances (ppm of the optimum): final worst {worst} mean {mean} optimal {optimal}/{count}; \
+             first local optimum worst {worst_first} mean {mean_first}"
         );
         assert!(worst <= WORST_RATIO && mean <= MEAN_RATIO, "worst {worst} mean {mean}");
         assert!(worst_first <= WORST_FIRST_RATIO && mean_first <= MEAN_FIRST_RATIO, "first: worst {worst_first} mean {mean_first}");
     }
     // Measured (seed 12345, 1 200 instances): final tour optimal in 1 199, worst ratio 1.1009 (n 8,
     // blocks of 3 and 5), mean 1.00008; the first local optimum (no kicks) worst 1.3609, mean 1.00722.
-    const WORST_RATIO: f64 = 1.101;
-    const MEAN_RATIO: f64 = 1.0001;
-    const WORST_FIRST_RATIO: f64 = 1.361;
-    const MEAN_FIRST_RATIO: f64 = 1.0073;
+    const PPM: u64 = 1_000_000;
+    const WORST_RATIO: u64 = 1_101_000;
+    const MEAN_RATIO: u64 = 1_000_100;
+    const WORST_FIRST_RATIO: u64 = 1_361_000;
+    const MEAN_FIRST_RATIO: u64 = 1_007_300;
 
     #[test]
     fn points_on_a_line_are_visited_in_order() {
@@ -973,7 +975,7 @@ mod tests {
         // 48 tasks, 1–3 classes. Also measures what the kicks gain over the first local optimum.
         let mut rng = Rng(2718);
         let mut s = TourSolver::new();
-        let (mut max_work, mut max_moves, mut sum, mut gain) = (0u64, 0u32, 0u64, 0.0f64);
+        let (mut max_work, mut max_moves, mut sum, mut gain_ppm) = (0u64, 0u32, 0u64, 0u64);
         let rounds = 60;
         for round in 0..rounds {
             let p = random_problem(&mut rng, MAX_TASKS, 1 + (round % 3) as u8, 2);
@@ -986,16 +988,16 @@ mod tests {
                 work += s.step(&p, 1000).0 as u64;
             }
             check(&p, s.best());
-            gain += first as f64 / s.best().cost as f64;
+            gain_ppm += first * PPM / s.best().cost.max(1);
             max_work = max_work.max(work);
             max_moves = max_moves.max(s.moves);
             sum += work;
         }
         std::println!(
-            "n {MAX_TASKS}: work mean {} max {max_work}, improving moves max {max_moves}, first local optimum / final {:.4}; \
+            "n {MAX_TASKS}: work mean {} max {max_work}, improving moves max {max_moves}, first local optimum / final {} ppm; \
              bound MAX_SOLVE_WORK {MAX_SOLVE_WORK}",
             sum / rounds as u64,
-            gain / rounds as f64
+            gain_ppm / rounds as u64
         );
         assert_eq!(MAX_SOLVE_WORK, 9_415_952);
         assert!(max_work <= MEASURED_MAX_WORK && MEASURED_MAX_WORK < MAX_SOLVE_WORK as u64);

@@ -505,23 +505,32 @@ fn a_goal_blocked_for_too_long_is_blacklisted_and_replaced() {
             },
         )
     };
-    let first = tick(&mut c, 0, false).goal.expect("a first goal").viewpoint.cell;
-    // Blocked for 2 s: waited out (a person passing), same goal.
-    for t in 1..=10 {
+    // A planning step spans two ticks: the first goal comes on the second.
+    assert!(tick(&mut c, 0, false).goal.is_none());
+    let mut pursued = tick(&mut c, 1, false).goal.expect("a first goal").viewpoint.cell;
+    // Blocked for 2 s: waited out (a person passing), nothing blacklisted.
+    for t in 2..=11 {
         let o = tick(&mut c, t, true);
         assert_eq!(o.status.blacklisted, 0, "tick {t}");
+        if let Some(g) = &o.goal {
+            pursued = g.viewpoint.cell;
+        }
     }
-    // Blocked past 3 s: the goal is blacklisted and a different one chosen.
+    // Blocked past 3 s: the goal being pursued is blacklisted and a different one chosen.
     let mut replaced = None;
-    for t in 11..=20 {
+    for t in 12..=21 {
         let o = tick(&mut c, t, true);
         if o.status.blacklisted > 0 {
             replaced = Some(o);
             break;
         }
+        if let Some(g) = &o.goal {
+            pursued = g.viewpoint.cell;
+        }
     }
     let o = replaced.expect("blacklisted within 4 s of blocking");
-    assert!(c.planner.blacklisted().any(|&b| b == first));
+    let first = pursued;
+    assert!(c.planner.blacklisted().any(|&b| b == first), "{first:?} not in {:?}", c.planner.blacklisted().collect::<Vec<_>>());
     if let Some(g) = o.goal {
         let (dx, dy) = (g.viewpoint.cell.0 - first.0, g.viewpoint.cell.1 - first.1);
         assert!(dx * dx + dy * dy > 25, "the new goal is outside the blacklist radius");
