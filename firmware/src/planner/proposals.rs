@@ -26,7 +26,7 @@
 
 use super::Planner;
 use crate::capacity::{MAX_NONMAP_POINTS, MAX_PROPOSALS};
-use crate::grid::{GridGeometry, LidarGrid, PackedGrid};
+use crate::grid::{LidarGrid, PackedGrid};
 use crate::nonmap::NonMapStore;
 use fixed_point::{atan2, BinaryAngle};
 
@@ -193,7 +193,6 @@ impl Planner {
             let _ = kept.push(p);
         }
         self.proposals.proposals = kept;
-        let _ = GridGeometry::cells; // (cells conversions live in GridGeometry)
         work
     }
 }

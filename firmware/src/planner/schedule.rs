@@ -424,9 +424,7 @@ impl Planner {
                     self.sched.kept = true;
                 } else {
                     // Back to the free tour (for the order reported and the next warm start).
-                    let mut order = free;
-                    work += self.tour.start(&self.problem, &order);
-                    order.clear();
+                    work += self.tour.start(&self.problem, &free);
                 }
             }
         }
