@@ -16,6 +16,7 @@
 //! The images are looked for in `$LIVES_MCU_DIR`, else `$CARGO_TARGET_DIR` (or `target/`)
 //! `/thumbv7em-none-eabihf/mcu/`. Missing QEMU or images fail the tests with what to do.
 
+mod common;
 use firmware::mcu::trace::{Digest, Trace};
 use firmware::node::{Node, NodeConfig, TimeMode};
 use firmware::protocol::{CoreToHost, HostDecoder, WireMode};
@@ -517,6 +518,7 @@ fn the_emulated_mcu_searches_over_its_uart_exactly_as_the_host_node() {
     let (node_end, mut bridge_end) = mem_pair();
     let stop_node = AtomicBool::new(false);
     let local = std::thread::scope(|s| {
+        let _stop = common::StopOnDrop(&[&stop_node]);
         let node = s.spawn(|| {
             let mut node_end = node_end;
             let opts = NodeOptions { model: spec.model, ..NodeOptions::new(TimeMode::Lockstep) };

@@ -199,6 +199,7 @@ fn a_bridge_recording_holds_the_protocol_messages_and_changes_nothing() {
     let (mut node_link, mut bridge_link) = mem_pair();
     let (stop_node, stop_bridge) = (AtomicBool::new(false), AtomicBool::new(false));
     let r = std::thread::scope(|s| {
+        let _stop = common::StopOnDrop(&[&stop_node, &stop_bridge]);
         let node = s.spawn(|| {
             let mut p = NodeProcess::new(Config::DEFAULT, NodeOptions::new(TimeMode::Lockstep)).expect("no model");
             p.run(&mut node_link, &stop_node);

@@ -17,6 +17,8 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+mod common;
+
 static PTY: Mutex<()> = Mutex::new(());
 
 fn spec(world: &str, scenario: Scenario, planner: PlannerChoice, seed: u64) -> SearchSpec {
@@ -53,7 +55,9 @@ fn run_pair(
 ) -> (BridgeResult, NodeReport) {
     let stop_node = AtomicBool::new(false);
     let stop_bridge = AtomicBool::new(false);
+    let _hung = common::hang_guard("run_pair", Duration::from_secs(600));
     std::thread::scope(|s| {
+        let _stop = common::StopOnDrop(&[&stop_node, &stop_bridge]);
         let node = s.spawn(|| {
             let mut p = NodeProcess::new(Config::DEFAULT, nopts).expect("no model");
             p.run(&mut *node_link, &stop_node);
@@ -76,7 +80,9 @@ fn mem_node_and_bridge(
 ) -> (Result<BridgeResult, BridgeError>, NodeReport, Config) {
     let (mut a, mut b) = mem_pair();
     let (stop_node, stop_bridge) = (AtomicBool::new(false), AtomicBool::new(false));
+    let _hung = common::hang_guard("mem_node_and_bridge", Duration::from_secs(600));
     std::thread::scope(|s| {
+        let _stop = common::StopOnDrop(&[&stop_node, &stop_bridge]);
         let node = s.spawn(|| {
             let mut p = NodeProcess::new(Config::DEFAULT, node_opts(node_mode)).expect("no model");
             p.run(&mut a, &stop_node);
@@ -272,7 +278,9 @@ fn one_node_serves_search_after_search_each_as_the_in_process_run() {
     let (mut a, mut b) = mem_pair();
     let stop_node = AtomicBool::new(false);
     let bopts = BridgeOptions { max_wall: Some(Duration::from_secs(120)), ..BridgeOptions::new(TimeMode::Lockstep) };
+    let _hung = common::hang_guard("one_node_serves_search_after_search", Duration::from_secs(600));
     let resets = std::thread::scope(|s| {
+        let _stop = common::StopOnDrop(&[&stop_node]);
         let node = s.spawn(|| {
             let mut p = NodeProcess::new(Config::DEFAULT, node_opts(TimeMode::Lockstep)).expect("no model");
             p.run(&mut a, &stop_node);
@@ -485,7 +493,9 @@ fn closing_the_nodes_end_stops_the_base_at_once_and_reopening_resumes_the_search
     };
     let (pause, done) = (AtomicBool::new(false), AtomicBool::new(false));
     let stop_bridge = AtomicBool::new(false);
+    let _hung = common::hang_guard("closing_the_nodes_end", Duration::from_secs(600));
     let (r, node, pulled_at, replugged_at, ticks_at_pull, ticks_at_replug) = std::thread::scope(|s| {
+        let _stop = common::StopOnDrop(&[&pause, &done, &stop_bridge]);
         let node = s.spawn(|| {
             let mut p = NodeProcess::new(Config::DEFAULT, node_opts(TimeMode::Lockstep)).unwrap();
             let mut link = slave;
@@ -623,10 +633,14 @@ fn real_time_node_and_bridge_drive_the_base_and_stop_it_when_the_link_is_lost() 
         progress: Some(progress.clone()),
         ..BridgeOptions::new(TimeMode::RealTime)
     };
+    // (If the run ends before 20 ticks, the watcher gives up and the assertions below fail
+    // instead of the test hanging.)
+    let over = Arc::new(AtomicBool::new(false));
     let watch = std::thread::spawn({
         let cable = cable.clone();
+        let over = over.clone();
         move || {
-            while progress.load(Ordering::Relaxed) < 20 {
+            while progress.load(Ordering::Relaxed) < 20 && !over.load(Ordering::Relaxed) {
                 std::thread::sleep(Duration::from_millis(1));
             }
             let quiet_at = Instant::now();
@@ -637,6 +651,7 @@ fn real_time_node_and_bridge_drive_the_base_and_stop_it_when_the_link_is_lost() 
         }
     });
     let (r, n) = run_pair(Box::new(node_end), Box::new(bridge_end), &sp, &bopts, node_opts(TimeMode::RealTime));
+    over.store(true, Ordering::Relaxed);
     let quiet_at = watch.join().unwrap();
     figures("real time", &r, &n);
     let lost = r.events.iter().find(|e| matches!(e.kind, BridgeEventKind::LinkLost { .. })).expect("the loss was noticed");
