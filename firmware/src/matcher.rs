@@ -143,6 +143,12 @@ pub struct MatchStats {
     pub last_work: u32,
     /// The last match's score, ‰.
     pub last_score_per_mille: u16,
+    /// The score of the last matched scan at the predicted pose, ‰ (what the match improved on).
+    pub last_predicted_per_mille: u16,
+    /// How far the last accepted match moved the pose from the prediction, millimetres.
+    pub last_shift_mm: u32,
+    /// How far it turned it, thousandths of a degree (absolute).
+    pub last_turn_mdeg: u32,
 }
 
 /// The scan matcher's working memory: the points of the scan being matched and their cells.
@@ -222,7 +228,16 @@ impl ScanMatcher {
             points: [(Meters::ZERO, Meters::ZERO); MATCH_MAX_POINTS],
             cells: [(0, 0); MATCH_MAX_POINTS],
             n: 0,
-            stats: MatchStats { matched: 0, too_few_points: 0, low_score: 0, last_work: 0, last_score_per_mille: 0 },
+            stats: MatchStats {
+                matched: 0,
+                too_few_points: 0,
+                low_score: 0,
+                last_work: 0,
+                last_score_per_mille: 0,
+                last_predicted_per_mille: 0,
+                last_shift_mm: 0,
+                last_turn_mdeg: 0,
+            },
         }
     }
 
@@ -315,6 +330,7 @@ impl ScanMatcher {
         let mut work = 0u32;
         // Coarse: (value, score, k, dx, dy); the prediction first.
         let mut best: Option<(i64, u32, i32, i32, i32)> = None;
+        let mut predicted_score = 0u32;
         for step in 0..COARSE_HEADINGS as i32 {
             // 0, −1, +1, −2, +2, …: nearer headings first.
             let k = if step % 2 == 0 { step / 2 } else { -(step + 1) / 2 };
@@ -334,6 +350,9 @@ impl ScanMatcher {
                     }
                     work += n as u32;
                     let v = value(s, n, 2 * dx, 2 * dy, 4 * k, w);
+                    if best.is_none() {
+                        predicted_score = s;
+                    }
                     if best.is_none_or(|b| v > b.0) {
                         best = Some((v, s, k, dx, dy));
                     }
@@ -411,12 +430,16 @@ impl ScanMatcher {
         self.stats.last_work = work;
         let per_mille = (score as u64 * 1000 / (HIT_SCORE as u64 * n as u64)) as u16;
         self.stats.last_score_per_mille = per_mille;
+        self.stats.last_predicted_per_mille = (predicted_score as u64 * 1000 / (HIT_SCORE as u64 * n as u64)) as u16;
         if (per_mille as u32) < MATCH_MIN_SCORE_PER_MILLE {
             self.stats.low_score += 1;
             return Err(MatchRefusal::LowScore(per_mille));
         }
         self.stats.matched += 1;
         let pose = Pose2::new(at.0, at.1, at.2);
+        let shift = fixed_point::hypot(at.0.saturating_sub(predicted.x), at.1.saturating_sub(predicted.y));
+        self.stats.last_shift_mm = ((shift.to_bits().max(0) as i64 * 1000) >> 16) as u32;
+        self.stats.last_turn_mdeg = ((((at.2 - predicted.theta).0 as i64).unsigned_abs() * 360_000) >> 32) as u32;
         Ok(Match { pose, score_per_mille: per_mille, points: n as u16 })
     }
 }

@@ -59,6 +59,37 @@ fn the_corrected_intel_log_is_scored_against_its_own_poses() {
     assert_eq!(r["relations"], Value::Null);
 }
 
+/// A ROS 2 bag of a log whose poses are right (the corrected ACES log, with `+inf` readings and
+/// a turned mount): replayed by default the controller trusts its odometry and keeps the walls;
+/// with `--set scan_matching=true` the report says what the matcher did, and on these poses
+/// every move it makes is its own error (docs/replay.md, "Scan matching").
+#[test]
+fn a_bag_replays_without_matching_by_default_and_the_report_says_what_matching_does() {
+    let bag = std::env::temp_dir().join(format!("lives-mapcheck-bag-{}.mcap", std::process::id()));
+    let out = Command::new(common::lives()).arg("export-bag").arg(data("aces-corrected.log.gz")).arg(&bag).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let run = |extra: &[&str]| -> Value {
+        let mut args: Vec<&std::ffi::OsStr> = vec![bag.as_os_str(), "--json".as_ref()];
+        args.extend(extra.iter().map(|a| std::ffi::OsStr::new(*a)));
+        let (code, stdout, stderr) = mapcheck(&args);
+        assert_eq!(code, Some(0), "{stderr}");
+        serde_json::from_str(&stdout).unwrap()
+    };
+    let plain = run(&[]);
+    let m = &plain["replay"]["matching"];
+    assert_eq!((m["on"].as_bool(), m["matched"].as_u64()), (Some(false), Some(0)), "{m}");
+    let (walls, phantom) = (share(&plain["map"]["walls_recovered"]), share(&plain["map"]["phantom_walls"]));
+    assert!(walls >= 0.90 && phantom <= 0.01, "walls {walls}, phantom {phantom}");
+    let matched = run(&["--set", "scan_matching=true"]);
+    let m = &matched["replay"]["matching"];
+    assert_eq!(m["on"].as_bool(), Some(true), "{m}");
+    let n = m["matched"].as_u64().unwrap();
+    assert!(n > 100, "{m}");
+    assert_eq!(m["shift_mm"]["n"].as_u64(), Some(n), "one move per accepted match: {m}");
+    assert!(m["shift_mm"]["max"].as_f64().unwrap() >= m["shift_mm"]["p50"].as_f64().unwrap(), "{m}");
+    let _ = std::fs::remove_file(&bag);
+}
+
 #[test]
 fn raw_csail_relations_reproduce_the_published_raw_odometry_errors() {
     let (log, rel) = (data("raw/mit-csail-raw.clf.gz"), data("raw/mit-csail.relations"));

@@ -105,14 +105,17 @@ pub struct RobotSpec {
 }
 
 impl RobotSpec {
-    /// Defaults: adapter scans, the `lives` planner, the default configuration, origin from the
+    /// Defaults: adapter scans, the `lives` planner, the default configuration without scan
+    /// matching (a real robot's pose is trusted, as a log's is in `lives replay`: on every shared
+    /// real log the matcher's own error per match exceeded the poses' error and cost walls,
+    /// docs/replay.md "Scan matching"; `--set scan_matching=true` turns it on), origin from the
     /// first pose, the adapter's defaults.
     pub fn new(listen: SocketAddr) -> Self {
         RobotSpec {
             listen,
             lidar: LidarSource::Adapter,
             planner: PlannerChoice::Lives,
-            controller: Config::DEFAULT,
+            controller: Config { scan_matching: false, ..Config::DEFAULT },
             origin: None,
             adapter: AdapterConfig::default(),
             on_listen: None,

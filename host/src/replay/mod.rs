@@ -718,9 +718,9 @@ pub struct ReplayOptions {
     /// The controller's LiDAR range for this log, metres (`None`: [`CARMEN_MAX_RANGE_M`] for
     /// CARMEN logs, the configuration's range for bags).
     pub max_range_m: Option<f64>,
-    /// Whether the controller matches scans against its map (`None`: off for CARMEN logs, whose
-    /// published poses are SLAM-corrected, the configuration's `scan_matching` for bags, whose
-    /// poses are a robot's odometry). See docs/replay.md, "Scan matching".
+    /// Whether the controller matches scans against its map (`None`: off, for every format: on
+    /// every shared real log the matcher's own error per match is larger than the logged poses'
+    /// error, and matching lost walls and drew phantom ones, docs/replay.md "Scan matching").
     pub scan_matching: Option<bool>,
 }
 
@@ -906,6 +906,8 @@ pub struct ReplayReport {
     pub error: Option<String>,
     /// The `--record` file, if one was written.
     pub record: Option<RecordInfo>,
+    /// What the scan matcher did.
+    pub matching: MatchReport,
 }
 
 /// What `--record` wrote.
@@ -917,6 +919,28 @@ pub struct RecordInfo {
     pub messages: u64,
     /// The first recording error (recording stops there; the replay does not).
     pub error: Option<String>,
+}
+
+/// What the scan matcher did over a replay (`--set scan_matching=true`; off by default): how many scans it matched or refused, and how far its accepted matches moved the
+/// odometry's prediction. On a log whose poses are already right (a SLAM-corrected log) every
+/// move is an error; on raw odometry they are its corrections.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct MatchReport {
+    /// Matching was on.
+    pub on: bool,
+    /// Scans matched (a correction accepted, possibly zero).
+    pub matched: u32,
+    /// Scans refused: too few returns.
+    pub too_few_points: u32,
+    /// Scans refused: the best score too low.
+    pub low_score: u32,
+    /// How far each accepted match moved the pose, millimetres.
+    pub shift_mm: crate::link::Summary,
+    /// How far each turned it, degrees.
+    pub turn_deg: crate::link::Summary,
+    /// The accepted matches' score at the prediction and at the match, ‰ of the most possible
+    /// (means).
+    pub score_per_mille: [f64; 2],
 }
 
 /// A laser pose at a log time stamp.
@@ -1063,7 +1087,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         (None, true) => fixed_point::meters_from_f64(CARMEN_MAX_RANGE_M).unwrap_or(opts.config.lidar_max_range_m),
         (None, false) => opts.config.lidar_max_range_m,
     };
-    let scan_matching = opts.scan_matching.unwrap_or(!carmen && opts.config.scan_matching);
+    let scan_matching = opts.scan_matching.unwrap_or(false);
     let cfg = Config { origin_x_m, origin_y_m, lidar_max_range_m: max_range, scan_matching, ..opts.config };
     let mut ctrl = Box::new(Controller::new(cfg));
     if let Some(blob) = opts.model {
@@ -1101,6 +1125,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     let mut status = firmware::Status::default();
     let mut strays = Vec::new();
     let mut controller_rejections: BTreeMap<&'static str, u32> = BTreeMap::new();
+    let (mut shifts, mut turns, mut scores) = (Vec::new(), Vec::new(), [0.0f64; 2]);
     for (i, s) in log.scans.iter().enumerate() {
         let t_us = if synthetic_time { i as u64 * crate::search::TICK_US } else { ((s.t_s - t0) * 1e6).round().max(0.0) as u64 };
         let now_us = last_us.max(t_us);
@@ -1138,8 +1163,16 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         };
         let refused_before = status.poses_rejected;
         let scans_refused_before = status.scans_rejected;
+        let matched_before = ctrl.matcher.stats.matched;
         let out = ctrl.tick(now_us, &inputs);
         status = out.status;
+        let ms = &ctrl.matcher.stats;
+        if ms.matched > matched_before {
+            shifts.push(ms.last_shift_mm as f64);
+            turns.push(ms.last_turn_mdeg as f64 / 1000.0);
+            scores[0] += ms.last_predicted_per_mille as f64;
+            scores[1] += ms.last_score_per_mille as f64;
+        }
         if status.scans_rejected > scans_refused_before {
             let reason = match status.last_scan_error {
                 Some(firmware::ScanError::Empty) => "empty",
@@ -1285,6 +1318,19 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         warnings,
         error: log.error.as_ref().map(|e| e.to_string()),
         record,
+        matching: {
+            let ms = &ctrl.matcher.stats;
+            let n = shifts.len().max(1) as f64;
+            MatchReport {
+                on: scan_matching,
+                matched: ms.matched,
+                too_few_points: ms.too_few_points,
+                low_score: ms.low_score,
+                shift_mm: crate::link::Summary::of(&shifts),
+                turn_deg: crate::link::Summary::of(&turns),
+                score_per_mille: [round3(scores[0] / n), round3(scores[1] / n)],
+            }
+        },
     };
     let first_pose = first_pose.unwrap_or(log.scans[0].pose);
     Ok(ReplayRun { report, controller: ctrl, trajectory, poses, first_pose, last_pose, bad_records: log.bad_records, error: log.error })
@@ -1299,7 +1345,7 @@ fn bad_records_skipped(n: u32) -> String {
 pub fn summary_line(r: &ReplayReport) -> String {
     format!(
         "{} ({}): {} scans read, {} used, {} rejected{}; {:.1} s of log replayed in {:.2} s ({:.2} % of its duration); \
-         {} goals; grid {} occupied / {} free cells; labels: {}",
+         {} goals; grid {} occupied / {} free cells; labels: {}{}",
         r.file,
         r.format,
         r.scans_read,
@@ -1315,7 +1361,17 @@ pub fn summary_line(r: &ReplayReport) -> String {
         r.goals.len(),
         r.grid.occupied,
         r.grid.free,
-        r.labels
+        r.labels,
+        match &r.matching {
+            m if m.on => format!(
+                "; scan matching: {} matched, {} refused, moved {} mm (median; {} at most)",
+                m.matched,
+                m.low_score + m.too_few_points,
+                m.shift_mm.p50.round(),
+                m.shift_mm.max.round()
+            ),
+            _ => String::new(),
+        }
     )
 }
 
