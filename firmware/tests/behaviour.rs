@@ -694,3 +694,50 @@ fn the_inflation_is_the_robot_radius_exactly_so_a_one_metre_doorway_stays_four_c
     assert_eq!(open, vec![73, 74, 75, 76]);
     assert!(planner.distance(105, 75) != firmware::planner::UNREACHABLE, "the robot can walk through");
 }
+
+/// `rrt` with no tree point yet, while the map has a reachable frontier at the end of a winding
+/// corridor the random trees have not threaded in one planning step: the grid's frontier
+/// detector supplies the goal (as in `rrt_exploration`), and the search does not end
+/// "exhausted" with frontiers left (issue 29).
+#[test]
+fn rrt_falls_back_on_the_grids_frontiers_when_its_trees_hold_none() {
+    let mut lidar = Box::new(LidarGrid::new(geom()));
+    // The robot's room, 50..=100 square, with a 1.2 m opening in its east wall at y 70..82.
+    let free = |g: &mut LidarGrid, x0: i32, y0: i32, x1: i32, y1: i32| {
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                g.grid.set(x, y, Cell::Free);
+            }
+        }
+    };
+    for y in 49..=460 {
+        for x in 49..=460 {
+            lidar.grid.set(x, y, Cell::Occupied);
+        }
+    }
+    free(&mut lidar, 51, 51, 99, 99);
+    // A corridor 12 cells wide snaking east, north, west, north, east: about 120 m long.
+    free(&mut lidar, 100, 70, 440, 81); // east
+    free(&mut lidar, 429, 82, 440, 200); // north
+    free(&mut lidar, 120, 189, 428, 200); // west
+    free(&mut lidar, 120, 201, 131, 330); // north
+    free(&mut lidar, 132, 319, 440, 330); // east, ending in unknown
+    for y in 319..=330 {
+        lidar.grid.set(441, y, Cell::Unknown);
+        lidar.grid.set(442, y, Cell::Unknown);
+    }
+    let vis = Box::new(VisualGrid::new());
+    let store = Box::new(NonMapStore::new());
+    let mut f = Box::new(FrontierSet::new());
+    let cfg = Config { planner: PlannerKind::Rrt, ..Config::DEFAULT };
+    f.compute(&lidar, &vis, cfg.min_frontier_cells);
+    let far = |c: (i32, i32)| c.0 > 400 && c.1 > 300;
+    assert!(f.frontiers().iter().any(|fr| fr.source == FrontierSource::Lidar && far(fr.anchor)), "the corridor's end is a frontier");
+    let robot = pose(7.55, 7.55, 0.0);
+    let mut planner = Box::new(Planner::new());
+    let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None);
+    assert_eq!(planner.rrt.points().count(), 0, "the trees found a point: this test needs them to have none");
+    let g = goal.expect("a goal from the grid's frontiers");
+    assert!(far(g.viewpoint.cell), "{:?}", g.viewpoint);
+    assert_eq!(g.viewpoint.source, firmware::planner::Site::LidarFrontier);
+}

@@ -1,6 +1,12 @@
 //! `rrt`: the frontier points of [`crate::rrt::RrtExplorer`]'s trees (LiDAR points first, camera
 //! points once none is reachable), scored by the original assigner's revenue, facing the
 //! direction of travel. A goal is kept until it is reached or fails (see `Controller`).
+//!
+//! When the trees hold no reachable point while the map still has frontiers (a full global tree
+//! that cannot grow, a winding corridor the random trees have not threaded yet), the grid's
+//! frontier detector supplies the points, as the image-based frontier detector does beside the
+//! two tree detectors in Umari and Mukhopadhyay's `rrt_exploration`: without it the search
+//! ended "exhausted" with frontiers left (issue 29).
 
 use super::{Planner, Site, Sites, Step};
 use crate::frontier::FrontierSource;
@@ -14,6 +20,7 @@ impl Planner {
         let mut work = self.rrt.grow(step.lidar, step.visual, step.robot);
         let mut unreachable = 0;
         let lidar_points = self.rrt.points().any(|p| p.source == FrontierSource::Lidar && self.reachable_near(p.cell, snap).is_some());
+        let before = sites.len();
         for &p in self.rrt.points() {
             if lidar_points && p.source != FrontierSource::Lidar {
                 continue;
@@ -22,6 +29,16 @@ impl Planner {
             let _ = sites.push((c, Site::frontier(p.source), None, rrt::revenue(step.lidar, step.visual, p, step.robot)));
         }
         self.stats.unreachable += unreachable;
+        if sites.len() == before {
+            // The grid's frontiers, LiDAR first, scored by the same revenue.
+            let lidar_first = self.lidar_frontiers_reachable(step);
+            work += self.frontier_sites(
+                step,
+                sites,
+                |f| !(lidar_first && f.source != FrontierSource::Lidar),
+                |f| rrt::revenue(step.lidar, step.visual, rrt::RrtPoint { cell: f.anchor, source: f.source }, step.robot),
+            );
+        }
         work
     }
 }
