@@ -371,6 +371,23 @@ fn key_at(text: &str, at: usize) -> (Option<String>, Option<String>) {
 /// i128, expected any valid TOML value`) in the world format's words: which key, what it must
 /// hold, what it holds. Messages that already speak the format's words pass unchanged.
 fn in_format_words(message: &str, text: &str, at: usize) -> String {
+    // A table header with the wrong number of brackets: serde reads `[[start]]`'s array as the
+    // fields of `[start]` in order and complains about the first field, backwards ("must be an
+    // array, found a table"); say what the header should be.
+    let at_c = (0..=at.min(text.len())).rev().find(|&i| text.is_char_boundary(i)).unwrap_or(0);
+    let line_start = text[..at_c].rfind('\n').map(|i| i + 1).unwrap_or(0);
+    let line = text[line_start..].lines().next().unwrap_or("").split('#').next().unwrap_or("").trim();
+    const ONE_TABLE: [&str; 1] = ["start"];
+    const ARRAYS_OF_TABLES: [&str; 4] = ["walls", "obstacles", "targets", "people"];
+    if let Some(name) = line.strip_prefix("[[").and_then(|l| l.strip_suffix("]]")).map(str::trim) {
+        if ONE_TABLE.contains(&name) {
+            return format!("`[[{name}]]`: `{name}` is one table, written `[{name}]`, not an array of tables");
+        }
+    } else if let Some(name) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')).map(str::trim) {
+        if ARRAYS_OF_TABLES.contains(&name) {
+            return format!("`[{name}]`: `{name}` is an array of tables, each written `[[{name}]]`");
+        }
+    }
     let (key, table) = key_at(text, at);
     let whose = match (&key, &table) {
         (Some(k), Some(t)) => format!("`{k}` (in {t})"),
@@ -1194,6 +1211,10 @@ speed_mps = 0.5
             ("closed = true", "closed = 1", "`closed` (in [[walls]]) must be a boolean, found the number 1"),
             ("points = [[0, 0], [6, 0], [6, 4], [0, 4]]", "points = 3", "`points` (in [[walls]]) must be an array, found the number 3"),
             ("kind = \"clutter\"", "kind = 3", "`kind` (in [[obstacles]]) must be `furniture` or `clutter`"),
+            ("[start]", "[[start]]", "`[[start]]`: `start` is one table, written `[start]`, not an array of tables"),
+            ("[[walls]]", "[walls]", "`[walls]`: `walls` is an array of tables, each written `[[walls]]`"),
+            ("[[targets]]", "[targets]", "`[targets]`: `targets` is an array of tables, each written `[[targets]]`"),
+            ("[[people]]", "[people]", "`[people]`: `people` is an array of tables, each written `[[people]]`"),
         ];
         for (from, to, expect) in cases {
             let text = tiny_with(from, to);
