@@ -3,6 +3,7 @@
 # libFuzzer (`cargo +nightly fuzz`), one at a time, niced, for SECONDS each (default 600).
 #
 #   scripts/fuzz-long.sh [SECONDS] [TARGET...]      (all targets when none is named)
+#   FUZZ_RUNS=10000000 scripts/fuzz-long.sh 0 TARGET...   (a number of inputs instead of a time)
 #
 # Needs the nightly toolchain and cargo-fuzz (installed here when missing). Works on a copy of the
 # committed corpus (fuzz/corpus-run/, not committed) so new inputs do not pile up in git; a crash
@@ -35,7 +36,9 @@ for t in "${TARGETS[@]}"; do
     log="$LOGS/$t.log"
     start=$(date +%s)
     set +e
-    nice -n 19 "$BIN/$t" "$work" -max_total_time="$SECONDS_EACH" -timeout=5 -rss_limit_mb=2048 -max_len=65536 \
+    limit=(-max_total_time="$SECONDS_EACH")
+    [ -n "${FUZZ_RUNS:-}" ] && limit=(-runs="$FUZZ_RUNS")
+    nice -n 19 "$BIN/$t" "$work" "${limit[@]}" -timeout=5 -rss_limit_mb=2048 -max_len=65536 \
         -print_final_stats=1 -artifact_prefix="fuzz/artifacts/$t/" >"$log" 2>&1
     rc=$?
     set -e

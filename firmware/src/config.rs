@@ -146,7 +146,7 @@ pub struct Config {
     /// points in view mean more furniture, not a better chance of seeing the target, and an
     /// uncapped count sends the robot across the building to the largest furniture cluster.
     /// Default 0: on the tuning worlds a cap of 8 did not hold up on held-out worlds
-    /// (docs/architecture.md, "Capping the non-map count").
+    /// (docs/experiments/look-while-walking.md, "Capping the non-map count").
     pub nonmap_view_cap: u16,
     /// `lives` and `multisensor` also score the four headings at the robot's own cell (turning in
     /// place to look is an action). Default false (the paper's candidates).
@@ -157,7 +157,7 @@ pub struct Config {
     /// path facing that way. The paper's robot faces where it walks. Default true: on the
     /// procedurally generated tuning worlds in both settings (`lives tune --worlds 192 --grid
     /// gaze=true`) it is faster than facing the way of travel by a paired 0.027 ± 0.024 of the
-    /// time limit (docs/architecture.md, "Look while walking"). It applies to every planner.
+    /// time limit (docs/experiments/look-while-walking.md). It applies to every planner.
     pub gaze: bool,
     /// The least view utility (same units as the utility's terms) worth turning the camera for
     /// while walking; below it the camera faces the direction of travel. Default 4.0.
@@ -181,7 +181,7 @@ pub struct Config {
     /// Non-map points closer than this to a map (wall) point are dropped (the paper's rule
     /// against localisation drift); zero turns the rule off. Default 0 (off): with the
     /// classifier's labels half of every piece of furniture is labelled map, and the rule then
-    /// dropped nearly all the rest (docs/architecture.md, "The near-wall rule"). 0.25 m on a
+    /// dropped nearly all the rest (docs/experiments/near-wall-rule.md). 0.25 m on a
     /// robot whose localisation drifts. In [0, [`MAX_NONMAP_RADIUS_M`]] (2 m: every non-map
     /// point of every scan searches a disc this wide for a wall point).
     pub nonmap_wall_clearance_m: Meters,
@@ -189,7 +189,7 @@ pub struct Config {
     /// neighbours free: later beams passed through where it was). Whatever stood there, such as a
     /// person walking by, has moved on; without the rule a walking person leaves a trail of
     /// points that draws `lives` to where the person was. An addition to the paper's filters.
-    /// Default true (docs/architecture.md, "Vacated non-map points").
+    /// Default true (docs/experiments/vacated-nonmap-points.md).
     pub nonmap_drop_vacated: bool,
     /// Replan at least this often while exploring. Default 3.0 s.
     pub replan_interval_us: u64,

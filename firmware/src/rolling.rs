@@ -43,7 +43,7 @@ use crate::planner::{Goal, Planner};
 use fixed_point::{Meters, Pose2};
 
 /// A pose this close to an edge (cells; 3 m) moves the window, if the LiDAR map reaches that edge.
-/// Measured on the CARMEN logs (`docs/architecture.md`): 8 m moved the window 12 times in the
+/// Measured on the CARMEN logs (`docs/experiments/real-lidar-maps.md`): 8 m moved the window 12 times in the
 /// ACES log, whose 45 × 40 m trajectory fits the grid, and forgot half its map; 3 m never moves
 /// it for a floor that fits, and the robot still sees at least 3 m ahead before a shift.
 pub const WINDOW_MARGIN_CELLS: i32 = 30;
