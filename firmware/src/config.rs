@@ -284,6 +284,20 @@ fn check(ok: bool, field: &'static str, allowed: &'static str) -> Result<(), Con
 }
 
 impl Config {
+    /// This configuration running `kind`, with the planner's own defaults where its original
+    /// differs from ours: `explore-lite` (ROS `explore_lite`) takes frontiers from 0.5 m
+    /// (5 cells), blacklists a goal without progress for 30 s (`goal_timeout_us`) and lets any
+    /// better frontier replace the goal (no switch margin). Every place that runs a planner (the
+    /// simulated search, the bridge to a robot, the dataset walker) gets its configuration here,
+    /// so the core, not a host, decides what each planner does.
+    pub fn with_planner(self, kind: PlannerKind) -> Config {
+        let base = Config { planner: kind, ..self };
+        match kind {
+            PlannerKind::ExploreLite => Config { min_frontier_cells: 5, goal_timeout_us: 30_000_000, switch_margin: Weight::ZERO, ..base },
+            _ => base,
+        }
+    }
+
     /// The defaults, as a `const` so a `static` can hold them.
     pub const DEFAULT: Config = Config {
         planner: PlannerKind::Lives,
@@ -436,6 +450,20 @@ mod tests {
         assert_eq!(Config::DEFAULT.validate(), Ok(()));
         for planner in PlannerKind::ALL {
             assert_eq!(Config { planner, ..Config::DEFAULT }.validate(), Ok(()));
+        }
+    }
+
+    #[test]
+    fn each_planner_gets_its_own_defaults_from_the_core_and_they_are_in_range() {
+        for planner in PlannerKind::ALL {
+            let c = Config::DEFAULT.with_planner(planner);
+            assert_eq!(c.planner, planner);
+            assert_eq!(c.validate(), Ok(()), "{planner:?}");
+            if planner == PlannerKind::ExploreLite {
+                assert_eq!((c.min_frontier_cells, c.goal_timeout_us, c.switch_margin), (5, 30_000_000, Weight::ZERO));
+            } else {
+                assert_eq!(c, Config { planner, ..Config::DEFAULT }, "{planner:?}: only explore-lite differs");
+            }
         }
     }
 

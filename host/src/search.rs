@@ -597,16 +597,9 @@ pub fn controller_config(base: &Config, world: &World, planner: PlannerChoice) -
     let [min, max] = world.bounds;
     let centre = [(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0];
     let half = firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64 / 2.0;
-    // explore_lite's own defaults where they differ from ours: minimum frontier 0.5 m, a goal
-    // without progress for 30 s is blacklisted, any better frontier replaces the goal.
-    let base = match planner {
-        PlannerChoice::ExploreLite => {
-            Config { min_frontier_cells: 5, goal_timeout_us: 30_000_000, switch_margin: firmware::config::Weight::ZERO, ..*base }
-        }
-        _ => *base,
-    };
+    // The planner's own defaults (explore-lite's) come from the core.
+    let base = base.with_planner(planner.kind());
     Config {
-        planner: planner.kind(),
         // Centred on the world, on the 0.1 m lattice (a world up to 51 m across fits).
         origin_x_m: fixed_point::meters_from_f64(((centre[0] - half) * 10.0).round() / 10.0).unwrap_or_default(),
         origin_y_m: fixed_point::meters_from_f64(((centre[1] - half) * 10.0).round() / 10.0).unwrap_or_default(),

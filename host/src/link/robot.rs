@@ -655,10 +655,9 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
 
 fn config_msg(spec: &RobotSpec, origin: [f64; 2]) -> ConfigMsg {
     let cfg = Config {
-        planner: spec.planner.kind(),
         origin_x_m: fixed_point::meters_from_f64(origin[0]).unwrap_or_default(),
         origin_y_m: fixed_point::meters_from_f64(origin[1]).unwrap_or_default(),
-        ..spec.controller
+        ..spec.controller.with_planner(spec.planner.kind())
     };
     ConfigMsg::from_config(&cfg)
 }
