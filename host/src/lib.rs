@@ -16,6 +16,7 @@ pub mod range;
 pub mod record;
 pub mod render;
 pub mod replay;
+pub mod robot_model;
 pub mod search;
 pub mod sensors;
 pub mod soak;

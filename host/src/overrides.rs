@@ -114,7 +114,7 @@ fn set_sim(sim: &mut SimConfig, cfg: &mut Config, name: &str, v: &str) -> Result
                 format!("`{name}`: unknown LiDAR profile `{v}`, expected one of {}", names.join(", "))
             })?;
             *sim = sim.clone().with_lidar(model);
-            *cfg = crate::search::controller_model(cfg, sim);
+            *cfg = crate::robot_model::controller_model(cfg, sim);
         }
         "white_range_m" => sim.white_range_m = in_range(name, v, 0.0, 200.0, false)?,
         "angular_jitter_deg" => sim.angular_jitter_rad = in_range(name, v, 0.0, 1.0, false)? * deg,
@@ -146,7 +146,7 @@ fn set_sim(sim: &mut SimConfig, cfg: &mut Config, name: &str, v: &str) -> Result
             // The controller keeps the same margin around the body as with the defaults
             // (0.35 m of clearance around a 0.25 m body).
             let x = in_range(name, v, 0.05, 1.0, false)?;
-            let margin = Config::DEFAULT.robot_radius_m.to_num::<f64>() - crate::search::default_sim().robot_radius_m;
+            let margin = Config::DEFAULT.robot_radius_m.to_num::<f64>() - crate::robot_model::default_sim().robot_radius_m;
             let m = fixed_point::meters_from_f64(x + margin).ok_or_else(|| format!("`{name}`: {x} m is out of range"))?;
             (sim.robot_radius_m, cfg.robot_radius_m) = (x, m);
         }
@@ -343,7 +343,7 @@ mod tests {
             apply(&mut c, &format!("{name}={d}")).unwrap_or_else(|e| panic!("{name}={d}: {e}"));
             assert_eq!(get(&c, name), Some(d.clone()), "{name}");
         }
-        let sim = crate::search::default_sim();
+        let sim = crate::robot_model::default_sim();
         for (name, _) in SIM_NAMES {
             let d = get_sim(&sim, name).unwrap_or_else(|| panic!("{name} has no value"));
             let (mut s, mut c) = (sim.clone(), Config::DEFAULT);
@@ -401,11 +401,11 @@ mod tests {
 
     #[test]
     fn a_lidar_profile_sets_the_scanner_and_the_controllers_range_model() {
-        let (mut sim, mut c) = (crate::search::default_sim(), Config::DEFAULT);
+        let (mut sim, mut c) = (crate::robot_model::default_sim(), Config::DEFAULT);
         apply_sim(&mut sim, &mut c, "lidar=rplidar-a2").unwrap();
         assert_eq!((sim.beams, sim.lidar_min_range_m, sim.lidar_max_range_m), (800, 0.15, 12.0));
         assert_eq!(c.lidar_max_range_m, fixed_point::Meters::from_num(12), "the controller's LiDAR model follows");
-        assert_eq!(sim.mount, crate::search::default_sim().mount, "the mount and odometry are the robot's, not the scanner's");
+        assert_eq!(sim.mount, crate::robot_model::default_sim().mount, "the mount and odometry are the robot's, not the scanner's");
         apply_sim(&mut sim, &mut c, "lidar=vlp16").unwrap();
         assert_eq!(sim.lidar_max_range_m, 100.0);
         assert_eq!(c.lidar_max_range_m, Config::DEFAULT.lidar_max_range_m, "a 100 m scanner is modelled out to the default 30 m");
@@ -413,7 +413,7 @@ mod tests {
         for s in ["mount_x_m=0", "odom_slip_per_m=0", "odom_heading_drift_per_rad=0"] {
             apply_sim(&mut sim, &mut c, s).unwrap();
         }
-        assert_eq!(sim, crate::search::ideal_sim(), "ideal and no drift is the robot of before the profiles");
+        assert_eq!(sim, crate::robot_model::ideal_sim(), "ideal and no drift is the robot of before the profiles");
         apply_sim(&mut sim, &mut c, "mount_yaw_deg=-90").unwrap();
         assert!((sim.mount[2] + std::f64::consts::FRAC_PI_2).abs() < 1e-15);
         assert_eq!(get_sim(&sim, "mount_yaw_deg").as_deref(), Some("-90"));
