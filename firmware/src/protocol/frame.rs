@@ -13,12 +13,12 @@
 //!
 //! Nothing here allocates or panics, whatever the input.
 
-use crate::protocol::message::{CoreToHost, HostToCore, MAX_CORE_TO_HOST_LEN, MAX_HOST_TO_CORE_LEN};
+use crate::protocol::message::{CoreToHost, HostToCore, LinkCounters, MAX_CORE_TO_HOST_LEN, MAX_HOST_TO_CORE_LEN};
 use core::marker::PhantomData;
 use postcard::ser_flavors::crc::CrcModifier;
 use postcard::ser_flavors::{Cobs, Slice};
 use serde::de::DeserializeOwned;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 /// The frame check: CRC-32/ISO-HDLC (the CRC of Ethernet, zlib and PNG: polynomial 0x04C11DB7,
 /// reflected, init and xor-out 0xFFFFFFFF; check value of `"123456789"` is 0xCBF43926).
@@ -84,55 +84,6 @@ impl core::fmt::Display for FrameError {
             Self::Decode => "not a valid message",
             Self::Overflow => "frame longer than the receive buffer",
         })
-    }
-}
-
-/// Receive counters: frames decoded, and frames dropped by cause. All wrap at 2³².
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub struct LinkCounters {
-    /// Frames decoded into a message.
-    pub frames_ok: u32,
-    /// Frames dropped: bad CRC.
-    pub crc_errors: u32,
-    /// Frames dropped: bad COBS.
-    pub cobs_errors: u32,
-    /// Frames dropped: CRC fine, message not decodable.
-    pub decode_errors: u32,
-    /// Frames dropped: longer than the buffer.
-    pub overflows: u32,
-    /// Messages decoded but not acted on: before the handshake, or from a refused peer (counted
-    /// by [`crate::protocol::Session`], always 0 in [`Decoder::counters`]).
-    pub ignored: u32,
-}
-
-/// `crc 0, cobs 0, decode 0, too long 0, ignored 0`: why frames were dropped (and messages
-/// ignored), for logs.
-impl core::fmt::Display for LinkCounters {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(
-            f,
-            "crc {}, cobs {}, decode {}, too long {}, ignored {}",
-            self.crc_errors, self.cobs_errors, self.decode_errors, self.overflows, self.ignored
-        )
-    }
-}
-
-impl LinkCounters {
-    /// Frames dropped for any cause.
-    pub const fn dropped(&self) -> u32 {
-        self.crc_errors.wrapping_add(self.cobs_errors).wrapping_add(self.decode_errors).wrapping_add(self.overflows)
-    }
-
-    /// Counts one frame: decoded (`None`) or dropped for `error`.
-    fn count(&mut self, error: Option<FrameError>) {
-        let c = match error {
-            None => &mut self.frames_ok,
-            Some(FrameError::Crc) => &mut self.crc_errors,
-            Some(FrameError::Cobs) => &mut self.cobs_errors,
-            Some(FrameError::Overflow) => &mut self.overflows,
-            Some(_) => &mut self.decode_errors,
-        };
-        *c = c.wrapping_add(1);
     }
 }
 
@@ -270,6 +221,23 @@ impl<M: DeserializeOwned, const N: usize> Iterator for Feed<'_, '_, M, N> {
 const _: () = assert!(MAX_HOST_TO_CORE_FRAME == 3351);
 const _: () = assert!(MAX_CORE_TO_HOST_FRAME == 919);
 const _: () = assert!(MAX_FRAME_LEN <= u16::MAX as usize);
+
+/// The receive side's counting (the counters themselves are a message's: [`StatusMsg::link`]).
+///
+/// [`StatusMsg::link`]: crate::protocol::StatusMsg::link
+impl LinkCounters {
+    /// Counts one frame: decoded (`None`) or dropped for `error`.
+    fn count(&mut self, error: Option<FrameError>) {
+        let c = match error {
+            None => &mut self.frames_ok,
+            Some(FrameError::Crc) => &mut self.crc_errors,
+            Some(FrameError::Cobs) => &mut self.cobs_errors,
+            Some(FrameError::Overflow) => &mut self.overflows,
+            Some(_) => &mut self.decode_errors,
+        };
+        *c = c.wrapping_add(1);
+    }
+}
 
 #[cfg(test)]
 mod tests {

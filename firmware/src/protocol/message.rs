@@ -21,7 +21,6 @@ use crate::capacity::{BEAMS, MAX_PATH_WAYPOINTS};
 use crate::config::{Config, PlannerKind, StageBudgets, Weight};
 use crate::controller::{Command, Detection, Mode, Outputs, StageCost, Status};
 use crate::planner::Goal;
-use crate::protocol::frame::LinkCounters;
 use crate::scan::{BeamLabel, BeamScan, ScanError, ScanInput, RANGE_LIMIT_MM};
 use fixed_point::{BinaryAngle, Meters, Pose2};
 use serde::{Deserialize, Serialize};
@@ -974,6 +973,43 @@ pub struct StageCostMsg {
 impl From<StageCost> for StageCostMsg {
     fn from(c: StageCost) -> Self {
         Self { classify: c.classify, lidar: c.lidar, visual: c.visual, nonmap: c.nonmap, plan: c.plan, gaze: c.gaze }
+    }
+}
+
+/// Receive counters: frames decoded, and frames dropped by cause. All wrap at 2³².
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct LinkCounters {
+    /// Frames decoded into a message.
+    pub frames_ok: u32,
+    /// Frames dropped: bad CRC.
+    pub crc_errors: u32,
+    /// Frames dropped: bad COBS.
+    pub cobs_errors: u32,
+    /// Frames dropped: CRC fine, message not decodable.
+    pub decode_errors: u32,
+    /// Frames dropped: longer than the buffer.
+    pub overflows: u32,
+    /// Messages decoded but not acted on: before the handshake, or from a refused peer (counted
+    /// by [`crate::protocol::Session`], always 0 in [`crate::protocol::Decoder::counters`]).
+    pub ignored: u32,
+}
+
+/// `crc 0, cobs 0, decode 0, too long 0, ignored 0`: why frames were dropped (and messages
+/// ignored), for logs.
+impl core::fmt::Display for LinkCounters {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "crc {}, cobs {}, decode {}, too long {}, ignored {}",
+            self.crc_errors, self.cobs_errors, self.decode_errors, self.overflows, self.ignored
+        )
+    }
+}
+
+impl LinkCounters {
+    /// Frames dropped for any cause.
+    pub const fn dropped(&self) -> u32 {
+        self.crc_errors.wrapping_add(self.cobs_errors).wrapping_add(self.decode_errors).wrapping_add(self.overflows)
     }
 }
 

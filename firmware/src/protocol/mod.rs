@@ -42,13 +42,12 @@ pub mod message;
 pub mod session;
 
 pub use frame::{
-    encode, CoreDecoder, Decoder, FrameError, HostDecoder, LinkCounters, CRC_LEN, MAX_CORE_TO_HOST_FRAME, MAX_FRAME_LEN,
-    MAX_HOST_TO_CORE_FRAME,
+    encode, CoreDecoder, Decoder, FrameError, HostDecoder, CRC_LEN, MAX_CORE_TO_HOST_FRAME, MAX_FRAME_LEN, MAX_HOST_TO_CORE_FRAME,
 };
 pub use inbox::{Accepted, Inbox};
 pub use message::{
     output_messages, AckReason, BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, ErrorCode, ErrorMsg, GoalMsg, Heartbeat, Hello, HelloAck,
-    HostToCore, IncompatiblePeer, LabelsMsg, PoseMsg, Role, ScanMsg, ScanSegmentMsg, SegmentError, StatusMsg, StopMsg, WireCommand,
-    WireError, WireMode, MAX_SEGMENT_BEAMS, MAX_WIRE_BEAMS, PROTOCOL_VERSION,
+    HostToCore, IncompatiblePeer, LabelsMsg, LinkCounters, PoseMsg, Role, ScanMsg, ScanSegmentMsg, SegmentError, StatusMsg, StopMsg,
+    WireCommand, WireError, WireMode, MAX_SEGMENT_BEAMS, MAX_WIRE_BEAMS, PROTOCOL_VERSION,
 };
 pub use session::{Admission, Session, SessionState};

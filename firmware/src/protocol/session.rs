@@ -7,7 +7,7 @@
 //! [`LinkCounters::ignored`]. A new `Hello` at any time starts over (a host that restarted, or
 //! was updated).
 
-use crate::protocol::frame::LinkCounters;
+use crate::protocol::message::LinkCounters;
 use crate::protocol::message::{ErrorCode, Hello, HelloAck, HostToCore, Role};
 
 /// Where the handshake stands.
