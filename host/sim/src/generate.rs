@@ -607,6 +607,20 @@ fn easy_variant(world: &World, seed: u64) -> Option<World> {
     }
 }
 
+/// The procedural buildings as [`World`] constructors.
+impl World {
+    /// A procedural building ([`random_world`]).
+    pub fn random(seed: u64) -> World {
+        random_world(seed)
+    }
+
+    /// A procedural building in the easy (target near the start) or hard (target in another
+    /// room) setting ([`random_world_scenario`]); `Hard` is [`World::random`].
+    pub fn random_scenario(seed: u64, scenario: crate::Scenario) -> World {
+        random_world_scenario(seed, scenario)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -765,18 +765,6 @@ impl World {
         super::builtin::NAMES
     }
 
-    /// A procedural building (see [`super::generate`]).
-    pub fn random(seed: u64) -> World {
-        super::generate::random_world(seed)
-    }
-
-    /// A procedural building in the easy (target near the start) or hard (target in another
-    /// room) setting (see [`super::generate::random_world_scenario`]); `Hard` is
-    /// [`World::random`].
-    pub fn random_scenario(seed: u64, scenario: Scenario) -> World {
-        super::generate::random_world_scenario(seed, scenario)
-    }
-
     /// Axis-aligned bounds of everything in the world.
     pub fn compute_bounds(&self) -> [P2; 2] {
         let mut pts: Vec<P2> = Vec::new();
