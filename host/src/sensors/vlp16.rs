@@ -650,6 +650,21 @@ impl std::error::Error for Vlp16Error {
     }
 }
 
+impl From<super::pcap::CaptureError> for Vlp16Error {
+    fn from(e: super::pcap::CaptureError) -> Self {
+        use super::pcap::CaptureError as C;
+        match e {
+            C::Io { path, source } => Self::Io { path: Some(path), source },
+            C::PcapHeaderTruncated { path, len } => Self::PcapHeaderTruncated { path, len },
+            C::NotPcap { path, magic } => Self::NotPcap { path, magic },
+            C::PcapNg { path } => Self::PcapNg { path },
+            C::LinkType { path, link_type } => Self::LinkType { path, link_type },
+            C::TruncatedRecord { path, offset, needed, available } => Self::TruncatedRecord { path, offset, needed, available },
+            C::CorruptRecord { path, offset, reason } => Self::CorruptRecord { path, offset, reason },
+        }
+    }
+}
+
 impl From<ConfigError> for Vlp16Error {
     fn from(e: ConfigError) -> Self {
         Self::Config(e)
@@ -837,7 +852,7 @@ pub fn stream_pcap<R: Read>(
                 Frame::Bad(msg) => dec.reject(offset, RejectReason::Headers(msg)),
             },
             Err(e) => {
-                error = Some(e);
+                error = Some(Vlp16Error::from(e));
                 break;
             }
         }
