@@ -1,7 +1,7 @@
 //! `lives bridge`: the host side of the serial link.
 //!
-//! The bridge owns the sources (the simulator, [`Source::Sim`], or a robot behind the base
-//! adapter, [`Source::Robot`], whose loop is `super::robot`) and the base. Each tick it
+//! The bridge owns the sources (the simulator, [`super::Source::Sim`], or a robot behind the base
+//! adapter, [`super::Source::Robot`], whose loop is `super::robot`) and the base. Each tick it
 //! sends the robot's pose, the LiDAR scan, a detection (if any) and the base's state as frames;
 //! it drives the base with the goals that come back and stops it on `Stop`. It opens the session
 //! with `Hello` (sent again every `hello_interval` until a `HelloAck`, whose version it checks),
@@ -27,7 +27,6 @@
 //! cause), batch retries, `Hello`s, losses, reconnections, and the round-trip time of heartbeat
 //! echoes.
 
-use super::robot::Base;
 use super::{Link, Summary, TimeMode};
 use crate::search::{controller_config, encode_sim_scan, step_base, RunTally, SearchResult, SearchSpec, TICK_US};
 use crate::sim::Sim;
@@ -53,13 +52,17 @@ pub const NOT_TICKING_ECHOES: u32 = 20;
 /// See [`NOT_TICKING_ECHOES`]: long enough for a node in real time to show its own ticks.
 pub const NOT_TICKING_FOR: Duration = Duration::from_secs(2);
 
-/// Where the data comes from.
-#[derive(Clone, Debug)]
-pub enum Source {
-    /// The simulator, with this search's world, scenario, planner and seed.
-    Sim(SearchSpec),
-    /// A real robot behind the base adapter (`docs/base-adapter.md`): real time only.
-    Robot(super::robot::RobotSpec),
+/// What the bridge drives: the simulator's base or a robot's (through the adapter). The bridge's
+/// session calls [`Base::stop_base`] when the link to the node is lost.
+pub trait Base {
+    /// Seconds since the run started (simulated, or wall time for a robot).
+    fn time_s(&self) -> f64;
+    /// The base's pose `[x, y, yaw]`, map frame, metres and radians.
+    fn pose(&self) -> [f64; 3];
+    /// Drive along `path` and turn to `final_yaw` at its end.
+    fn set_path(&mut self, path: &[[f64; 2]], final_yaw: Option<f64>);
+    /// Stop now (the link to the node was lost).
+    fn stop_base(&mut self);
 }
 
 /// How the bridge runs.
@@ -654,13 +657,10 @@ fn round3(v: f64) -> f64 {
     (v * 1000.0).round() / 1000.0
 }
 
-/// Runs the search of `source` through the node at the other end of `link` until the target is
-/// found, the search is exhausted, the time limit passes, or `stop` is set.
-pub fn run_bridge(link: &mut dyn Link, source: Source, opts: &BridgeOptions, stop: &AtomicBool) -> Result<BridgeResult, BridgeError> {
-    let spec = match source {
-        Source::Sim(spec) => spec,
-        Source::Robot(robot) => return super::robot::run_robot(link, robot, opts, stop).map(|r| r.bridge),
-    };
+/// Runs the simulated search `spec` through the node at the other end of `link` until the
+/// target is found, the search is exhausted, the time limit passes, or `stop` is set
+/// ([`super::run_bridge`] with [`super::Source::Sim`]).
+pub fn run_sim(link: &mut dyn Link, spec: SearchSpec, opts: &BridgeOptions, stop: &AtomicBool) -> Result<BridgeResult, BridgeError> {
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
     let geom = GridGeometry { origin_x: cfg.origin_x_m, origin_y: cfg.origin_y_m };
     let sim = Sim::new(spec.world.clone(), spec.sim.clone(), spec.seed);
@@ -982,7 +982,7 @@ mod tests {
             max_wall: Some(Duration::from_secs(5)),
             ..BridgeOptions::new(TimeMode::Lockstep)
         };
-        let err = run_bridge(&mut bridge_end, Source::Sim(spec), &opts, &AtomicBool::new(false)).err().expect("refused");
+        let err = run_sim(&mut bridge_end, spec, &opts, &AtomicBool::new(false)).err().expect("refused");
         assert_eq!(err, BridgeError::Incompatible(IncompatiblePeer { ours: PROTOCOL_VERSION, theirs: 99 }));
         let text = err.to_string();
         assert!(text.contains("v99") && text.contains("incompatible"), "{text}");

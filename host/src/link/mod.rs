@@ -22,12 +22,14 @@ pub mod bridge;
 pub mod fault;
 pub mod node;
 pub mod robot;
+pub mod source;
 
-pub use bridge::{run_bridge, BridgeError, BridgeEvent, BridgeEventKind, BridgeOptions, BridgeResult, LinkStats, Source};
+pub use bridge::{BridgeError, BridgeEvent, BridgeEventKind, BridgeOptions, BridgeResult, LinkStats};
 pub use fault::{FaultConfig, FaultHandle, FaultStats, FaultyLink};
 pub use firmware::node::TimeMode;
 pub use node::{run_node, NodeOptions, NodeProcess, NodeReport};
 pub use robot::{run_robot, LidarSource, RobotRun, RobotSpec};
+pub use source::{run_bridge, Source};
 
 use serialport::{SerialPort, TTYPort};
 use std::collections::VecDeque;

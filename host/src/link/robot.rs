@@ -24,7 +24,7 @@
 //! the grid (51.2 m), on the 0.1 m lattice: the search area is centred on where the robot starts.
 
 use super::adapter::{round_to, AdapterConfig, AdapterServer, AdapterStats, Detection, Input, LaserScan, Odometry, StopReason};
-use super::bridge::{resume_from, Bridge, BridgeError, BridgeOptions, BridgeResult};
+use super::bridge::{resume_from, Base, Bridge, BridgeError, BridgeOptions, BridgeResult};
 use super::SerialLink;
 use super::{Link, Summary, TimeMode};
 use crate::range::{EncodedScan, RangeLimits};
@@ -45,19 +45,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, SyncSender};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-
-/// What the bridge drives: the simulator's base or a robot's (through the adapter). The bridge's
-/// session calls [`Base::stop_base`] when the link to the node is lost.
-pub trait Base {
-    /// Seconds since the run started (simulated, or wall time for a robot).
-    fn time_s(&self) -> f64;
-    /// The base's pose `[x, y, yaw]`, map frame, metres and radians.
-    fn pose(&self) -> [f64; 3];
-    /// Drive along `path` and turn to `final_yaw` at its end.
-    fn set_path(&mut self, path: &[[f64; 2]], final_yaw: Option<f64>);
-    /// Stop now (the link to the node was lost).
-    fn stop_base(&mut self);
-}
 
 impl Base for Sim {
     fn time_s(&self) -> f64 {
