@@ -362,11 +362,7 @@ impl Controller {
 
     /// Runs one tick at time `now_us` (microseconds, monotonic, supplied by the caller).
     pub fn tick(&mut self, now_us: u64, inputs: &Inputs<'_>) -> Outputs {
-        #[cfg(not(feature = "stage-hook"))]
-        let mut obs = ();
-        #[cfg(feature = "stage-hook")]
-        let mut obs = crate::mcu::hook::Hooked;
-        self.tick_observed(now_us, inputs, &mut obs)
+        self.tick_observed(now_us, inputs, &mut ())
     }
 
     /// [`Controller::tick`], telling `obs` where each stage begins and ends.

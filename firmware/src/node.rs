@@ -52,7 +52,7 @@
 //! `Error` per host heartbeat at most.
 
 use crate::config::ConfigError;
-use crate::controller::{Controller, Mode, Outputs, Status};
+use crate::controller::{Controller, Mode, Outputs, StageObserver, Status};
 use crate::protocol::frame::CRC;
 use crate::protocol::{
     encode, output_messages, Accepted, Admission, ConfigMsg, CoreDecoder, CoreToHost, ErrorCode, ErrorMsg, Heartbeat, HostToCore, Inbox,
@@ -245,19 +245,31 @@ impl Node {
 
     /// Takes bytes from the line. Answers go to `send`, one frame per call. In lockstep a
     /// heartbeat closing a complete batch ticks `ctl`; returns the number of ticks run.
-    pub fn receive(&mut self, bytes: &[u8], ctl: &mut Controller, mut send: impl FnMut(&[u8])) -> u32 {
+    pub fn receive(&mut self, bytes: &[u8], ctl: &mut Controller, send: impl FnMut(&[u8])) -> u32 {
+        self.receive_observed(bytes, ctl, send, &mut ())
+    }
+
+    /// [`Node::receive`], telling `obs` where each stage of a tick it runs begins and ends
+    /// ([`Controller::tick_observed`]; the MCU's trace image times the stages with it).
+    pub fn receive_observed(
+        &mut self,
+        bytes: &[u8],
+        ctl: &mut Controller,
+        mut send: impl FnMut(&[u8]),
+        obs: &mut impl StageObserver,
+    ) -> u32 {
         self.counters.bytes_received = self.counters.bytes_received.wrapping_add(bytes.len() as u64);
         let mut ticks = 0;
         for &b in bytes {
             // A bad frame is counted by the decoder and goes no further.
             if let Some(Ok(msg)) = self.decoder.push(b) {
-                ticks += self.handle(msg, ctl, &mut send);
+                ticks += self.handle(msg, ctl, &mut send, obs);
             }
         }
         ticks
     }
 
-    fn handle(&mut self, msg: HostToCore, ctl: &mut Controller, send: &mut impl FnMut(&[u8])) -> u32 {
+    fn handle(&mut self, msg: HostToCore, ctl: &mut Controller, send: &mut impl FnMut(&[u8]), obs: &mut impl StageObserver) -> u32 {
         let is_beat = matches!(msg, HostToCore::Heartbeat(_));
         match self.session.admit(&msg) {
             Admission::Deliver => {}
@@ -323,7 +335,7 @@ impl Node {
         let Some(h) = beat else { return 0 };
         let mut ticks = 0;
         if self.cfg.time_mode == TimeMode::Lockstep {
-            ticks = self.lockstep_beat(h.t_us, ctl, send);
+            ticks = self.lockstep_beat(h.t_us, ctl, send, obs);
         }
         // The echo: in lockstep it follows the batch's outputs ("batch t handled").
         self.emit(&CoreToHost::Heartbeat(h), send);
@@ -332,7 +344,7 @@ impl Node {
         ticks
     }
 
-    fn lockstep_beat(&mut self, t: u64, ctl: &mut Controller, send: &mut impl FnMut(&[u8])) -> u32 {
+    fn lockstep_beat(&mut self, t: u64, ctl: &mut Controller, send: &mut impl FnMut(&[u8]), obs: &mut impl StageObserver) -> u32 {
         match self.last_tick_us {
             Some(last) if t < last => {
                 self.counters.lockstep_stale = self.counters.lockstep_stale.wrapping_add(1);
@@ -362,7 +374,7 @@ impl Node {
                     }
                     self.counters.lockstep_partial = self.counters.lockstep_partial.wrapping_add(1);
                 }
-                self.tick(t, ctl, |f| send(f));
+                self.tick_observed(t, ctl, |f| send(f), obs);
                 1
             }
             _ => {
@@ -375,9 +387,20 @@ impl Node {
     /// Runs one controller tick at `now_us` with what arrived since the last one, and sends its
     /// outputs. Call it at a fixed rate in [`TimeMode::RealTime`]; in lockstep
     /// [`Node::receive`] calls it.
-    pub fn tick(&mut self, now_us: u64, ctl: &mut Controller, mut send: impl FnMut(&[u8])) -> &Outputs {
+    pub fn tick(&mut self, now_us: u64, ctl: &mut Controller, send: impl FnMut(&[u8])) -> &Outputs {
+        self.tick_observed(now_us, ctl, send, &mut ())
+    }
+
+    /// [`Node::tick`], telling `obs` where each stage begins and ends.
+    pub fn tick_observed(
+        &mut self,
+        now_us: u64,
+        ctl: &mut Controller,
+        mut send: impl FnMut(&[u8]),
+        obs: &mut impl StageObserver,
+    ) -> &Outputs {
         let scans_before = self.last_out.as_ref().map_or(0, |o| o.status.scans);
-        let out = ctl.tick(now_us, &self.inbox.inputs());
+        let out = ctl.tick_observed(now_us, &self.inbox.inputs(), obs);
         self.inbox.ticked();
         self.pose_t_us = None;
         self.scan_t_us = None;

@@ -102,7 +102,7 @@ mod app {
         hook::install(on_stage);
         let mut last = clock::now_counts();
         let ticks = trace
-            .replay(node, ctl, |d| {
+            .replay_observed(node, ctl, &mut hook::Hooked, |d| {
                 let now = clock::now_counts();
                 let total = now - last;
                 let s = TIMES.with(|t| core::mem::replace(&mut t.sum, [0; STAGES]));

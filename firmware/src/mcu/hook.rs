@@ -1,7 +1,7 @@
-//! A run-time hook for stage boundaries: [`install`] a function, and (with the `stage-hook`
-//! feature) every [`crate::Controller::tick`] calls it at the start and end of each
-//! [`Stage`]. The hook sees no data and cannot change the tick; without the feature
-//! `tick` uses the no-op observer `()` and this module is never called.
+//! A run-time hook for stage boundaries: [`install`] a function, and every tick observed through
+//! [`Hooked`] (`Controller::tick_observed`, `Node::receive_observed`, `Trace::replay_observed`:
+//! the MCU's trace image) calls it at the start and end of each [`Stage`]. The hook sees no data
+//! and cannot change the tick; `Controller::tick` itself observes nothing.
 #![allow(unsafe_code)]
 
 use crate::controller::{Stage, StageObserver};
@@ -34,7 +34,7 @@ fn call(stage: Stage, begin: bool) {
     }
 }
 
-/// The observer `Controller::tick` uses with the `stage-hook` feature: forwards to the hook.
+/// The observer that forwards to the hook (the trace image passes it to `Trace::replay_observed`).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Hooked;
 

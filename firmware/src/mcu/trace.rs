@@ -219,7 +219,19 @@ impl<'a> Trace<'a> {
     /// Replays the trace through `node` (lockstep, fresh) and `ctl` (fresh; the embedded model is
     /// installed first if the trace asks for it), calling `each` with every record's digest.
     /// Returns the ticks run.
-    pub fn replay(&self, node: &mut Node, ctl: &mut Controller, mut each: impl FnMut(&Digest)) -> Result<u32, TraceError> {
+    pub fn replay(&self, node: &mut Node, ctl: &mut Controller, each: impl FnMut(&Digest)) -> Result<u32, TraceError> {
+        self.replay_observed(node, ctl, &mut (), each)
+    }
+
+    /// [`Trace::replay`], telling `obs` where each stage of every tick begins and ends (the
+    /// MCU's trace image passes [`super::hook::Hooked`] to time them).
+    pub fn replay_observed(
+        &self,
+        node: &mut Node,
+        ctl: &mut Controller,
+        obs: &mut impl crate::controller::StageObserver,
+        mut each: impl FnMut(&Digest),
+    ) -> Result<u32, TraceError> {
         if node.config().time_mode != TimeMode::Lockstep {
             return Err(TraceError::NotLockstep);
         }
@@ -230,10 +242,15 @@ impl<'a> Trace<'a> {
         for (i, r) in self.records().enumerate() {
             let mut crc = DIGEST.digest();
             let mut len = 0u32;
-            let ticks = node.receive(r.bytes, ctl, |f| {
-                crc.update(f);
-                len = len.wrapping_add(f.len() as u32);
-            });
+            let ticks = node.receive_observed(
+                r.bytes,
+                ctl,
+                |f| {
+                    crc.update(f);
+                    len = len.wrapping_add(f.len() as u32);
+                },
+                obs,
+            );
             total += ticks;
             each(&Digest { record: i as u32, t_us: r.t_us, ticks, len, crc: crc.finalize() });
         }
