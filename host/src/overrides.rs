@@ -73,7 +73,7 @@ fn in_range(name: &str, v: &str, lo: f64, hi: f64, open_lo: bool) -> Result<f64,
     let above = if open_lo { x > lo } else { x >= lo };
     if !(above && x <= hi) {
         let open = if open_lo { '(' } else { '[' };
-        return Err(format!("`{name}`: expected a value in {open}{lo}, {hi}], got {x}"));
+        return Err(format!("`{name}`: expected a value in {open}{lo}, {hi}], got {}", v.trim()));
     }
     Ok(x)
 }
