@@ -142,6 +142,11 @@ pub enum ReplayError {
         /// The file.
         file: PathBuf,
     },
+    /// A ROS 1 bag (`#ROSBAG V2.0`), which replay does not read.
+    Ros1Bag {
+        /// The file.
+        file: PathBuf,
+    },
     /// The gzip stream is truncated or corrupt.
     Gzip {
         /// The file.
@@ -296,6 +301,13 @@ impl fmt::Display for ReplayError {
             ReplayError::UnknownFormat { file } => {
                 write!(f, "{}: not a CARMEN log (plain or gzip), an MCAP file, a sqlite3 bag or a VLP-16 capture", file.display())
             }
+            ReplayError::Ros1Bag { file } => write!(
+                f,
+                "{}: a ROS 1 bag, which replay does not read yet: convert it to a ROS 2 bag first (`pip install rosbags`, then \
+                 `rosbags-convert --src {} --dst OUT_DIR`) and replay OUT_DIR",
+                file.display(),
+                file.display()
+            ),
             ReplayError::Gzip { file, lines, offset, reason } => {
                 write!(f, "{}: gzip stream damaged at compressed byte {offset} (after line {lines}): {reason}", file.display())
             }
@@ -616,8 +628,14 @@ fn looks_like_text(head: &[u8]) -> bool {
     !head.is_empty() && other * 64 <= head.len() && nul * 2 < head.len()
 }
 
-/// The format of a file from its first bytes.
+/// How a ROS 1 bag (format 2.0) starts.
+pub const ROS1_BAG_MAGIC: &[u8] = b"#ROSBAG V2.0\n";
+
+/// The format of a file from its first bytes (a ROS 1 bag is none of them).
 pub fn detect(head: &[u8]) -> Option<LogFormat> {
+    if head.starts_with(ROS1_BAG_MAGIC) {
+        return None;
+    }
     if head.starts_with(&[0x1f, 0x8b]) {
         Some(LogFormat::CarmenGzip)
     } else if head.starts_with(rosbag::MCAP_MAGIC) {
@@ -635,6 +653,9 @@ pub fn detect(head: &[u8]) -> Option<LogFormat> {
 
 fn read_one(file: &Path) -> Result<LogData, ReplayError> {
     let bytes = std::fs::read(file).map_err(io_err(file))?;
+    if bytes.starts_with(ROS1_BAG_MAGIC) {
+        return Err(ReplayError::Ros1Bag { file: file.to_path_buf() });
+    }
     let format = detect(&bytes).ok_or_else(|| ReplayError::UnknownFormat { file: file.to_path_buf() })?;
     Ok(match format {
         LogFormat::Carmen | LogFormat::CarmenGzip => read_carmen(file, format, bytes),
@@ -1481,6 +1502,20 @@ mod tests {
         // Binary: about one byte in eight is a control byte.
         let binary: Vec<u8> = (0..4096u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8).collect();
         assert_eq!(detect(&binary), None);
+        // A ROS 1 bag: its connection records are text enough to pass for a CARMEN log.
+        let ros1 = [&b"#ROSBAG V2.0\n"[..], &b"op=\x07topic=/scan message_definition=float32 angle_min\n".repeat(60)].concat();
+        assert_eq!(detect(&ros1), None);
+    }
+
+    #[test]
+    fn a_ros1_bag_is_named_and_how_to_convert_it_said() {
+        let file = std::env::temp_dir().join(format!("lives-ros1-{}.bag", std::process::id()));
+        std::fs::write(&file, [&b"#ROSBAG V2.0\n"[..], &[0u8; 4096][..]].concat()).unwrap();
+        let e = read_log(&file).err().expect("refused");
+        let _ = std::fs::remove_file(&file);
+        assert!(matches!(e, ReplayError::Ros1Bag { .. }), "{e:?}");
+        let m = e.to_string();
+        assert!(m.starts_with(&format!("{}: a ROS 1 bag", file.display())) && m.contains("rosbags-convert"), "{m}");
     }
 
     #[test]
