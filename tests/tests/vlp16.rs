@@ -6,6 +6,7 @@
 //! `a` (clockwise, 0.01°) has yaw −a and goes to beam round((−a + 180°) · 897 / 360°) (halves up).
 //! Beam 598 is exactly yaw +60° (598 · 360 / 897 = 240) and covers azimuths (299.80°, 300.20°].
 
+use host::sensors::pcap::CaptureError;
 use host::sensors::vlp16::{
     self, PacketError, PcapScans, PlanarScan, RejectReason, Skipped, Vlp16Config, Vlp16Error, Vlp16Packet, Vlp16Udp, DATA_PORT, PACKET_LEN,
 };
@@ -174,7 +175,9 @@ fn truncated_pcap_keeps_the_scans_before_the_cut() {
     assert_eq!(bits(&r.scans[0]), bits(&full.scans[0]));
     assert!(r.partial.is_some());
     match &r.error {
-        Some(Vlp16Error::TruncatedRecord { path: p, offset: 54_574, needed: 1264, available: 100 }) => assert_eq!(p, &path),
+        Some(Vlp16Error::Capture(CaptureError::TruncatedRecord { path: p, offset: 54_574, needed: 1264, available: 100 })) => {
+            assert_eq!(p, &path)
+        }
         e => panic!("{e:?}"),
     }
     let msg = r.error.unwrap().to_string();
@@ -210,14 +213,14 @@ fn corrupt_record_length_ends_the_read_with_its_offset() {
     assert_eq!(r.counts.data, 50);
     assert_eq!(r.scans.len(), 1);
     let e = r.error.expect("an error");
-    assert!(matches!(e, Vlp16Error::CorruptRecord { offset, .. } if offset == rec as u64), "{e:?}");
+    assert!(matches!(e, Vlp16Error::Capture(CaptureError::CorruptRecord { offset, .. }) if offset == rec as u64), "{e:?}");
     assert!(e.to_string().starts_with(&format!("len.pcap: byte {rec}: corrupt pcap record header")), "{e}");
 }
 
 #[test]
 fn not_a_pcap_and_missing_files_are_errors() {
     let e = vlp16::read_pcap(&einride(), &Vlp16Config::default()).unwrap_err();
-    assert!(matches!(e, Vlp16Error::NotPcap { .. }), "{e:?}");
+    assert!(matches!(e, Vlp16Error::Capture(CaptureError::NotPcap { .. })), "{e:?}");
     assert!(e.to_string().contains("einride_vlp16_recording.bin: byte 0: magic 0xFFEE"), "{e}");
     let e = vlp16::read_raw(&data("no-such-file.bin"), &Vlp16Config::default()).unwrap_err();
     assert!(matches!(e, Vlp16Error::Io { .. }));

@@ -587,18 +587,8 @@ pub enum Vlp16Error {
     Config(ConfigError),
     /// Opening or reading a file, or the socket.
     Io { path: Option<PathBuf>, source: io::Error },
-    /// The file is shorter than a pcap file header (24 bytes).
-    PcapHeaderTruncated { path: PathBuf, len: u64 },
-    /// The file does not start with a pcap magic number.
-    NotPcap { path: PathBuf, magic: u32 },
-    /// A pcap-ng file (only classic pcap is read).
-    PcapNg { path: PathBuf },
-    /// The pcap's link type is none of Ethernet (1), raw IP (101, 228, 229), Linux cooked (113).
-    LinkType { path: PathBuf, link_type: u32 },
-    /// The file ends inside a record: its header or data is cut.
-    TruncatedRecord { path: PathBuf, offset: u64, needed: u64, available: u64 },
-    /// A record header that cannot be right (length above the snapshot length, bad timestamp).
-    CorruptRecord { path: PathBuf, offset: u64, reason: String },
+    /// The pcap file could not be read ([`super::pcap::CaptureError`]).
+    Capture(super::pcap::CaptureError),
     /// A raw payload file ends inside a packet.
     TruncatedPayload { path: PathBuf, offset: u64, len: u64 },
     /// The file has no bytes.
@@ -613,22 +603,7 @@ impl fmt::Display for Vlp16Error {
             Self::Config(e) => write!(f, "VLP-16 configuration: {e}"),
             Self::Io { path: Some(p), source } => write!(f, "{}: {source}", p.display()),
             Self::Io { path: None, source } => write!(f, "VLP-16 socket: {source}"),
-            Self::PcapHeaderTruncated { path, len } => {
-                write!(f, "{}: {len} bytes, shorter than a pcap file header (24 bytes)", path.display())
-            }
-            Self::NotPcap { path, magic } => write!(f, "{}: byte 0: magic 0x{magic:08X} is not a pcap file", path.display()),
-            Self::PcapNg { path } => {
-                write!(f, "{}: byte 0: a pcap-ng file; save it as classic pcap (e.g. `editcap -F pcap`)", path.display())
-            }
-            Self::LinkType { path, link_type } => {
-                write!(f, "{}: byte 20: link type {link_type} is none of Ethernet, raw IP, Linux cooked", path.display())
-            }
-            Self::TruncatedRecord { path, offset, needed, available } => {
-                write!(f, "{}: byte {offset}: truncated pcap record ({needed} bytes needed, {available} left in the file)", path.display())
-            }
-            Self::CorruptRecord { path, offset, reason } => {
-                write!(f, "{}: byte {offset}: corrupt pcap record header: {reason}", path.display())
-            }
+            Self::Capture(e) => e.fmt(f),
             Self::TruncatedPayload { path, offset, len } => {
                 write!(f, "{}: byte {offset}: the file ends {len} bytes into a {PACKET_LEN}-byte packet", path.display())
             }
@@ -645,6 +620,7 @@ impl std::error::Error for Vlp16Error {
         match self {
             Self::Config(e) => Some(e),
             Self::Io { source, .. } => Some(source),
+            Self::Capture(e) => e.source(),
             _ => None,
         }
     }
@@ -652,16 +628,7 @@ impl std::error::Error for Vlp16Error {
 
 impl From<super::pcap::CaptureError> for Vlp16Error {
     fn from(e: super::pcap::CaptureError) -> Self {
-        use super::pcap::CaptureError as C;
-        match e {
-            C::Io { path, source } => Self::Io { path: Some(path), source },
-            C::PcapHeaderTruncated { path, len } => Self::PcapHeaderTruncated { path, len },
-            C::NotPcap { path, magic } => Self::NotPcap { path, magic },
-            C::PcapNg { path } => Self::PcapNg { path },
-            C::LinkType { path, link_type } => Self::LinkType { path, link_type },
-            C::TruncatedRecord { path, offset, needed, available } => Self::TruncatedRecord { path, offset, needed, available },
-            C::CorruptRecord { path, offset, reason } => Self::CorruptRecord { path, offset, reason },
-        }
+        Self::Capture(e)
     }
 }
 
