@@ -538,11 +538,7 @@ impl Controller {
         // or the match's own noise would walk a standing robot's pose.
         let motion = self.last_scan_odom.map_or(crate::matcher::Motion::UNKNOWN, |last| {
             let step = last.inverse().compose(&odom);
-            let dist = fixed_point::hypot(step.x, step.y);
-            crate::matcher::Motion {
-                dist_mm: ((dist.to_bits().max(0) as i64 * 1000) >> 16) as u32,
-                turn_mdeg: (((step.theta.0 as i64).unsigned_abs() * 360_000) >> 32) as u32,
-            }
+            crate::matcher::Motion::of_step(step.x, step.y, step.theta)
         });
         if motion.dist_mm < crate::matcher::MATCH_MIN_MOTION.dist_mm && motion.turn_mdeg < crate::matcher::MATCH_MIN_MOTION.turn_mdeg {
             return *predicted;

@@ -145,10 +145,8 @@ pub struct MatchStats {
     pub last_score_per_mille: u16,
     /// The score of the last matched scan at the predicted pose, ‰ (what the match improved on).
     pub last_predicted_per_mille: u16,
-    /// How far the last accepted match moved the pose from the prediction, millimetres.
-    pub last_shift_mm: u32,
-    /// How far it turned it, thousandths of a degree (absolute).
-    pub last_turn_mdeg: u32,
+    /// How far the last accepted match moved and turned the pose from the prediction.
+    pub last_move: Motion,
 }
 
 /// The scan matcher's working memory: the points of the scan being matched and their cells.
@@ -199,6 +197,16 @@ pub struct Motion {
 pub const MATCH_MIN_MOTION: Motion = Motion { dist_mm: 50, turn_mdeg: 1_000 };
 
 impl Motion {
+    /// The motion of a step `(dx, dy, dθ)` (a pose relative to another): its length and the
+    /// absolute turn.
+    pub fn of_step(dx: Meters, dy: Meters, turn: BinaryAngle) -> Motion {
+        let dist = fixed_point::hypot(dx, dy);
+        Motion {
+            dist_mm: ((dist.to_bits().max(0) as i64 * 1000) >> 16) as u32,
+            turn_mdeg: (((turn.0 as i64).unsigned_abs() * 360_000) >> 32) as u32,
+        }
+    }
+
     /// Nothing known about the motion (the first matched scan): a weak prior, as after 5 m and
     /// 90°.
     pub const UNKNOWN: Motion = Motion { dist_mm: 5_000, turn_mdeg: 90_000 };
@@ -235,8 +243,7 @@ impl ScanMatcher {
                 last_work: 0,
                 last_score_per_mille: 0,
                 last_predicted_per_mille: 0,
-                last_shift_mm: 0,
-                last_turn_mdeg: 0,
+                last_move: Motion { dist_mm: 0, turn_mdeg: 0 },
             },
         }
     }
@@ -437,9 +444,7 @@ impl ScanMatcher {
         }
         self.stats.matched += 1;
         let pose = Pose2::new(at.0, at.1, at.2);
-        let shift = fixed_point::hypot(at.0.saturating_sub(predicted.x), at.1.saturating_sub(predicted.y));
-        self.stats.last_shift_mm = ((shift.to_bits().max(0) as i64 * 1000) >> 16) as u32;
-        self.stats.last_turn_mdeg = ((((at.2 - predicted.theta).0 as i64).unsigned_abs() * 360_000) >> 32) as u32;
+        self.stats.last_move = Motion::of_step(at.0.saturating_sub(predicted.x), at.1.saturating_sub(predicted.y), at.2 - predicted.theta);
         Ok(Match { pose, score_per_mille: per_mille, points: n as u16 })
     }
 }

@@ -343,9 +343,7 @@ fn found_in_format_words(found: &str) -> String {
 /// The key whose value starts at byte `at` of `text` (the last `key =` before it on its line, or
 /// the table header it is in), and the table it is in (`[[obstacles]]`), if any.
 fn key_at(text: &str, at: usize) -> (Option<String>, Option<String>) {
-    let at = at.min(text.len());
-    let at = (0..=at).rev().find(|&i| text.is_char_boundary(i)).unwrap_or(0);
-    let line_start = text[..at].rfind('\n').map(|i| i + 1).unwrap_or(0);
+    let (at, line_start) = line_at(text, at);
     let before = &text[line_start..at];
     let key_char = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
     let key = before.rfind('=').and_then(|eq| {
@@ -366,6 +364,12 @@ fn key_at(text: &str, at: usize) -> (Option<String>, Option<String>) {
     }
 }
 
+/// Byte `at` of `text` moved back to a character boundary, and the start of its line.
+fn line_at(text: &str, at: usize) -> (usize, usize) {
+    let at = (0..=at.min(text.len())).rev().find(|&i| text.is_char_boundary(i)).unwrap_or(0);
+    (at, text[..at].rfind('\n').map(|i| i + 1).unwrap_or(0))
+}
+
 /// A toml or serde message (`invalid type: floating point `50.9`, expected struct RawRect`,
 /// `invalid length 0, expected struct RawRect with 4 elements`, `invalid value: integer `…` as
 /// i128, expected any valid TOML value`) in the world format's words: which key, what it must
@@ -374,8 +378,7 @@ fn in_format_words(message: &str, text: &str, at: usize) -> String {
     // A table header with the wrong number of brackets: serde reads `[[start]]`'s array as the
     // fields of `[start]` in order and complains about the first field, backwards ("must be an
     // array, found a table"); say what the header should be.
-    let at_c = (0..=at.min(text.len())).rev().find(|&i| text.is_char_boundary(i)).unwrap_or(0);
-    let line_start = text[..at_c].rfind('\n').map(|i| i + 1).unwrap_or(0);
+    let (_, line_start) = line_at(text, at);
     let line = text[line_start..].lines().next().unwrap_or("").split('#').next().unwrap_or("").trim();
     const ONE_TABLE: [&str; 1] = ["start"];
     const ARRAYS_OF_TABLES: [&str; 4] = ["walls", "obstacles", "targets", "people"];

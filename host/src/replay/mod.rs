@@ -653,10 +653,10 @@ pub fn detect(head: &[u8]) -> Option<LogFormat> {
 
 fn read_one(file: &Path) -> Result<LogData, ReplayError> {
     let bytes = std::fs::read(file).map_err(io_err(file))?;
-    if bytes.starts_with(ROS1_BAG_MAGIC) {
-        return Err(ReplayError::Ros1Bag { file: file.to_path_buf() });
-    }
-    let format = detect(&bytes).ok_or_else(|| ReplayError::UnknownFormat { file: file.to_path_buf() })?;
+    let format = detect(&bytes).ok_or_else(|| match bytes.starts_with(ROS1_BAG_MAGIC) {
+        true => ReplayError::Ros1Bag { file: file.to_path_buf() },
+        false => ReplayError::UnknownFormat { file: file.to_path_buf() },
+    })?;
     Ok(match format {
         LogFormat::Carmen | LogFormat::CarmenGzip => read_carmen(file, format, bytes),
         LogFormat::Ros2Mcap => read_bag(file, format, Some(bytes)),
@@ -1189,8 +1189,8 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         status = out.status;
         let ms = &ctrl.matcher.stats;
         if ms.matched > matched_before {
-            shifts.push(ms.last_shift_mm as f64);
-            turns.push(ms.last_turn_mdeg as f64 / 1000.0);
+            shifts.push(ms.last_move.dist_mm as f64);
+            turns.push(ms.last_move.turn_mdeg as f64 / 1000.0);
             scores[0] += ms.last_predicted_per_mille as f64;
             scores[1] += ms.last_score_per_mille as f64;
         }
