@@ -1,0 +1,237 @@
+//! The `tf` frame tree: transforms by frame pair, interpolated to a stamp, with the rejections counted.
+
+use super::super::cdr::Transform;
+use std::collections::HashMap;
+
+/// A rigid transform in 3D, for walking the frame tree.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Iso {
+    pub(super) t: [f64; 3],
+    /// `[x, y, z, w]`, unit.
+    pub(super) q: [f64; 4],
+}
+
+impl Iso {
+    const IDENTITY: Iso = Iso { t: [0.0; 3], q: [0.0, 0.0, 0.0, 1.0] };
+
+    /// From a message's transform; `None` when it is not finite or the quaternion is zero.
+    pub(super) fn from(t: &Transform) -> Option<Iso> {
+        let q = t.rotation;
+        let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+        let finite = t.translation.iter().chain(q.iter()).all(|v| v.is_finite());
+        (finite && n > 1e-9).then(|| Iso { t: t.translation, q: [q[0] / n, q[1] / n, q[2] / n, q[3] / n] })
+    }
+
+    pub(super) fn rotate(&self, v: [f64; 3]) -> [f64; 3] {
+        let [x, y, z, w] = self.q;
+        // v + 2w (u × v) + 2 u × (u × v), u = (x, y, z).
+        let c1 = [y * v[2] - z * v[1], z * v[0] - x * v[2], x * v[1] - y * v[0]];
+        let c2 = [y * c1[2] - z * c1[1], z * c1[0] - x * c1[2], x * c1[1] - y * c1[0]];
+        [v[0] + 2.0 * (w * c1[0] + c2[0]), v[1] + 2.0 * (w * c1[1] + c2[1]), v[2] + 2.0 * (w * c1[2] + c2[2])]
+    }
+
+    /// `self ∘ other`: `other` expressed in `self`'s parent.
+    pub(super) fn compose(&self, other: &Iso) -> Iso {
+        let r = self.rotate(other.t);
+        let (a, b) = (self.q, other.q);
+        let q = [
+            a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1],
+            a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0],
+            a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3],
+            a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2],
+        ];
+        Iso { t: [self.t[0] + r[0], self.t[1] + r[1], self.t[2] + r[2]], q }
+    }
+}
+
+/// A scan is placed only if the odometry (the moving edge of its frame chain nearest the laser,
+/// e.g. `odom` → `base_link`) has a sample at most this long before its stamp, or brackets the
+/// stamp with a sample this close: 0.5 s. Odometry is published at 20–100 Hz; a gap of half a
+/// second means the robot's motion during it is unknown.
+pub const MAX_POSE_AGE_NS: u64 = 500_000_000;
+
+/// A moving edge (odometry or `tf`) whose translation moves more than this between consecutive
+/// samples, plus [`MAX_SPEED_M_S`] times the time between them, has jumped (a corrupt message,
+/// an odometry reset): the sample is rejected (`odometry_jump`), the edge keeps its history.
+pub const MAX_JUMP_M: f64 = 1.0;
+
+/// The fastest a robot's frame is assumed to move, m/s (with [`MAX_JUMP_M`]).
+pub const MAX_SPEED_M_S: f64 = 10.0;
+
+/// One edge of the frame tree: its parent, and the child's pose in it over time (one sample for
+/// a `tf_static` edge).
+#[derive(Clone, Debug)]
+pub(super) struct Edge {
+    parent: String,
+    /// From `tf_static`: holds at every time.
+    fixed: bool,
+    /// `(stamp ns, pose)`, stamps non-decreasing.
+    pub(super) samples: Vec<(u64, Iso)>,
+}
+
+/// Why a moving transform was not taken.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum EdgeReject {
+    /// Not finite, a zero quaternion, or a frame its own parent.
+    Invalid,
+    /// It would close a cycle in the frame tree.
+    Loop,
+    /// Its stamp is before the edge's previous one.
+    Backwards,
+    /// Its translation jumped ([`MAX_JUMP_M`], [`MAX_SPEED_M_S`]).
+    Jump,
+}
+
+/// Why a scan could not be placed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum PoseError {
+    /// Its frame is in no tree with a root (or a cycle).
+    NoPose,
+    /// The odometry has no sample at or before the scan's stamp.
+    NoOdometryYet,
+    /// The odometry's nearest sample is more than [`MAX_POSE_AGE_NS`] from the stamp.
+    Stale,
+}
+
+/// The frame tree: child → edge. Moving edges keep every sample, so a scan is placed with the
+/// transforms interpolated to its own stamp.
+#[derive(Default)]
+pub(super) struct FrameTree {
+    pub(super) edges: HashMap<String, Edge>,
+}
+
+/// Frame names without the ROS 1 leading slash.
+pub(super) fn frame(name: &str) -> String {
+    name.trim_start_matches('/').to_string()
+}
+
+/// Shortest-arc spherical interpolation between unit quaternions (for a planar pose: yaw
+/// interpolated the short way round), `s` in [0, 1].
+pub(super) fn slerp(a: [f64; 4], b: [f64; 4], s: f64) -> [f64; 4] {
+    let mut d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+    let mut b = b;
+    if d < 0.0 {
+        d = -d;
+        b = b.map(|v| -v);
+    }
+    let (wa, wb) = if d > 0.9995 {
+        (1.0 - s, s)
+    } else {
+        let th = d.min(1.0).acos();
+        let sn = th.sin();
+        (((1.0 - s) * th).sin() / sn, (s * th).sin() / sn)
+    };
+    let q = [0, 1, 2, 3].map(|i| wa * a[i] + wb * b[i]);
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    q.map(|v| v / n)
+}
+
+/// `a` and `b` interpolated at `s` in [0, 1]: translation linear, rotation shortest arc.
+pub(super) fn interpolate(a: &Iso, b: &Iso, s: f64) -> Iso {
+    Iso { t: [0, 1, 2].map(|i| a.t[i] + (b.t[i] - a.t[i]) * s), q: slerp(a.q, b.q, s) }
+}
+
+impl FrameTree {
+    /// Would `parent` → `child` close a cycle (is `child` an ancestor of `parent`, or `parent`)?
+    fn closes_loop(&self, parent: &str, child: &str) -> bool {
+        let mut cur = parent.to_string();
+        for _ in 0..=64 {
+            if cur == child {
+                return true;
+            }
+            match self.edges.get(&cur) {
+                None => return false,
+                Some(e) => cur = e.parent.clone(),
+            }
+        }
+        true
+    }
+
+    /// A `tf_static` edge: holds at every time, replaces what the edge was.
+    pub(super) fn set_static(&mut self, parent: &str, child: &str, t: &Transform) -> Result<(), EdgeReject> {
+        let (parent, child) = (frame(parent), frame(child));
+        let iso = Iso::from(t).filter(|_| parent != child).ok_or(EdgeReject::Invalid)?;
+        if self.closes_loop(&parent, &child) {
+            return Err(EdgeReject::Loop);
+        }
+        self.edges.insert(child, Edge { parent, fixed: true, samples: vec![(0, iso)] });
+        Ok(())
+    }
+
+    /// A moving edge's sample at `t_ns` (odometry or `tf`). A new parent for the child starts a
+    /// new history.
+    pub(super) fn push(&mut self, parent: &str, child: &str, t_ns: u64, t: &Transform) -> Result<(), EdgeReject> {
+        let (parent, child) = (frame(parent), frame(child));
+        let iso = Iso::from(t).filter(|_| parent != child).ok_or(EdgeReject::Invalid)?;
+        let same_parent = self.edges.get(&child).is_some_and(|e| e.parent == parent);
+        if !same_parent && self.closes_loop(&parent, &child) {
+            return Err(EdgeReject::Loop);
+        }
+        if let Some(e) = self.edges.get_mut(&child).filter(|e| e.parent == parent && !e.fixed) {
+            let &(t0, last) = e.samples.last().expect("an edge has a sample");
+            if t_ns < t0 {
+                return Err(EdgeReject::Backwards);
+            }
+            let moved = ((iso.t[0] - last.t[0]).powi(2) + (iso.t[1] - last.t[1]).powi(2) + (iso.t[2] - last.t[2]).powi(2)).sqrt();
+            if moved > MAX_JUMP_M + MAX_SPEED_M_S * (t_ns - t0) as f64 / 1e9 {
+                return Err(EdgeReject::Jump);
+            }
+            e.samples.push((t_ns, iso));
+        } else {
+            self.edges.insert(child, Edge { parent, fixed: false, samples: vec![(t_ns, iso)] });
+        }
+        Ok(())
+    }
+
+    /// The pose of `f` in the root of its tree at time `t_ns`, the root's name and the number of
+    /// edges walked. Moving edges are interpolated to `t_ns` between the samples around it. The
+    /// first moving edge from `f` up (the odometry) must have a sample at or before `t_ns`
+    /// ([`PoseError::NoOdometryYet`]) and one within [`MAX_POSE_AGE_NS`] of it
+    /// ([`PoseError::Stale`]); edges above it (e.g. `map` → `odom`, published slowly) hold their
+    /// nearest sample outside the span of their samples.
+    pub(super) fn resolve_at(&self, f: &str, t_ns: u64) -> Result<(Iso, String, usize), PoseError> {
+        let mut pose = Iso::IDENTITY;
+        let mut cur = frame(f);
+        let mut odometry_seen = false;
+        for depth in 0..=64 {
+            let Some(e) = self.edges.get(&cur) else { return Ok((pose, cur, depth)) };
+            let edge = if e.fixed {
+                e.samples[0].1
+            } else {
+                let k = e.samples.partition_point(|s| s.0 <= t_ns);
+                let before = k.checked_sub(1).map(|i| e.samples[i]);
+                let after = e.samples.get(k).copied();
+                if !odometry_seen {
+                    odometry_seen = true;
+                    let Some((tb, _)) = before else { return Err(PoseError::NoOdometryYet) };
+                    let age = after.map_or(t_ns - tb, |(ta, _)| (t_ns - tb).min(ta - t_ns));
+                    if age > MAX_POSE_AGE_NS {
+                        return Err(PoseError::Stale);
+                    }
+                }
+                match (before, after) {
+                    (Some((tb, a)), Some((ta, b))) => interpolate(&a, &b, (t_ns - tb) as f64 / (ta - tb) as f64),
+                    (Some((_, a)), None) | (None, Some((_, a))) => a,
+                    (None, None) => unreachable!("an edge has a sample"),
+                }
+            };
+            pose = edge.compose(&pose);
+            cur = e.parent.clone();
+        }
+        Err(PoseError::NoPose)
+    }
+}
+
+/// Moving transforms (odometry, `tf`) rejected, by reason: nothing else is lost with them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct RejectedTransforms {
+    /// The translation jumped ([`MAX_JUMP_M`] + [`MAX_SPEED_M_S`] × the time since the edge's
+    /// previous sample), e.g. odometry 100 m away from the message before.
+    pub odometry_jump: u32,
+    /// The transform would close a cycle of frames (`a` → `b` → `a`).
+    pub tf_loop: u32,
+    /// Its header stamp is before the previous one of the same edge.
+    pub stamp_backwards: u32,
+    /// Not finite, a zero quaternion, or a frame its own parent.
+    pub invalid: u32,
+}
