@@ -115,3 +115,12 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Lidar(cmd) => host::sensors::run(cmd),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// clap's own checks of the whole command line (flags, defaults, conflicts, the `mut_arg`s).
+    #[test]
+    fn the_command_line_is_consistent() {
+        super::negatives_as_values(<super::Cli as clap::CommandFactory>::command()).debug_assert();
+    }
+}
