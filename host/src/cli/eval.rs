@@ -93,7 +93,7 @@ pub fn run(args: EvalArgs) -> Result<ExitCode, String> {
     );
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
     write_file(&out.join("table.md"), &md)?;
-    write_file(&out.join("results.csv"), &eval::csv(&cells))?;
+    write_file(&out.join("results.csv"), eval::csv(&cells))?;
     let json =
         serde_json::json!({ "command": command, "commit": commit, "robot": robot, "wall_s": wall, "summary": cells, "trials": results });
     write_file(&out.join("results.json"), &serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?)?;
