@@ -1,0 +1,148 @@
+//! `lives eval`: the paper's Table I, every planner over the built-in worlds and scenarios.
+
+use super::common::{cores, count_bar, say, write_file, RobotArgs};
+use host::eval;
+use host::search::{self, PlannerChoice, SearchSpec};
+use host::sim::Scenario;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// Reproduce the paper's Table I: every planner over the built-in worlds and scenarios,
+/// N trials each, in parallel; writes the table (Markdown, JSON, CSV) and plots.
+#[derive(clap::Args)]
+#[command(mut_arg("set", |a| a.help("Override a controller parameter for every planner (repeatable)")))]
+pub struct EvalArgs {
+    /// Trials per planner and setting (seeds 1..=N: start pose, target placement, people, noise).
+    #[arg(long, default_value_t = 10)]
+    trials: u64,
+    /// Built-in worlds, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "apartment,office,hallway")]
+    worlds: Vec<String>,
+    /// Scenarios, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "easy,hard")]
+    scenarios: Vec<Scenario>,
+    /// Planners, comma-separated (`lives` runs the embedded int8 classifier). Default: every
+    /// planner `--planner` knows, the last first (today rrt, explore-lite, nearest,
+    /// multisensor, lives-gt, lives).
+    #[arg(long, value_delimiter = ',')]
+    planners: Vec<PlannerChoice>,
+    /// Worker threads (default: the machine's cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Output directory: table.md, results.json, results.csv, times.png, trajectories/.
+    #[arg(long, default_value = "out/eval")]
+    out: PathBuf,
+    /// Skip the trajectory pictures.
+    #[arg(long)]
+    no_pictures: bool,
+    #[command(flatten)]
+    robot: RobotArgs,
+    /// Also run N held-out procedural worlds (seeds 1000001.., which `lives tune` and
+    /// `lives dataset` refuse), one trial each, alternately easy and hard: the rows
+    /// `heldout easy` and `heldout hard`. 0 runs none.
+    #[arg(long, default_value_t = 100)]
+    heldout: u64,
+}
+
+pub fn run(args: EvalArgs) -> Result<ExitCode, String> {
+    let EvalArgs { trials, worlds, scenarios, planners, threads, out, no_pictures, robot: robot_args, heldout } = args;
+    let planners = if planners.is_empty() { PlannerChoice::ALL.into_iter().rev().collect() } else { planners };
+    let robot = robot_args.robot;
+    if trials == 0 {
+        return Err("--trials must be at least 1".into());
+    }
+    let configure = |spec: &mut SearchSpec| robot_args.configure(spec);
+    let mut specs = eval::eval_specs(&worlds, &scenarios, &planners, trials, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?;
+    specs.extend(eval::heldout_specs(heldout, &planners, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?);
+    let pb = count_bar();
+    pb.set_length(specs.len() as u64);
+    let t0 = Instant::now();
+    let threads_n = threads.unwrap_or_else(cores);
+    let mut results = eval::run_batch(&specs, threads_n, |n| pb.set_position(n as u64))?;
+    pb.finish_and_clear();
+    let searches_s = t0.elapsed().as_secs_f64();
+    eval::attach_oracles(&specs, &mut results, threads_n);
+    let wall = t0.elapsed().as_secs_f64();
+    let oracles_s = wall - searches_s;
+    let cells = eval::summarise(&results);
+    let commit = std::process::Command::new("git")
+        .args(["rev-parse", "--short", "HEAD"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|| "unknown".into());
+    let command = std::env::args().map(|a| if a.contains(' ') { format!("'{a}'") } else { a }).collect::<Vec<_>>().join(" ");
+    let table = eval::markdown_table(&cells);
+    let claims = eval::claims(&results).unwrap_or_default();
+    let heldout_note = if heldout > 0 {
+        format!(
+            "The held-out rows: {heldout} procedural worlds (`World::random_scenario`, seeds {}–{}, alternately easy and hard; \
+             seeds `lives tune` and `lives dataset` refuse), one trial each; their limits are each world's own.\n\n",
+            eval::HELDOUT_FIRST_SEED,
+            eval::HELDOUT_FIRST_SEED + heldout - 1
+        )
+    } else {
+        String::new()
+    };
+    let md = format!(
+        "Robot: `{robot}` (camera {} m).\n\n{table}\n{heldout_note}{claims}\nCommand: `{command}` · commit {commit} · {} searches in {searches_s:.0} s and their oracles in {oracles_s:.0} s on {threads_n} threads ({wall:.0} s).\n",
+        robot.camera_range_m(),
+        results.len(),
+    );
+    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+    write_file(&out.join("table.md"), &md)?;
+    write_file(&out.join("results.csv"), eval::csv(&cells))?;
+    let json =
+        serde_json::json!({ "command": command, "commit": commit, "robot": robot, "wall_s": wall, "summary": cells, "trials": results });
+    write_file(&out.join("results.json"), &serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?)?;
+    // Time-to-find distributions: one panel per setting, one column per planner.
+    let mut panels = Vec::new();
+    let mut seen: Vec<(String, String)> = Vec::new();
+    for c in &cells {
+        let key = (c.world.clone(), c.scenario.clone());
+        if seen.contains(&key) {
+            continue;
+        }
+        seen.push(key);
+        let columns = cells
+            .iter()
+            .filter(|d| d.world == c.world && d.scenario == c.scenario)
+            .map(|d| (d.planner.as_str(), d.times_s.clone()))
+            .collect();
+        panels.push(host::render::StripPanel {
+            title: format!("{} {} (limit {:.0} s)", c.world, c.scenario, c.time_limit_s),
+            y_max: c.time_limit_s,
+            columns,
+        });
+    }
+    let times_png = out.join("times.png");
+    host::render::write_strip_plot(&times_png, &format!("time to find, {trials} trials (failure = limit)"), "s", &panels)
+        .map_err(|e| format!("{}: {e}", times_png.display()))?;
+    if !no_pictures {
+        // One trajectory picture per planner and setting, all for seed 1.
+        let dir = out.join("trajectories");
+        std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        for spec in specs.iter().filter(|s| s.seed == 1) {
+            let run = search::try_run(spec, |_| {}).map_err(|e| format!("{e}"))?;
+            let r = &run.result;
+            let title = format!(
+                "{} {} · {} · seed 1 · {}",
+                r.world,
+                r.scenario,
+                r.planner,
+                if r.found { format!("FOUND in {:.1} s", r.time_s) } else { "NOT FOUND".into() }
+            );
+            let path = dir.join(format!("{}-{}-{}.png", r.world, r.scenario, r.planner));
+            host::picture::write_png(&run, &path, &title).map_err(|e| format!("{}: {e}", path.display()))?;
+        }
+    }
+    say!("{md}");
+    say!(
+        "written: {0}/table.md, {0}/results.json, {0}/results.csv, {0}/times.png{1}",
+        out.display(),
+        if no_pictures { "" } else { ", trajectories/" }
+    );
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,20 @@
+//! The subcommands of `lives`: one module per subcommand (or small family), each with its clap
+//! arguments and its `run`; `common` holds what several share. The modules use `common` and
+//! never each other.
+
+pub mod bench;
+pub mod bridge;
+pub mod common;
+pub mod dataset;
+pub mod eval;
+pub mod node;
+pub mod params;
+pub mod search;
+pub mod soak;
+pub mod trace;
+#[cfg(feature = "train")]
+pub mod train;
+#[cfg(feature = "train")]
+pub mod train_geo;
+pub mod tune;
+pub mod worlds;
