@@ -717,7 +717,7 @@ mod tests {
 
     #[test]
     fn heldout_seeds_are_disjoint_from_tunes_and_split_into_easy_and_hard() {
-        // `lives tune` has used worlds 1-384 and refuses the held-out range (main.rs); the
+        // `lives tune` has used worlds 1-384 and refuses the held-out range (cli/tune.rs); the
         // datasets 1-1200.
         assert!(!overlaps_heldout(1, 384) && !overlaps_heldout(1, 1200));
         assert!(overlaps_heldout(1, HELDOUT_FIRST_SEED) && overlaps_heldout(HELDOUT_FIRST_SEED + 999, u64::MAX));

@@ -649,7 +649,7 @@ fn config_msg(spec: &RobotSpec, origin: [f64; 2]) -> ConfigMsg {
     ConfigMsg::from_config(&cfg)
 }
 
-/// `lives bridge --source robot`'s options (parsed by `main.rs`).
+/// `lives bridge --source robot`'s options (parsed by `cli/bridge.rs`).
 pub struct CliOptions {
     /// The serial device of the node.
     pub port: PathBuf,
