@@ -51,12 +51,10 @@
 //!
 //! Recording only reads: a run is bit-identical with and without it.
 
-use crate::link::bridge::{BridgeObserver, SharedObserver};
 use base64::Engine as _;
-use firmware::capacity::{CELLS_PER_METER, GRID_CELLS};
-use firmware::grid::{beam_angle, mm_to_meters, Cell, GridGeometry, PackedGrid};
-use firmware::planner::{Site, Viewpoint};
-use firmware::protocol::{CoreToHost, DetectionMsg, GoalMsg, LinkCounters, PoseMsg, ScanMsg, StatusMsg, WireMode};
+use firmware::grid::{beam_angle, mm_to_meters, GridGeometry, PackedGrid};
+use firmware::planner::Viewpoint;
+use firmware::protocol::{DetectionMsg, GoalMsg, LinkCounters, StatusMsg, WireMode};
 use firmware::scan::{BeamLabel, BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
 use firmware::{Controller, FrontierSet, Inputs, Mode, Outputs, Pose2};
 use serde::Serialize;
@@ -65,11 +63,15 @@ use std::fmt;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 mod msg;
 use msg::*;
+
+mod convert;
+mod observer;
+use convert::*;
+pub use observer::*;
 
 /// The world frame.
 pub const FRAME_MAP: &str = "map";
@@ -658,162 +660,6 @@ impl Recorder {
             self.record_nonmap(t_us, ctrl.nonmap.points())?;
         }
         Ok(())
-    }
-}
-
-/// Runs a [`crate::search`] search, recording every tick into `rec` if there is one
-/// ([`crate::search::try_run_observed`] with [`Recorder::record_controller_tick`]). The run is the
-/// same as without recording; a recording error stops the recording (not the run) and comes back
-/// beside the run.
-pub fn record_search(
-    spec: &crate::search::SearchSpec,
-    mut rec: Option<&mut Recorder>,
-    progress: impl FnMut(f64),
-) -> Result<(crate::search::SearchRun, Result<(), RecordError>), firmware::classifier::ModelError> {
-    let mut recorded: Result<(), RecordError> = Ok(());
-    let run = crate::search::try_run_observed(spec, progress, |t| {
-        if let (Some(rec), true) = (rec.as_deref_mut(), recorded.is_ok()) {
-            recorded = rec.record_controller_tick(t.t_us, t.inputs, t.outputs, t.controller);
-        }
-    })?;
-    Ok((run, recorded))
-}
-
-/// The bridge's recording: protocol messages only (see the module docs). Hand
-/// [`SharedRecording::observer`] to [`crate::link::BridgeOptions::observer`] and call
-/// [`SharedRecording::finish`] after the run. The first recording error stops the recording (not
-/// the run) and is returned by `finish`.
-#[derive(Clone, Debug)]
-pub struct SharedRecording(Arc<Mutex<BridgeRecording>>);
-
-#[derive(Debug)]
-struct BridgeRecording {
-    recorder: Option<Recorder>,
-    error: Option<RecordError>,
-}
-
-impl SharedRecording {
-    /// Creates the recording at `path` (default [`RecordOptions`]).
-    pub fn create(path: &Path) -> Result<Self, RecordError> {
-        Ok(Self::new(Recorder::create(path, RecordOptions::default())?))
-    }
-
-    /// Records into `recorder`.
-    pub fn new(recorder: Recorder) -> Self {
-        SharedRecording(Arc::new(Mutex::new(BridgeRecording { recorder: Some(recorder), error: None })))
-    }
-
-    /// The observer to give the bridge.
-    pub fn observer(&self) -> SharedObserver {
-        SharedObserver(self.0.clone())
-    }
-
-    /// Finishes the file; the summary, or the first error of the recording.
-    pub fn finish(&self) -> Result<RecordSummary, RecordError> {
-        let mut r = self.0.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some(e) = r.error.take() {
-            return Err(e);
-        }
-        r.recorder.take().ok_or(RecordError::Finished)?.finish()
-    }
-}
-
-impl BridgeRecording {
-    fn attempt(&mut self, f: impl FnOnce(&mut Recorder) -> Result<(), RecordError>) {
-        if let (Some(rec), None) = (self.recorder.as_mut(), &self.error) {
-            if let Err(e) = f(rec) {
-                self.error = Some(e);
-            }
-        }
-    }
-}
-
-impl BridgeObserver for BridgeRecording {
-    fn tick(&mut self, pose: &PoseMsg, scan: &ScanMsg, detection: Option<&DetectionMsg>) {
-        self.attempt(|r| {
-            r.record_pose(pose.t_us, &pose.pose())?;
-            r.record_scan_input(scan.t_us, &scan.scan_input())?;
-            match detection {
-                Some(d) => r.record_detection(d.t_us, d),
-                None => Ok(()),
-            }
-        });
-    }
-
-    fn received(&mut self, m: &CoreToHost) {
-        self.attempt(|r| match m {
-            CoreToHost::Status(s) => r.record_status(s),
-            CoreToHost::Goal(g) => {
-                let t = r.last_t_us;
-                r.record_goal(t, g)
-            }
-            CoreToHost::Labels(l) => r.record_node_labels(l.t_us, &l.labels),
-            _ => Ok(()),
-        });
-    }
-}
-
-const LOG_INFO: u8 = 2;
-const LOG_WARNING: u8 = 3;
-
-fn site_name(s: Site) -> &'static str {
-    match s {
-        Site::LidarFrontier => "lidar-frontier",
-        Site::VisualFrontier => "visual-frontier",
-        Site::NonMapCluster => "nonmap-cluster",
-        Site::Here => "here",
-        Site::Current => "current",
-        Site::Room => "room",
-    }
-}
-
-fn base64(bytes: &[u8]) -> String {
-    base64::engine::general_purpose::STANDARD.encode(bytes)
-}
-
-/// The centre of cell `c`, metres.
-fn cell_centre(geom: &GridGeometry, c: (i32, i32)) -> [f64; 2] {
-    let (x, y) = geom.center_of(c.0, c.1);
-    [x.to_num::<f64>(), y.to_num::<f64>()]
-}
-
-/// The smallest box `[x0, y0, x1, y1]` (inclusive cells) holding every cell either grid knows.
-fn known_box(a: &PackedGrid, b: &PackedGrid) -> Option<[i32; 4]> {
-    let n = GRID_CELLS as i32;
-    let mut bx: Option<[i32; 4]> = None;
-    for y in 0..n {
-        for x in 0..n {
-            if a.get(x, y) != Cell::Unknown || b.get(x, y) != Cell::Unknown {
-                bx = Some(match bx {
-                    None => [x, y, x, y],
-                    Some([x0, y0, x1, y1]) => [x0.min(x), y0.min(y), x1.max(x), y1.max(y)],
-                });
-            }
-        }
-    }
-    bx
-}
-
-fn grid_msg(t_us: u64, geom: &GridGeometry, grid: &PackedGrid, [x0, y0, x1, y1]: [i32; 4]) -> Grid<'static> {
-    let cell = 1.0 / CELLS_PER_METER as f64;
-    let cols = (x1 - x0 + 1) as u32;
-    let mut data = Vec::with_capacity(cols as usize * (y1 - y0 + 1) as usize);
-    for y in y0..=y1 {
-        for x in x0..=x1 {
-            data.push(grid.get(x, y).to_ros() as u8);
-        }
-    }
-    let (ox, oy) = (geom.origin_x.to_num::<f64>() + x0 as f64 * cell, geom.origin_y.to_num::<f64>() + y0 as f64 * cell);
-    Grid {
-        timestamp: Time::of(t_us),
-        frame_id: FRAME_MAP,
-        pose: Pose::xy_yaw(ox, oy, 0.0),
-        column_count: cols,
-        cell_size: Vec2 { x: cell, y: cell },
-        row_stride: cols,
-        cell_stride: 1,
-        fields: &GRID_FIELDS,
-        data: base64(&data),
     }
 }
 

@@ -1,7 +1,7 @@
 use super::*;
 use crate::search::{self, PlannerChoice, SearchSpec};
 use crate::sim::{Scenario, World};
-use firmware::grid::PackedGrid;
+use firmware::grid::{Cell, PackedGrid};
 use serde_json::Value;
 
 fn tmp(name: &str) -> PathBuf {
