@@ -51,7 +51,6 @@
 //!
 //! Recording only reads: a run is bit-identical with and without it.
 
-use base64::Engine as _;
 use firmware::grid::{beam_angle, mm_to_meters, GridGeometry, PackedGrid};
 use firmware::planner::Viewpoint;
 use firmware::protocol::{DetectionMsg, GoalMsg, LinkCounters, StatusMsg, WireMode};
