@@ -30,7 +30,6 @@ use super::{Link, Summary, TimeMode};
 use crate::range::{EncodedScan, RangeLimits};
 use crate::search::{PlannerChoice, SearchResult};
 use crate::sensors::vlp16::{PlanarScan, Vlp16Config, Vlp16Udp};
-use crate::sim::Sim;
 use firmware::protocol::{
     BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, GoalMsg, HostToCore, PoseMsg, ScanMsg, StatusMsg, WireCommand, WireMode,
     MAX_WIRE_BEAMS,
@@ -45,22 +44,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, SyncSender};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-
-impl Base for Sim {
-    fn time_s(&self) -> f64 {
-        Sim::time_s(self)
-    }
-    fn pose(&self) -> [f64; 3] {
-        Sim::pose(self)
-    }
-    fn set_path(&mut self, path: &[[f64; 2]], final_yaw: Option<f64>) {
-        // The node's goals are in its frame: the laser's, in the (drifting) odometry frame.
-        Sim::set_goal_path(self, path, final_yaw)
-    }
-    fn stop_base(&mut self) {
-        Sim::stop_base(self)
-    }
-}
 
 /// Where the robot's scans come from.
 #[derive(Clone, Debug, PartialEq)]

@@ -431,7 +431,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     let mut controller_rejections: BTreeMap<&'static str, u32> = BTreeMap::new();
     let (mut shifts, mut turns, mut scores) = (Vec::new(), Vec::new(), [0.0f64; 2]);
     for (i, s) in log.scans.iter().enumerate() {
-        let t_us = if synthetic_time { i as u64 * crate::search::TICK_US } else { ((s.t_s - t0) * 1e6).round().max(0.0) as u64 };
+        let t_us = if synthetic_time { i as u64 * crate::run::TICK_US } else { ((s.t_s - t0) * 1e6).round().max(0.0) as u64 };
         let now_us = last_us.max(t_us);
         last_us = now_us;
         if stray[i] {
@@ -549,9 +549,9 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             "the log's time stamps do not advance ({distinct} distinct among {} scans): replayed at one scan per {} ms, \
              and the duration is that of the replayed scans",
             log.scans.len(),
-            crate::search::TICK_US / 1000
+            crate::run::TICK_US / 1000
         ));
-        (log.scans.len() - 1) as f64 * crate::search::TICK_US as f64 / 1e6
+        (log.scans.len() - 1) as f64 * crate::run::TICK_US as f64 / 1e6
     } else {
         log.span_s.map_or(0.0, |(a, b)| b - a)
     };
