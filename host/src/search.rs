@@ -585,62 +585,6 @@ mod tests {
         assert_eq!(steps, 4, "the search chose at least four goals");
         assert!(marked > 0);
     }
-
-    #[test]
-    fn the_label_score_counts_every_beam_both_labelled() {
-        use BeamLabel::{Map, NonMap, Unlabelled};
-        let mut truth = BeamScan::new();
-        let mut used = BeamScan::new();
-        let pairs = [(Map, Map), (Map, NonMap), (NonMap, Map), (NonMap, NonMap), (NonMap, NonMap), (Unlabelled, NonMap), (Map, Unlabelled)];
-        for (b, &(t, u)) in pairs.iter().enumerate() {
-            truth.labels[b] = t;
-            used.labels[b] = u;
-        }
-        let mut confusion = [[0u64; 2]; 2];
-        count_labels(&mut confusion, &truth, &used);
-        let s = LabelScore::from_confusion(confusion);
-        assert_eq!(s.beams, 5, "beams either side left unlabelled are not scored");
-        assert_eq!(s.accuracy, 0.6);
-        assert_eq!(s.nonmap_recall, 0.6667);
-        assert_eq!(s.nonmap_precision, 0.6667);
-        assert_eq!(s.confusion, [[1, 1], [1, 2]]);
-        assert_eq!(LabelScore::from_confusion([[0; 2]; 2]), LabelScore::default(), "nothing to score is zeros, not NaN");
-        // Pooled runs add their counts: not the mean of their ratios.
-        let other = LabelScore::from_confusion([[0, 0], [3, 0]]);
-        let both = LabelScore::pooled([&s, &other]);
-        assert_eq!(both.beams, 8);
-        assert_eq!(both.nonmap_recall, 0.3333);
-        assert_eq!(both.nonmap_precision, s.nonmap_precision);
-    }
-
-    #[test]
-    fn the_tally_times_the_first_lidar_sighting_and_the_first_within_camera_reach() {
-        let scan = |target_ranges: &[f32]| {
-            let mut ranges_m = vec![6.0f32; 20];
-            let mut hits = vec![HitKind::Wall; 20];
-            for (i, &r) in target_ranges.iter().enumerate() {
-                ranges_m[i] = r;
-                hits[i] = HitKind::Target;
-            }
-            Scan {
-                angle_min: -std::f64::consts::PI,
-                angle_increment: std::f64::consts::TAU / 20.0,
-                range_min_m: 0.1,
-                range_max_m: 30.0,
-                ranges_m,
-                hits,
-            }
-        };
-        let mut t = RunTally::new(4.0);
-        t.scan(0, &scan(&[5.0, 5.0]));
-        assert_eq!((t.lidar_saw_target_s(), t.target_in_camera_reach_s()), (None, None), "two beams are not a sighting");
-        t.scan(200_000, &scan(&[5.0, 4.5, 4.2]));
-        assert_eq!((t.lidar_saw_target_s(), t.target_in_camera_reach_s()), (Some(0.2), None), "seen, but beyond 4 m");
-        t.scan(400_000, &scan(&[4.5, 3.9, 3.8, 4.0]));
-        assert_eq!(t.target_in_camera_reach_s(), Some(0.4), "three beams within 4 m");
-        t.scan(600_000, &scan(&[1.0, 1.0, 1.0]));
-        assert_eq!((t.lidar_saw_target_s(), t.target_in_camera_reach_s()), (Some(0.2), Some(0.4)), "the first times stay");
-    }
 }
 
 #[cfg(test)]
@@ -661,7 +605,7 @@ mod ideal_sensor_digest {
         let w = World::builtin("apartment", Scenario::Easy).unwrap();
         let mut spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, 1);
         spec.sim = sim;
-        spec.world.time_limit_s = n as f64 * TICK_US as f64 / 1e6;
+        spec.world.time_limit_s = n as f64 * crate::run::TICK_US as f64 / 1e6;
         let mut h = 0xcbf2_9ce4_8422_2325u64;
         let mut observe = |v: &TickView<'_>| {
             let p = v.inputs.pose.unwrap_or_default();

@@ -647,9 +647,6 @@ pub(super) fn resume_from(path: &[[f64; 2]], p: [f64; 2]) -> Vec<[f64; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::{mem_pair, Link};
-    use crate::sim::{Scenario, World};
-    use firmware::protocol::{AckReason, CoreDecoder, HelloAck, PROTOCOL_VERSION};
 
     #[test]
     fn an_interrupted_path_resumes_past_what_was_driven() {
