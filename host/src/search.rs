@@ -1,9 +1,12 @@
-//! One simulated search: the simulator and the controller core in lockstep, in-process.
+//! One simulated search: the simulator and the controller core in lockstep, in-process — the run
+//! loop ([`crate::run::drive`]) with [`SimSource`] as the source and [`InProcess`] as the brain.
 //!
 //! Virtual time advances one controller period (200 ms, the LiDAR's 5 Hz) per tick: the simulator
 //! produces a scan, the pose and a detection; the core ticks; its goal path is handed to the base,
 //! which then moves for one period in four 50 ms steps. Nothing reads a wall clock, so the same
-//! world, planner and seed give the same run bit for bit.
+//! world, planner and seed give the same run bit for bit. This module owns what a search is (the
+//! planners, the spec, the result, [`SearchResult::simulated`] for the bridge's runs too) and the
+//! `--trace` lines.
 
 pub use crate::robot_model::{controller_model, default_sim, ideal_sim, Robot, CALIBRATED_CAMERA_RANGE_M, SHORT_CAMERA_RANGE_M};
 use crate::run::{controller_config, count_labels, drive, AfterAct, Answer, End, Ended, Frame, InProcess, LabelScore, Motion, SimSource};

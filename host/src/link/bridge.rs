@@ -1,7 +1,8 @@
 //! `lives bridge`: the host side of the serial link.
 //!
-//! The bridge owns the sources (the simulator, [`super::Source::Sim`], or a robot behind the base
-//! adapter, [`super::Source::Robot`], whose loop is `super::robot`) and the base. Each tick it
+//! The bridge's session (`Bridge`) drives a base: the simulator's ([`super::Source::Sim`], whose
+//! run is the run loop with the node as its brain, `super::sim_bridge`) or a robot's behind the
+//! base adapter ([`super::Source::Robot`], whose loop is `super::robot`). Each tick it
 //! sends the robot's pose, the LiDAR scan, a detection (if any) and the base's state as frames;
 //! it drives the base with the goals that come back and stops it on `Stop`. It opens the session
 //! with `Hello` (sent again every `hello_interval` until a `HelloAck`, whose version it checks),

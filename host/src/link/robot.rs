@@ -255,8 +255,7 @@ fn stamp(started: Instant, at: Instant) -> u64 {
 
 /// The grid origin for a robot first seen at `(x, y)`: centred, on the 0.1 m lattice.
 fn origin_for(x: f64, y: f64) -> [f64; 2] {
-    let half = firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64 / 2.0;
-    [((x - half) * 10.0).round() / 10.0, ((y - half) * 10.0).round() / 10.0]
+    crate::run::centred_origin([x, y])
 }
 
 /// Runs the search of a robot behind the base adapter through the node at the other end of

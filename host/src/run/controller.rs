@@ -87,14 +87,19 @@ impl Brain for Idle {
 /// bounds sit inside it with a margin — the operator's "search area".
 pub fn controller_config(base: &Config, world: &World, planner: PlannerKind) -> Config {
     let [min, max] = world.bounds;
-    let centre = [(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0];
-    let half = firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64 / 2.0;
+    // Centred on the world (a world up to 51 m across fits).
+    let [x, y] = centred_origin([(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0]);
     // The planner's own defaults (explore-lite's) come from the core.
     let base = base.with_planner(planner);
     Config {
-        // Centred on the world, on the 0.1 m lattice (a world up to 51 m across fits).
-        origin_x_m: fixed_point::meters_from_f64(((centre[0] - half) * 10.0).round() / 10.0).unwrap_or_default(),
-        origin_y_m: fixed_point::meters_from_f64(((centre[1] - half) * 10.0).round() / 10.0).unwrap_or_default(),
+        origin_x_m: fixed_point::meters_from_f64(x).unwrap_or_default(),
+        origin_y_m: fixed_point::meters_from_f64(y).unwrap_or_default(),
         ..base
     }
+}
+
+/// The lower-left corner of the grid (51.2 m square) centred on `centre`, on the 0.1 m lattice.
+pub fn centred_origin(centre: [f64; 2]) -> [f64; 2] {
+    let half = firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64 / 2.0;
+    centre.map(|c| ((c - half) * 10.0).round() / 10.0)
 }

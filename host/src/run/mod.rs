@@ -38,7 +38,7 @@ mod score;
 mod sim;
 mod walk;
 
-pub use controller::{controller_config, Idle, InProcess};
+pub use controller::{centred_origin, controller_config, Idle, InProcess};
 pub use score::{
     count_labels, LabelScore, Motion, RunTally, LIDAR_SIGHTING_BEAMS, MOVING_M_PER_TICK, TURNING_RAD_PER_TICK,
 };
