@@ -413,14 +413,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     // in steps of 10 000 s) cannot drive the controller's clock: replay one scan per tick instead.
     let distinct = 1 + log.scans.windows(2).filter(|w| w[1].t_s != w[0].t_s).count();
     let synthetic_time = log.scans.len() > 1 && 2 * distinct < log.scans.len();
-    let read = Rejected {
-        no_pose: log.no_pose as u32,
-        no_odometry_yet: log.no_odometry_yet as u32,
-        stale_pose: log.stale_pose as u32,
-        stamp_backwards: log.scan_stamp_backwards as u32,
-        ..Rejected::default()
-    };
-    let mut source = LogSource::new(&log.scans, &stray, synthetic_time, read);
+    let mut source = LogSource::new(&log.scans, &stray, synthetic_time);
     let mut goals = Vec::new();
     let mut trajectory = Vec::new();
     let mut poses = Vec::new();
@@ -487,8 +480,17 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     };
     let mut brain = InProcess::restarting(ctrl, cfg.replan_interval_us);
     let Ok(_) = drive(&mut source, &mut brain, &mut [&mut watch]);
-    let LogSource { mut rejected, strays, .. } = source;
-    rejected.outside_grid = outside_grid;
+    let LogSource { stray_pose, no_pose, bad_angles, strays, .. } = source;
+    let mut rejected = Rejected {
+        outside_grid,
+        no_pose: log.no_pose as u32 + no_pose,
+        bad_angles,
+        stray_pose,
+        no_odometry_yet: log.no_odometry_yet as u32,
+        stale_pose: log.stale_pose as u32,
+        stamp_backwards: log.scan_stamp_backwards as u32,
+        ..Rejected::default()
+    };
     let ctrl = brain.ctrl;
     let status = before.0;
     rejected.controller = status.scans_rejected;

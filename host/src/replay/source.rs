@@ -1,13 +1,14 @@
 //! A recorded log as a run's source ([`LogSource`]): its scans at their poses, in order.
 
-use super::*;
+use super::error::{compact, BAD_RECORDS_KEPT};
+use super::ScanRecord;
 use crate::range::{EncodedScan, RangeLimits};
 use crate::run::{Answer, Frame, Source, TICK_US};
 use firmware::Pose2;
 
 /// The scans of a log that can be mapped, at their time stamps (or one per [`TICK_US`] when the
 /// stamps do not advance). Strays, non-finite poses and non-finite beam angles are skipped and
-/// counted. Nobody drives: the brain's goals are what it would have sent.
+/// counted (`Rejected`). Nobody drives: the brain's goals are what it would have sent.
 pub(super) struct LogSource<'a> {
     scans: &'a [ScanRecord],
     stray: &'a [bool],
@@ -17,17 +18,20 @@ pub(super) struct LogSource<'a> {
     t0: f64,
     synthetic_time: bool,
     last_us: u64,
-    /// Scans skipped (the counts of [`Rejected`] the source sees).
-    pub(super) rejected: Rejected,
+    /// Scans skipped: the laser's pose strays from the trajectory, is not finite, or the beam
+    /// angles are not.
+    pub(super) stray_pose: u32,
+    pub(super) no_pose: u32,
+    pub(super) bad_angles: u32,
     /// The first few strays, for the warning.
     pub(super) strays: Vec<String>,
 }
 
 impl<'a> LogSource<'a> {
-    /// `scans` (not empty), `stray` one per scan; `synthetic_time`: one scan per tick;
-    /// `rejected`: what reading the log refused already.
-    pub(super) fn new(scans: &'a [ScanRecord], stray: &'a [bool], synthetic_time: bool, rejected: Rejected) -> Self {
-        LogSource { scans, stray, next: 0, current: 0, t0: scans[0].t_s, synthetic_time, last_us: 0, rejected, strays: Vec::new() }
+    /// `scans` (not empty), `stray` one per scan; `synthetic_time`: one scan per tick.
+    pub(super) fn new(scans: &'a [ScanRecord], stray: &'a [bool], synthetic_time: bool) -> Self {
+        let t0 = scans[0].t_s;
+        LogSource { scans, stray, next: 0, current: 0, t0, synthetic_time, last_us: 0, stray_pose: 0, no_pose: 0, bad_angles: 0, strays: Vec::new() }
     }
 
     /// The scan of the last frame.
@@ -46,7 +50,7 @@ impl Source for LogSource<'_> {
             let now_us = self.last_us.max(t_us);
             self.last_us = now_us;
             if self.stray[i] {
-                self.rejected.stray_pose += 1;
+                self.stray_pose += 1;
                 if self.strays.len() < BAD_RECORDS_KEPT {
                     self.strays.push(format!("{} at ({}, {})", s.at, compact(s.pose[0]), compact(s.pose[1])));
                 }
@@ -54,12 +58,12 @@ impl Source for LogSource<'_> {
             }
             // A non-finite pose: no pose to map the scan at; non-finite beam angles: no beams.
             let Some(pose) = Pose2::from_f64(s.pose[0], s.pose[1], s.pose[2]) else {
-                self.rejected.no_pose += 1;
+                self.no_pose += 1;
                 continue;
             };
             let limits = RangeLimits::new(s.range_limits_m[0], s.range_limits_m[1]);
             let Some(scan) = EncodedScan::new(s.angle_min, s.angle_increment, s.ranges_m.iter().map(|&r| r as f64), &limits) else {
-                self.rejected.bad_angles += 1;
+                self.bad_angles += 1;
                 continue;
             };
             self.current = i;
