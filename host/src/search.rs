@@ -18,7 +18,6 @@ use serde::Serialize;
 use std::fmt;
 use std::str::FromStr;
 
-
 /// The planners a search can run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "kebab-case")]

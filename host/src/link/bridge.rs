@@ -32,8 +32,8 @@ use super::{Link, Summary, TimeMode};
 use crate::run::TICK_US;
 use crate::search::SearchResult;
 use firmware::protocol::{
-    encode, ConfigMsg, CoreToHost, DetectionMsg, ErrorCode, GoalMsg, Heartbeat, Hello, HostDecoder, HostToCore,
-    IncompatiblePeer, LinkCounters, PoseMsg, Role, ScanMsg, StatusMsg, WireCommand, WireMode, MAX_FRAME_LEN,
+    encode, ConfigMsg, CoreToHost, DetectionMsg, ErrorCode, GoalMsg, Heartbeat, Hello, HostDecoder, HostToCore, IncompatiblePeer,
+    LinkCounters, PoseMsg, Role, ScanMsg, StatusMsg, WireCommand, WireMode, MAX_FRAME_LEN,
 };
 use firmware::BinaryAngle;
 use std::collections::VecDeque;

@@ -9,7 +9,9 @@
 //! thinks (in lockstep while the node answers, in real time until the next deadline), so the base
 //! ends each tick exactly as if the session had driven it directly.
 
-use super::bridge::{Base, Bridge, BridgeError, BridgeOptions, BridgeResult, ClassifierCheck, NOT_TICKING_ECHOES, NOT_TICKING_FOR, SEQ_BASE};
+use super::bridge::{
+    Base, Bridge, BridgeError, BridgeOptions, BridgeResult, ClassifierCheck, NOT_TICKING_ECHOES, NOT_TICKING_FOR, SEQ_BASE,
+};
 use super::{Link, TimeMode};
 use crate::run::{controller_config, drive, Act, Answer, Brain, Clock, End, Ended, Frame, SimSource};
 use crate::search::{SearchResult, SearchSpec};
@@ -381,5 +383,4 @@ mod tests {
         assert!(text.contains("v99") && text.contains("incompatible"), "{text}");
         assert_eq!(fake.join().unwrap(), 3);
     }
-
 }

@@ -1,8 +1,8 @@
 //! Running the controller over a log ([`replay_log`]): the options, the grid's placement, the
 //! report and its summary line.
 
-use super::*;
 use super::source::LogSource;
+use super::*;
 use crate::run::{drive, Answer, Frame, InProcess};
 use firmware::{Config, Controller};
 use serde::Serialize;

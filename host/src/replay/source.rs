@@ -31,7 +31,19 @@ impl<'a> LogSource<'a> {
     /// `scans` (not empty), `stray` one per scan; `synthetic_time`: one scan per tick.
     pub(super) fn new(scans: &'a [ScanRecord], stray: &'a [bool], synthetic_time: bool) -> Self {
         let t0 = scans[0].t_s;
-        LogSource { scans, stray, next: 0, current: 0, t0, synthetic_time, last_us: 0, stray_pose: 0, no_pose: 0, bad_angles: 0, strays: Vec::new() }
+        LogSource {
+            scans,
+            stray,
+            next: 0,
+            current: 0,
+            t0,
+            synthetic_time,
+            last_us: 0,
+            stray_pose: 0,
+            no_pose: 0,
+            bad_angles: 0,
+            strays: Vec::new(),
+        }
     }
 
     /// The scan of the last frame.

@@ -1,7 +1,7 @@
 //! The brains that run in this process: the controller core ([`InProcess`]) and none
 //! ([`Idle`], the source's walker drives).
 
-use super::{Act, Answer, Brain, End, Frame};
+use super::cycle::{Act, Answer, Brain, End, Frame};
 use crate::sim::World;
 use firmware::{Command, Config, Controller, Mode, Outputs, PlannerKind};
 use std::convert::Infallible;

@@ -2,7 +2,7 @@
 //! by the simulator source), and how a classifier's labels compared with the truth
 //! ([`LabelScore`]).
 
-use super::TICK_US;
+use super::cycle::TICK_US;
 use crate::sim::{HitKind, Scan};
 use firmware::scan::{BeamLabel, BeamScan};
 use serde::Serialize;

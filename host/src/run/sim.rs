@@ -2,7 +2,9 @@
 //! its base for one period in [`SUBSTEPS`] steps. It keeps what scoring a simulated run needs
 //! (the true trajectory, blocked periods, collisions, a [`RunTally`]).
 
-use super::{Act, Answer, Frame, RunTally, Source, Walker, TICK_US};
+use super::cycle::{Act, Answer, Frame, Source, TICK_US};
+use super::score::RunTally;
+use super::walk::Walker;
 use crate::range::{encode_range, EncodedScan, RangeLimits};
 use crate::sim::{BaseStatus, HitKind, Scan, Sim, SimConfig};
 use firmware::scan::BeamLabel;
