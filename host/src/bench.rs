@@ -213,7 +213,7 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
                     continue;
                 };
                 let wall = t.elapsed().as_secs_f64();
-                let sim_s = r.result.ticks as f64 * search::TICK_US as f64 / 1e6;
+                let sim_s = r.result.ticks as f64 * crate::run::TICK_US as f64 / 1e6;
                 sim_total += sim_s;
                 wall_total += wall;
                 println!("{:<28} {:>10.1} {:>10.3} {:>12.0}", format!("{planner} seed {seed}"), sim_s, wall, sim_s / wall);

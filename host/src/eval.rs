@@ -11,7 +11,8 @@
 //! * [`tune`] scores parameter assignments on procedurally generated worlds only (never the
 //!   built-in ones, which are the evaluation's unseen buildings).
 
-use crate::search::{self, LabelScore, PlannerChoice, SearchResult, SearchSpec};
+use crate::run::LabelScore;
+use crate::search::{self, PlannerChoice, SearchResult, SearchSpec};
 use crate::sim::{Scenario, World};
 use serde::Serialize;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -176,7 +177,7 @@ pub fn summarise(results: &[SearchResult]) -> Vec<CellSummary> {
 /// oracle's time, at least one controller period (the first detection can come no sooner).
 /// `None` without an oracle.
 pub fn oracle_ratio(r: &SearchResult) -> Option<f64> {
-    let tick = search::TICK_US as f64 / 1e6;
+    let tick = crate::run::TICK_US as f64 / 1e6;
     let t = if r.found { r.time_s } else { r.time_limit_s };
     r.oracle_s.map(|o| t / o.max(tick))
 }

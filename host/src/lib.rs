@@ -17,6 +17,7 @@ pub mod record;
 pub mod render;
 pub mod replay;
 pub mod robot_model;
+pub mod run;
 pub mod search;
 pub mod sensors;
 pub mod soak;

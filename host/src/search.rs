@@ -1,24 +1,22 @@
-//! One simulated search: the simulator and the controller core in lockstep, in-process.
+//! One simulated search: the simulator and the controller core in lockstep, in-process — the run
+//! loop ([`crate::run::drive`]) with [`SimSource`] as the source and [`InProcess`] as the brain.
 //!
 //! Virtual time advances one controller period (200 ms, the LiDAR's 5 Hz) per tick: the simulator
 //! produces a scan, the pose and a detection; the core ticks; its goal path is handed to the base,
 //! which then moves for one period in four 50 ms steps. Nothing reads a wall clock, so the same
-//! world, planner and seed give the same run bit for bit.
+//! world, planner and seed give the same run bit for bit. This module owns what a search is (the
+//! planners, the spec, the result, [`SearchResult::simulated`] for the bridge's runs too) and the
+//! `--trace` lines.
 
-use crate::range::{encode_range, EncodedScan, RangeLimits};
 pub use crate::robot_model::{controller_model, default_sim, ideal_sim, Robot, CALIBRATED_CAMERA_RANGE_M, SHORT_CAMERA_RANGE_M};
-use crate::sim::{BaseStatus, HitKind, Scan, Scenario, Sim, SimConfig, World};
+use crate::run::{controller_config, count_labels, drive, AfterAct, Answer, End, Ended, Frame, InProcess, LabelScore, Motion, SimSource};
+use crate::sim::{Scenario, Sim, SimConfig, World};
 use firmware::planner::Viewpoint;
-use firmware::scan::{BeamLabel, BeamScan};
-use firmware::{BinaryAngle, Command, Config, Controller, Detection, Inputs, Mode, PlannerKind, Pose2};
+use firmware::scan::BeamScan;
+use firmware::{Config, Controller, Inputs, PlannerKind};
 use serde::Serialize;
 use std::fmt;
 use std::str::FromStr;
-
-/// Controller period and simulator step, microseconds.
-pub const TICK_US: u64 = 200_000;
-/// Base sub-steps per tick.
-const SUBSTEPS: u32 = 4;
 
 /// The planners a search can run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
@@ -293,148 +291,6 @@ pub struct SearchResult {
     pub oracle_s: Option<f64>,
 }
 
-/// The classifier's labels against the simulator's truth, every beam of every scan of a run
-/// that both labelled (map or non-map).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct LabelScore {
-    /// Beams compared.
-    pub beams: u64,
-    /// Fraction labelled as the truth labels them.
-    pub accuracy: f64,
-    /// Fraction of the true non-map beams labelled non-map.
-    pub nonmap_recall: f64,
-    /// Fraction of the beams labelled non-map that are non-map.
-    pub nonmap_precision: f64,
-    /// The counts: `confusion[truth][label]`, index 0 map, 1 non-map.
-    pub confusion: [[u64; 2]; 2],
-}
-
-impl LabelScore {
-    /// The score of a confusion matrix (`[truth][label]`, 0 map, 1 non-map); ratios of nothing
-    /// are 0.
-    pub fn from_confusion(c: [[u64; 2]; 2]) -> Self {
-        let ratio = |a: u64, b: u64| if b == 0 { 0.0 } else { (a as f64 / b as f64 * 1e4).round() / 1e4 };
-        let beams = c[0][0] + c[0][1] + c[1][0] + c[1][1];
-        LabelScore {
-            beams,
-            accuracy: ratio(c[0][0] + c[1][1], beams),
-            nonmap_recall: ratio(c[1][1], c[1][0] + c[1][1]),
-            nonmap_precision: ratio(c[1][1], c[0][1] + c[1][1]),
-            confusion: c,
-        }
-    }
-
-    /// The score of several runs together (their beams pooled).
-    pub fn pooled<'a>(scores: impl IntoIterator<Item = &'a LabelScore>) -> Self {
-        let mut c = [[0u64; 2]; 2];
-        for s in scores {
-            for (row, srow) in c.iter_mut().zip(s.confusion.iter()) {
-                for (v, sv) in row.iter_mut().zip(srow.iter()) {
-                    *v += sv;
-                }
-            }
-        }
-        Self::from_confusion(c)
-    }
-}
-
-/// Adds one scan's beams to `confusion` (`[truth][label]`, 0 map, 1 non-map): every beam both
-/// labelled.
-fn count_labels(confusion: &mut [[u64; 2]; 2], truth: &BeamScan, used: &BeamScan) {
-    let class = |l: BeamLabel| match l {
-        BeamLabel::Map => Some(0),
-        BeamLabel::NonMap => Some(1),
-        BeamLabel::Unlabelled => None,
-    };
-    for (&t, &u) in truth.labels.iter().zip(used.labels.iter()) {
-        if let (Some(t), Some(u)) = (class(t), class(u)) {
-            confusion[t][u] += 1;
-        }
-    }
-}
-
-/// Where a run's time went, tick by tick.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct Motion {
-    /// The base translated ([`MOVING_M_PER_TICK`] or more in the tick).
-    pub moving_s: f64,
-    /// It turned in place ([`TURNING_RAD_PER_TICK`] or more, without moving).
-    pub turning_s: f64,
-    /// It stood still (waiting out a block, arrived, stopped, or waiting for a goal).
-    pub still_s: f64,
-}
-
-/// Tallies a simulated run for [`SearchResult::motion`], [`SearchResult::lidar_saw_target_s`]
-/// and [`SearchResult::target_in_camera_reach_s`]; the in-process loop and the serial bridge both
-/// feed one.
-#[derive(Clone, Debug)]
-pub struct RunTally {
-    /// Seconds moving, turning, still.
-    split: [f64; 3],
-    camera_range_m: f64,
-    lidar_saw_target_s: Option<f64>,
-    in_camera_reach_s: Option<f64>,
-}
-
-impl RunTally {
-    /// A tally for a camera of this range.
-    pub fn new(camera_range_m: f64) -> Self {
-        Self { split: [0.0; 3], camera_range_m, lidar_saw_target_s: None, in_camera_reach_s: None }
-    }
-
-    /// A scan taken at `now_us`.
-    pub fn scan(&mut self, now_us: u64, scan: &Scan) {
-        let t = round3(now_us as f64 / 1e6);
-        let on_target = || scan.hits.iter().zip(&scan.ranges_m).filter(|&(&h, _)| h == HitKind::Target);
-        if self.lidar_saw_target_s.is_none() && on_target().count() >= LIDAR_SIGHTING_BEAMS {
-            self.lidar_saw_target_s = Some(t);
-        }
-        if self.in_camera_reach_s.is_none() {
-            let near = on_target().filter(|&(_, &r)| (r as f64) <= self.camera_range_m).count();
-            if near >= LIDAR_SIGHTING_BEAMS {
-                self.in_camera_reach_s = Some(t);
-            }
-        }
-    }
-
-    /// One base step of `dt_s` seconds (a tick), from pose `before` to pose `after`.
-    pub fn step(&mut self, before: [f64; 3], after: [f64; 3], dt_s: f64) {
-        let scale = dt_s / (TICK_US as f64 / 1e6);
-        let kind = if (after[0] - before[0]).hypot(after[1] - before[1]) >= MOVING_M_PER_TICK * scale {
-            0
-        } else if crate::sim::geometry::wrap_angle(after[2] - before[2]).abs() >= TURNING_RAD_PER_TICK * scale {
-            1
-        } else {
-            2
-        };
-        self.split[kind] += dt_s;
-    }
-
-    /// The motion split.
-    pub fn motion(&self) -> Motion {
-        let [moving_s, turning_s, still_s] = self.split.map(round3);
-        Motion { moving_s, turning_s, still_s }
-    }
-
-    /// When the LiDAR first saw a target.
-    pub fn lidar_saw_target_s(&self) -> Option<f64> {
-        self.lidar_saw_target_s
-    }
-
-    /// When a target was first within the camera's reach.
-    pub fn target_in_camera_reach_s(&self) -> Option<f64> {
-        self.in_camera_reach_s
-    }
-}
-
-/// A tick (of the nominal 0.2 s; scaled for other periods) in which the base moves at least this
-/// far counts as moving (2.5 cm/s).
-pub const MOVING_M_PER_TICK: f64 = 0.005;
-/// A tick in which the base turns at least this much (and does not move) counts as turning.
-pub const TURNING_RAD_PER_TICK: f64 = 0.01;
-/// Beams that must hit a target in one scan for [`SearchResult::lidar_saw_target_s`].
-pub const LIDAR_SIGHTING_BEAMS: usize = 3;
-
 /// Everything a picture or a test may want after a run.
 pub struct SearchRun {
     /// The result.
@@ -451,72 +307,6 @@ pub struct SearchRun {
     pub found_at: Option<[f64; 2]>,
     /// Every goal issued, in order (cell and heading index) — the run's decisions.
     pub goals: Vec<((i32, i32), firmware::BinaryAngle)>,
-}
-
-/// The sensor limits of the simulator's LiDAR (what its scans say in `range_min`/`range_max`).
-pub fn sim_limits(cfg: &SimConfig) -> RangeLimits {
-    RangeLimits::new(cfg.lidar_min_range_m, cfg.lidar_max_range_m)
-}
-
-/// One simulated scan in the core's encoding (the host/core boundary, [`crate::range`]) with its
-/// scanner's own limits, and the ground-truth label of every beam.
-pub fn encode_sim_scan(scan: &Scan) -> EncodedScan {
-    let fallback = BinaryAngle::from_fraction(1, scan.ranges_m.len().max(1) as i64);
-    let limits = RangeLimits::new(scan.range_min_m, scan.range_max_m);
-    let (range_min_mm, range_max_mm) = limits.mm();
-    EncodedScan {
-        angle_min: BinaryAngle::from_radians(scan.angle_min).unwrap_or(BinaryAngle::HALF),
-        angle_increment: BinaryAngle::from_radians(scan.angle_increment).unwrap_or(fallback),
-        ranges_mm: scan.ranges_m.iter().map(|&r| encode_range(r as f64, &limits)).collect(),
-        range_min_mm,
-        range_max_mm,
-        labels: scan.hits.iter().map(|&h| gt_label(h)).collect(),
-    }
-}
-
-/// What the base did during one controller period.
-pub struct BaseStep {
-    /// It reported blocked in at least one sub-step.
-    pub blocked: bool,
-    /// Where it ended.
-    pub position: [f64; 2],
-    /// It ended overlapping a wall, an obstacle or a person (must never happen).
-    pub collided: bool,
-}
-
-/// Moves the simulated base for `period_s` in [`SUBSTEPS`] steps.
-pub fn step_base(sim: &mut Sim, period_s: f64) -> BaseStep {
-    let mut blocked = false;
-    for _ in 0..SUBSTEPS {
-        blocked |= sim.step(period_s / SUBSTEPS as f64) == BaseStatus::Blocked;
-    }
-    let q = sim.pose();
-    BaseStep { blocked, position: [q[0], q[1]], collided: sim.collides([q[0], q[1]]) }
-}
-
-/// The ground-truth label of what a beam hit.
-pub fn gt_label(h: HitKind) -> BeamLabel {
-    match h {
-        HitKind::None => BeamLabel::Unlabelled,
-        HitKind::Wall => BeamLabel::Map,
-        HitKind::Furniture | HitKind::Clutter | HitKind::Person | HitKind::Target => BeamLabel::NonMap,
-    }
-}
-
-/// The controller configuration for a world: the grid (51.2 m square) placed so the world's
-/// bounds sit inside it with a margin — the operator's "search area".
-pub fn controller_config(base: &Config, world: &World, planner: PlannerChoice) -> Config {
-    let [min, max] = world.bounds;
-    let centre = [(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0];
-    let half = firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64 / 2.0;
-    // The planner's own defaults (explore-lite's) come from the core.
-    let base = base.with_planner(planner.kind());
-    Config {
-        // Centred on the world, on the 0.1 m lattice (a world up to 51 m across fits).
-        origin_x_m: fixed_point::meters_from_f64(((centre[0] - half) * 10.0).round() / 10.0).unwrap_or_default(),
-        origin_y_m: fixed_point::meters_from_f64(((centre[1] - half) * 10.0).round() / 10.0).unwrap_or_default(),
-        ..base
-    }
 }
 
 /// The `n` best candidate viewpoints of the controller's last planning step, best first (ties in
@@ -590,7 +380,7 @@ pub fn try_run_observed(
     progress: impl FnMut(f64),
     observe: impl FnMut(&TickView<'_>),
 ) -> Result<SearchRun, firmware::classifier::ModelError> {
-    let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
+    let cfg = controller_config(&spec.controller, &spec.world, spec.planner.kind());
     let mut ctrl = Box::new(Controller::new(cfg));
     let classifier = spec.planner.uses_classifier() && spec.model.is_some();
     if let (true, Some(blob)) = (classifier, spec.model) {
@@ -602,142 +392,126 @@ pub fn try_run_observed(
 /// [`try_run`] for specs without a model (ground-truth or no labels): cannot fail.
 pub fn run(spec: &SearchSpec, progress: impl FnMut(f64)) -> SearchRun {
     let spec = SearchSpec { model: None, ..spec.clone() };
-    let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
+    let cfg = controller_config(&spec.controller, &spec.world, spec.planner.kind());
     run_with(&spec, Box::new(Controller::new(cfg)), false, progress, |_| {})
 }
 
 fn run_with(
     spec: &SearchSpec,
-    mut ctrl: Box<Controller>,
+    ctrl: Box<Controller>,
     classifier: bool,
     mut progress: impl FnMut(f64),
     mut observe: impl FnMut(&TickView<'_>),
 ) -> SearchRun {
-    let mut sim = Sim::new(spec.world.clone(), spec.sim.clone(), spec.seed);
-    let start = sim.pose();
-    let limit = spec.world.time_limit_s;
     // Ground-truth labels for lives-gt, and for lives until a classifier model is installed.
     let use_labels = !classifier && spec.planner.uses_labels();
-    let mut trajectory = vec![[start[0], start[1]]];
+    let sim = Sim::new(spec.world.clone(), spec.sim.clone(), spec.seed);
+    let mut source = SimSource::new(sim, use_labels, spec.world.time_limit_s);
+    let mut brain = InProcess::new(ctrl);
     let mut goals = Vec::new();
-    let (mut ticks, mut blocked_count, mut collisions) = (0u32, 0u32, 0u32);
-    let mut base_blocked = false;
-    let mut found_at = None;
-    let mut outcome = "time-limit";
-    let mut status: firmware::Status;
-    let mut tally = RunTally::new(spec.sim.camera_range_m);
     let mut confusion = [[0u64; 2]; 2];
-    let tick_s = TICK_US as f64 / 1e6;
-    loop {
-        let now_us = ticks as u64 * TICK_US;
-        // The true pose (trajectory, scoring) and the one the controller is given: the laser's,
-        // in the drifting odometry frame, as a robot's odometry and `tf` give it.
-        let p = sim.pose();
-        let q = sim.controller_pose();
-        let scan = sim.scan();
-        tally.scan(now_us, &scan);
-        let encoded = encode_sim_scan(&scan);
-        let detection = sim.detect().map(|_| Detection { position: None });
-        let inputs = Inputs {
-            pose: Pose2::from_f64(q[0], q[1], q[2]),
-            scan: Some(encoded.input(use_labels)),
-            detection,
-            command: (ticks == 0).then_some(Command::Start),
-            base_blocked,
-        };
-        let out = ctrl.tick(now_us, &inputs);
+    let mut watch = |src: &SimSource, frame: &Frame, brain: &InProcess, answer: &Answer| {
+        let (ctrl, Some(out)) = (&brain.ctrl, brain.outputs()) else { return };
         if classifier {
             // The truth on the core's beam grid, to score the labels the core used.
             let mut truth = BeamScan::new();
-            if truth.resample(&encoded.input(true)).is_ok() {
+            if truth.resample(&frame.scan.input(true)).is_ok() {
                 count_labels(&mut confusion, &truth, ctrl.beams());
             }
         }
-        observe(&TickView { t_us: now_us, inputs: &inputs, outputs: &out, controller: &ctrl });
-        ticks += 1;
-        status = out.status;
-        match out.status.mode {
-            Some(Mode::TargetFound) => {
-                outcome = "found";
-                found_at = Some([p[0], p[1]]);
-                break;
-            }
-            Some(Mode::Exhausted) => {
-                outcome = "exhausted";
-                break;
-            }
-            _ => {}
+        observe(&TickView { t_us: frame.t_us, inputs: &frame.inputs(answer.command), outputs: out, controller: ctrl });
+        if answer.end.is_some() || out.stop {
+            return;
         }
-        if out.stop {
-            sim.stop_base();
-        } else if let (true, Some(g)) = (out.new_goal, &out.goal) {
+        if let (true, Some(g)) = (out.new_goal, &out.goal) {
             // As the bridge records a goal from the wire: its pose's cell (the configured grid)
             // and heading, in the frame the base follows (`Outputs::goal`).
             let initial = firmware::grid::GridGeometry { origin_x: ctrl.config().origin_x_m, origin_y: ctrl.config().origin_y_m };
             goals.push((initial.cell_of(g.pose.x, g.pose.y), g.pose.theta));
             if spec.trace {
-                let v = &g.viewpoint;
-                eprintln!(
-                    "t={:6.1}s robot ({:5.1},{:5.1}) goal #{:<3} ({:5.1},{:5.1}) {:>4.0}° {:?} {} cands={} {:?}{}",
-                    sim.time_s(),
-                    p[0],
-                    p[1],
-                    goals.len(),
-                    g.pose.x.to_num::<f64>(),
-                    g.pose.y.to_num::<f64>(),
-                    g.pose.theta.to_radians().to_degrees(),
-                    v.source,
-                    utility_terms(v),
-                    ctrl.planner.stats.candidates,
-                    ctrl.planner.stats,
-                    if spec.planner.kind().is_structured() { format!(" {:?}", ctrl.planner.sched) } else { String::new() }
-                );
-                for line in candidate_lines(&ctrl, spec.trace_candidates) {
-                    eprintln!("{line}");
-                }
+                trace_goal(spec, src.sim.time_s(), src.pose, goals.len(), ctrl, g);
             }
-            let path: Vec<[f64; 2]> = g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect();
-            // In the controller's frame: the base follows it in the odometry frame.
-            sim.set_goal_path(&path, Some(g.pose.theta.to_radians()));
         }
-        sim.set_goal_gaze(out.status.gaze.map(|h| h.to_radians()));
-        let moved = step_base(&mut sim, tick_s);
-        tally.step(p, sim.pose(), tick_s);
-        base_blocked = moved.blocked;
-        blocked_count += moved.blocked as u32;
-        trajectory.push(moved.position);
-        collisions += moved.collided as u32;
-        progress(sim.time_s());
-        if sim.time_s() >= limit {
-            break;
+    };
+    let mut progress = AfterAct(|src: &SimSource| progress(src.sim.time_s()));
+    let Ok(ended) = drive(&mut source, &mut brain, &mut [&mut watch, &mut progress]);
+    let status = brain.outputs().map(|o| o.status).unwrap_or_default();
+    let found_at = (ended.end == End::Found).then_some([source.pose[0], source.pose[1]]);
+    let score = classifier.then(|| LabelScore::from_confusion(confusion));
+    let result = SearchResult::simulated(spec, &source, ended, status.goals, status.blacklisted, classifier, score);
+    let SimSource { sim, trajectory, start, .. } = source;
+    SearchRun { result, controller: brain.ctrl, sim, trajectory, start, found_at, goals }
+}
+
+/// Prints a new goal with its utility terms (`--trace`), and the step's best candidates.
+fn trace_goal(spec: &SearchSpec, t_s: f64, p: [f64; 3], n: usize, ctrl: &Controller, g: &firmware::Goal) {
+    let v = &g.viewpoint;
+    eprintln!(
+        "t={:6.1}s robot ({:5.1},{:5.1}) goal #{:<3} ({:5.1},{:5.1}) {:>4.0}° {:?} {} cands={} {:?}{}",
+        t_s,
+        p[0],
+        p[1],
+        n,
+        g.pose.x.to_num::<f64>(),
+        g.pose.y.to_num::<f64>(),
+        g.pose.theta.to_radians().to_degrees(),
+        v.source,
+        utility_terms(v),
+        ctrl.planner.stats.candidates,
+        ctrl.planner.stats,
+        if spec.planner.kind().is_structured() { format!(" {:?}", ctrl.planner.sched) } else { String::new() }
+    );
+    for line in candidate_lines(ctrl, spec.trace_candidates) {
+        eprintln!("{line}");
+    }
+}
+
+impl SearchResult {
+    /// The result of a simulated search (in process or through the node) that ended as `ended`;
+    /// `goals` and `blacklisted` are the controller's counts, `classifier` whether it labelled
+    /// the scans, `score` how its labels compared with the truth.
+    pub fn simulated(
+        spec: &SearchSpec,
+        src: &SimSource,
+        ended: Ended,
+        goals: u32,
+        blacklisted: u32,
+        classifier: bool,
+        score: Option<LabelScore>,
+    ) -> Self {
+        let outcome = match ended.end {
+            End::Found => "found",
+            End::Exhausted => "exhausted",
+            End::Stopped => "stopped",
+            End::Source => "time-limit",
+        };
+        let found = ended.end == End::Found;
+        let limit = spec.world.time_limit_s;
+        SearchResult {
+            world: spec.world_name.clone(),
+            scenario: spec.scenario_label().to_string(),
+            planner: spec.planner.to_string(),
+            seed: spec.seed,
+            found,
+            time_s: if found { round3(src.sim.time_s()) } else { limit },
+            path_m: round3(src.sim.path_length_m()),
+            ticks: ended.ticks,
+            time_limit_s: limit,
+            outcome: outcome.to_string(),
+            goals,
+            blacklisted,
+            blocked: src.blocked,
+            collisions: src.collisions,
+            labels: spec.planner.label_source(classifier).to_string(),
+            targets: src.sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
+            motion: Some(src.tally.motion()),
+            lidar_saw_target_s: src.tally.lidar_saw_target_s(),
+            target_in_camera_reach_s: src.tally.target_in_camera_reach_s(),
+            classifier: score,
+            sim: SimSettings::changed(&spec.sim),
+            oracle_s: None,
         }
     }
-    let found = outcome == "found";
-    let result = SearchResult {
-        world: spec.world_name.clone(),
-        scenario: spec.scenario_label().to_string(),
-        planner: spec.planner.to_string(),
-        seed: spec.seed,
-        found,
-        time_s: if found { round3(sim.time_s()) } else { limit },
-        path_m: round3(sim.path_length_m()),
-        ticks,
-        time_limit_s: limit,
-        outcome: outcome.to_string(),
-        goals: status.goals,
-        blacklisted: status.blacklisted,
-        blocked: blocked_count,
-        collisions,
-        labels: spec.planner.label_source(classifier).to_string(),
-        targets: sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
-        motion: Some(tally.motion()),
-        lidar_saw_target_s: tally.lidar_saw_target_s(),
-        target_in_camera_reach_s: tally.target_in_camera_reach_s(),
-        classifier: classifier.then(|| LabelScore::from_confusion(confusion)),
-        sim: SimSettings::changed(&spec.sim),
-        oracle_s: None,
-    };
-    SearchRun { result, controller: ctrl, sim, trajectory, start, found_at, goals }
 }
 
 fn round3(v: f64) -> f64 {
@@ -813,62 +587,6 @@ mod tests {
         assert_eq!(steps, 4, "the search chose at least four goals");
         assert!(marked > 0);
     }
-
-    #[test]
-    fn the_label_score_counts_every_beam_both_labelled() {
-        use BeamLabel::{Map, NonMap, Unlabelled};
-        let mut truth = BeamScan::new();
-        let mut used = BeamScan::new();
-        let pairs = [(Map, Map), (Map, NonMap), (NonMap, Map), (NonMap, NonMap), (NonMap, NonMap), (Unlabelled, NonMap), (Map, Unlabelled)];
-        for (b, &(t, u)) in pairs.iter().enumerate() {
-            truth.labels[b] = t;
-            used.labels[b] = u;
-        }
-        let mut confusion = [[0u64; 2]; 2];
-        count_labels(&mut confusion, &truth, &used);
-        let s = LabelScore::from_confusion(confusion);
-        assert_eq!(s.beams, 5, "beams either side left unlabelled are not scored");
-        assert_eq!(s.accuracy, 0.6);
-        assert_eq!(s.nonmap_recall, 0.6667);
-        assert_eq!(s.nonmap_precision, 0.6667);
-        assert_eq!(s.confusion, [[1, 1], [1, 2]]);
-        assert_eq!(LabelScore::from_confusion([[0; 2]; 2]), LabelScore::default(), "nothing to score is zeros, not NaN");
-        // Pooled runs add their counts: not the mean of their ratios.
-        let other = LabelScore::from_confusion([[0, 0], [3, 0]]);
-        let both = LabelScore::pooled([&s, &other]);
-        assert_eq!(both.beams, 8);
-        assert_eq!(both.nonmap_recall, 0.3333);
-        assert_eq!(both.nonmap_precision, s.nonmap_precision);
-    }
-
-    #[test]
-    fn the_tally_times_the_first_lidar_sighting_and_the_first_within_camera_reach() {
-        let scan = |target_ranges: &[f32]| {
-            let mut ranges_m = vec![6.0f32; 20];
-            let mut hits = vec![HitKind::Wall; 20];
-            for (i, &r) in target_ranges.iter().enumerate() {
-                ranges_m[i] = r;
-                hits[i] = HitKind::Target;
-            }
-            Scan {
-                angle_min: -std::f64::consts::PI,
-                angle_increment: std::f64::consts::TAU / 20.0,
-                range_min_m: 0.1,
-                range_max_m: 30.0,
-                ranges_m,
-                hits,
-            }
-        };
-        let mut t = RunTally::new(4.0);
-        t.scan(0, &scan(&[5.0, 5.0]));
-        assert_eq!((t.lidar_saw_target_s(), t.target_in_camera_reach_s()), (None, None), "two beams are not a sighting");
-        t.scan(200_000, &scan(&[5.0, 4.5, 4.2]));
-        assert_eq!((t.lidar_saw_target_s(), t.target_in_camera_reach_s()), (Some(0.2), None), "seen, but beyond 4 m");
-        t.scan(400_000, &scan(&[4.5, 3.9, 3.8, 4.0]));
-        assert_eq!(t.target_in_camera_reach_s(), Some(0.4), "three beams within 4 m");
-        t.scan(600_000, &scan(&[1.0, 1.0, 1.0]));
-        assert_eq!((t.lidar_saw_target_s(), t.target_in_camera_reach_s()), (Some(0.2), Some(0.4)), "the first times stay");
-    }
 }
 
 #[cfg(test)]
@@ -889,7 +607,7 @@ mod ideal_sensor_digest {
         let w = World::builtin("apartment", Scenario::Easy).unwrap();
         let mut spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::LivesGt, 1);
         spec.sim = sim;
-        spec.world.time_limit_s = n as f64 * TICK_US as f64 / 1e6;
+        spec.world.time_limit_s = n as f64 * crate::run::TICK_US as f64 / 1e6;
         let mut h = 0xcbf2_9ce4_8422_2325u64;
         let mut observe = |v: &TickView<'_>| {
             let p = v.inputs.pose.unwrap_or_default();

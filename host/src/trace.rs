@@ -9,7 +9,8 @@
 //! where it stopped.
 
 use crate::link::{mem_pair, run_bridge, BridgeOptions, Link, MemLink, NodeOptions, NodeProcess, Source, TimeMode};
-use crate::search::{SearchSpec, TICK_US};
+use crate::run::TICK_US;
+use crate::search::SearchSpec;
 use firmware::classifier::EMBEDDED_MODEL;
 use firmware::mcu::trace::{self, Digest, Trace, FLAG_EMBEDDED_MODEL, MAX_RECORD};
 use firmware::node::{Node, NodeConfig};

@@ -29,7 +29,7 @@ fn lives_gt_finds_the_target_in_the_bedroom_start_apartment_seed_1() {
     // Where the time went: every stepped tick is moving, turning or still (the detecting tick
     // is not stepped), and the LiDAR saw the suitcase before the camera did.
     let m = r.motion.expect("a simulated run reports its motion");
-    let stepped_s = (r.ticks - 1) as f64 * search::TICK_US as f64 / 1e6;
+    let stepped_s = (r.ticks - 1) as f64 * host::run::TICK_US as f64 / 1e6;
     assert!((m.moving_s + m.turning_s + m.still_s - stepped_s).abs() < 1e-6, "{m:?} vs {stepped_s} s");
     assert!(m.moving_s > m.turning_s && m.moving_s > m.still_s, "{m:?}");
     let seen = r.lidar_saw_target_s.expect("the LiDAR saw the target");

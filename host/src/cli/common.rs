@@ -122,7 +122,7 @@ pub fn result_line(r: &search::SearchResult) -> String {
     // A search that runs out of places to look ends early; like the paper, it counts as the
     // limit (`time_s`), but the line says when it stopped.
     let when = if r.outcome == "exhausted" {
-        let stopped = r.ticks as f64 * search::TICK_US as f64 / 1e6;
+        let stopped = r.ticks as f64 * host::run::TICK_US as f64 / 1e6;
         format!("exhausted (nothing left to explore) at {stopped:.1} s, counted as the limit ({:.0} s)", r.time_limit_s)
     } else {
         format!("{} in {:.1} s (limit {:.0} s)", r.outcome, r.time_s, r.time_limit_s)

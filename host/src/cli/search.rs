@@ -1,7 +1,6 @@
 //! `lives search`: one simulated search, its result, and optionally a picture and a recording.
 
 use super::common::{load_spec, progress_bar, result_line, say, RobotArgs, RunArgs};
-use host::search;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -82,7 +81,7 @@ pub fn run(args: SearchArgs) -> Result<ExitCode, String> {
     if json {
         say!("{}", serde_json::to_string(r).map_err(|e| e.to_string())?);
     } else {
-        let sim_s = r.ticks as f64 * search::TICK_US as f64 / 1e6;
+        let sim_s = r.ticks as f64 * host::run::TICK_US as f64 / 1e6;
         say!("{}; {:.1} s simulated in {:.2} s ({:.0}x real time)", result_line(r), sim_s, wall, sim_s / wall.max(1e-9));
         if let Some(m) = r.motion {
             let lidar = r.lidar_saw_target_s.map_or("never saw the target".to_string(), |t| format!("first saw the target at {t:.1} s"));

@@ -10,12 +10,13 @@ use rand_chacha::ChaCha8Rng;
 
 use super::*;
 use crate::labeller::{hit_code, Agreement, Labeller, LabellerConfig};
-use crate::search::{controller_config, encode_sim_scan, TICK_US};
+use crate::run::{controller_config, drive, Act, Answer, Brain, End, Frame, Idle, InProcess, SimSource, Walker};
 use crate::sim::generate::{random_world_with_density, GENERATOR_ROBOT_RADIUS_M};
 use crate::sim::geometry::dist;
 use crate::sim::reach::ReachMap;
-use crate::sim::{BaseStatus, Scan, Scenario, Sim, SimConfig, World, P2};
-use firmware::{Command, Config, Controller, Detection, Inputs, Mode, Pose2};
+use crate::sim::{Scan, Scenario, Sim, SimConfig, World, P2};
+use firmware::{Config, Controller};
+use std::convert::Infallible;
 
 /// SplitMix64: derives independent seeds from (world seed, episode).
 pub(super) fn mix(mut z: u64) -> u64 {
@@ -94,63 +95,35 @@ impl WorldContext {
     }
 }
 
-/// Random waypoint walk: picks a reachable cell 1–8 m away with a clear straight line, or turns
-/// on the spot; a new choice when the base arrives, is blocked for 1 s, or runs out of time.
-pub(super) struct RandomWalker {
-    rng: ChaCha8Rng,
-    deadline_tick: u32,
-    blocked_ticks: u32,
-}
-
-impl RandomWalker {
-    fn new(seed: u64) -> RandomWalker {
-        RandomWalker { rng: ChaCha8Rng::seed_from_u64(seed), deadline_tick: 0, blocked_ticks: 0 }
-    }
-
-    fn update(&mut self, sim: &mut Sim, free: &[P2], tick: u32, blocked: bool) {
-        self.blocked_ticks = if blocked { self.blocked_ticks + 1 } else { 0 };
-        let idle = matches!(sim.base_status(), BaseStatus::Idle | BaseStatus::Arrived);
-        if !(idle || self.blocked_ticks >= 5 || tick >= self.deadline_tick) {
-            return;
-        }
-        self.blocked_ticks = 0;
-        let p = sim.pose();
-        let here = [p[0], p[1]];
-        if !free.is_empty() && self.rng.gen_bool(0.85) {
-            for _ in 0..60 {
-                let q = free[self.rng.gen_range(0..free.len())];
-                let d = dist(here, q);
-                if !(1.0..=8.0).contains(&d) || !line_clear(sim, here, q) {
-                    continue;
-                }
-                let yaw = self.rng.gen_bool(0.3).then(|| self.rng.gen_range(-std::f64::consts::PI..std::f64::consts::PI));
-                sim.set_path(&[q], yaw);
-                let speed = sim.config().speed_mps.max(0.05);
-                self.deadline_tick = tick + ((d / speed + 10.0) * SCAN_HZ) as u32;
-                return;
-            }
-        }
-        let yaw = self.rng.gen_range(-std::f64::consts::PI..std::f64::consts::PI);
-        sim.set_path(&[], Some(yaw));
-        self.deadline_tick = tick + (8.0 * SCAN_HZ) as u32;
-    }
-}
-
-/// Is the straight line from `a` to `b` clear for the robot (sampled every 5 cm)?
-pub(super) fn line_clear(sim: &Sim, a: P2, b: P2) -> bool {
-    let d = dist(a, b);
-    let n = (d / 0.05).ceil().max(1.0) as usize;
-    (1..=n).all(|i| {
-        let t = i as f64 / n as f64;
-        !sim.collides([a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t])
-    })
-}
-
 /// The result of driving one episode.
 pub(super) struct EpisodeRun {
     start: [f64; 3],
     path_m: f64,
     controller_outcome: &'static str,
+}
+
+/// The brain of an episode: a planner's controller until it hands over (target found, search
+/// exhausted), then the source's random walker; the walker alone for a random walk.
+struct HandOver {
+    ctrl: Option<InProcess>,
+    outcome: &'static str,
+}
+
+impl Brain for HandOver {
+    type Error = Infallible;
+
+    fn think(&mut self, frame: &Frame) -> Result<Answer, Infallible> {
+        let Some(c) = &mut self.ctrl else { return Idle.think(frame) };
+        let Ok(mut answer) = c.think(frame);
+        // The dataset's base looks ahead: no gaze.
+        answer.acts.retain(|a| !matches!(a, Act::Gaze(_)));
+        if let Some(end) = answer.end.take() {
+            self.outcome = if end == End::Found { "found" } else { "exhausted" };
+            self.ctrl = None;
+            answer.acts = vec![Act::Stop, Act::Wander];
+        }
+        Ok(answer)
+    }
 }
 
 /// Drive one episode of `ticks` ticks through `world` and call `on_tick(tick, pose, scan)` at
@@ -163,66 +136,25 @@ pub(super) fn drive_episode(
     ticks: u32,
     mut on_tick: impl FnMut(u32, [f64; 3], &Scan),
 ) -> EpisodeRun {
-    let cfg = sim_config();
-    let mut sim = Sim::new(world.clone(), cfg.clone(), sim_seed);
-    let start = sim.pose();
-    let mut ctrl = match trajectory {
-        Trajectory::Planner(p) => Some((Box::new(Controller::new(controller_config(&Config::DEFAULT, world, p))), p)),
-        Trajectory::RandomWalk => None,
+    let sim = Sim::new(world.clone(), sim_config(), sim_seed);
+    let walker = Walker::new(mix(sim_seed ^ 0x5741_4C4B), true);
+    let (ctrl, labels) = match trajectory {
+        Trajectory::Planner(p) => {
+            (Some(InProcess::new(Box::new(Controller::new(controller_config(&Config::DEFAULT, world, p.kind()))))), p.uses_labels())
+        }
+        Trajectory::RandomWalk => (None, false),
     };
-    let mut outcome = if ctrl.is_some() { "running" } else { "walk" };
-    let mut walker = RandomWalker::new(mix(sim_seed ^ 0x5741_4C4B));
-    let mut base_blocked = false;
-    for tick in 0..ticks {
-        let p = sim.pose();
-        let scan = sim.scan();
-        on_tick(tick, p, &scan);
-        let mut handed_over = false;
-        if let Some((c, planner)) = ctrl.as_mut() {
-            let use_labels = planner.uses_labels();
-            let encoded = encode_sim_scan(&scan);
-            let inputs = Inputs {
-                pose: Pose2::from_f64(p[0], p[1], p[2]),
-                scan: Some(encoded.input(use_labels)),
-                detection: sim.detect().map(|_| Detection { position: None }),
-                command: (tick == 0).then_some(Command::Start),
-                base_blocked,
-            };
-            let out = c.tick(tick as u64 * TICK_US, &inputs);
-            match out.status.mode {
-                Some(Mode::TargetFound) => {
-                    outcome = "found";
-                    handed_over = true;
-                }
-                Some(Mode::Exhausted) => {
-                    outcome = "exhausted";
-                    handed_over = true;
-                }
-                _ => {
-                    if out.stop {
-                        sim.stop_base();
-                    } else if let (true, Some(g)) = (out.new_goal, &out.goal) {
-                        let path: Vec<[f64; 2]> = g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect();
-                        sim.set_path(&path, Some(g.pose.theta.to_radians()));
-                    }
-                }
-            }
+    let mut source = SimSource::episode(sim, ticks, labels, ctrl.is_some(), walker, free.to_vec());
+    let mut brain = HandOver { outcome: if ctrl.is_some() { "running" } else { "walk" }, ctrl };
+    let mut tick = 0;
+    let mut watch = |src: &SimSource, _: &Frame, _: &HandOver, _: &Answer| {
+        if let Some(scan) = &src.scan {
+            on_tick(tick, src.pose, scan);
         }
-        if handed_over {
-            ctrl = None;
-            sim.stop_base();
-        }
-        if ctrl.is_none() {
-            walker.update(&mut sim, free, tick, base_blocked);
-        }
-        base_blocked = false;
-        for _ in 0..SUBSTEPS {
-            if sim.step(TICK_US as f64 / 1e6 / SUBSTEPS as f64) == BaseStatus::Blocked {
-                base_blocked = true;
-            }
-        }
-    }
-    EpisodeRun { start, path_m: (sim.path_length_m() * 1000.0).round() / 1000.0, controller_outcome: outcome }
+        tick += 1;
+    };
+    let Ok(_) = drive(&mut source, &mut brain, &mut [&mut watch]);
+    EpisodeRun { start: source.start, path_m: (source.sim.path_length_m() * 1000.0).round() / 1000.0, controller_outcome: brain.outcome }
 }
 
 /// Drive `trajectory` through `world` for `duration_s` (simulator seed `sim_seed`, the world's own

@@ -55,9 +55,6 @@ pub const EXCLUDED_WORLDS: [&str; 3] = ["apartment", "office", "hallway"];
 /// Longest episode a spec may ask for.
 pub const MAX_EPISODE_S: f64 = 3600.0;
 
-/// Base sub-steps per tick (as in [`crate::search`]).
-const SUBSTEPS: u32 = 4;
-
 /// Bytes of one record with `beams` beams: `u64 + 2 × u32 + 3 × f32 + beams × (f32 + 2 × u8)`,
 /// padded to a multiple of 4.
 pub const fn record_bytes(beams: usize) -> usize {

@@ -1,7 +1,8 @@
 //! `lives bridge`: the host side of the serial link.
 //!
-//! The bridge owns the sources (the simulator, [`super::Source::Sim`], or a robot behind the base
-//! adapter, [`super::Source::Robot`], whose loop is `super::robot`) and the base. Each tick it
+//! The bridge's session (`Bridge`) drives a base: the simulator's ([`super::Source::Sim`], whose
+//! run is the run loop with the node as its brain, `super::sim_bridge`) or a robot's behind the
+//! base adapter ([`super::Source::Robot`], whose loop is `super::robot`). Each tick it
 //! sends the robot's pose, the LiDAR scan, a detection (if any) and the base's state as frames;
 //! it drives the base with the goals that come back and stops it on `Stop`. It opens the session
 //! with `Hello` (sent again every `hello_interval` until a `HelloAck`, whose version it checks),
@@ -28,13 +29,13 @@
 //! echoes.
 
 use super::{Link, Summary, TimeMode};
-use crate::search::{controller_config, encode_sim_scan, step_base, RunTally, SearchResult, SearchSpec, TICK_US};
-use crate::sim::Sim;
+use crate::run::TICK_US;
+use crate::search::SearchResult;
 use firmware::protocol::{
-    encode, BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, ErrorCode, GoalMsg, Heartbeat, Hello, HostDecoder, HostToCore,
-    IncompatiblePeer, LinkCounters, PoseMsg, Role, ScanMsg, StatusMsg, WireCommand, WireMode, MAX_FRAME_LEN,
+    encode, ConfigMsg, CoreToHost, DetectionMsg, ErrorCode, GoalMsg, Heartbeat, Hello, HostDecoder, HostToCore, IncompatiblePeer,
+    LinkCounters, PoseMsg, Role, ScanMsg, StatusMsg, WireCommand, WireMode, MAX_FRAME_LEN,
 };
-use firmware::{BinaryAngle, GridGeometry, Meters, Pose2};
+use firmware::BinaryAngle;
 use std::collections::VecDeque;
 use std::fmt;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
@@ -42,7 +43,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Heartbeat sequence numbers of the bridge start here (the node's own count from 1).
-const SEQ_BASE: u32 = 0x8000_0000;
+pub(super) const SEQ_BASE: u32 = 0x8000_0000;
 
 /// Lockstep: a batch the node echoes at least this many times in a row, for at least
 /// [`NOT_TICKING_FOR`], without ticking it, while it sends statuses of other times, is an error
@@ -283,13 +284,13 @@ pub const CLASSIFIER_CHECK_SCANS: u32 = 3;
 /// Whether a node that should label the scans itself does: its status reports the classify
 /// stage's work (`cost.classify`), which stays 0 while it has no model.
 #[derive(Clone, Copy, Debug)]
-struct ClassifierCheck {
-    expected: bool,
-    seen: bool,
+pub(super) struct ClassifierCheck {
+    pub(super) expected: bool,
+    pub(super) seen: bool,
 }
 
 impl ClassifierCheck {
-    fn observe(&mut self, s: &StatusMsg) -> Result<(), BridgeError> {
+    pub(super) fn observe(&mut self, s: &StatusMsg) -> Result<(), BridgeError> {
         if self.expected && !self.seen {
             self.seen = s.cost.classify > 0;
             if !self.seen && s.scans >= CLASSIFIER_CHECK_SCANS {
@@ -320,9 +321,9 @@ pub struct BridgeResult {
 }
 
 /// The session with the node, generic over the base it drives (the simulator's or a robot's).
-pub(super) struct Bridge<'l, B: Base = Sim> {
+pub(super) struct Bridge<'l, B: Base> {
     link: &'l mut dyn Link,
-    opts: BridgeOptions,
+    pub(super) opts: BridgeOptions,
     stop: &'l AtomicBool,
     pub(super) started: Instant,
     pub(super) dec: HostDecoder,
@@ -345,7 +346,7 @@ pub(super) struct Bridge<'l, B: Base = Sim> {
     /// The field of the configuration the node refused as out of range (`Error { ConfigInvalid }`).
     pub(super) config_invalid: Option<u8>,
     pub(super) sim: B,
-    goal: Option<GoalMsg>,
+    pub(super) goal: Option<GoalMsg>,
     status: Option<StatusMsg>,
     pub(super) goals_received: Vec<GoalMsg>,
     applied_seq: Option<u32>,
@@ -557,7 +558,7 @@ impl<'l, B: Base> Bridge<'l, B> {
 
     /// Until a session is open. `Err` on an incompatible node, or no node answering the first
     /// `Hello`s for [`BridgeOptions::first_hello_timeout`]; `Ok(false)` if told to stop.
-    fn await_session(&mut self) -> Result<bool, BridgeError> {
+    pub(super) fn await_session(&mut self) -> Result<bool, BridgeError> {
         while !self.open {
             if let Some(e) = self.incompatible {
                 return Err(BridgeError::Incompatible(e));
@@ -575,7 +576,7 @@ impl<'l, B: Base> Bridge<'l, B> {
 
     /// Opens the session, sends the configuration, measures the link. `Err` if the node refuses
     /// the configuration as out of range.
-    fn setup(&mut self, config: &ConfigMsg) -> Result<(), BridgeError> {
+    pub(super) fn setup(&mut self, config: &ConfigMsg) -> Result<(), BridgeError> {
         if !self.await_session()? {
             return Err(BridgeError::NoSession);
         }
@@ -624,7 +625,7 @@ impl<'l, B: Base> Bridge<'l, B> {
 
     /// While exploring, the status counts `goals` goals and the current one has that `seq`: it must
     /// be here (none yet if the count is 0, e.g. exploring without a valid pose).
-    fn goal_consistent(&self, s: &StatusMsg) -> bool {
+    pub(super) fn goal_consistent(&self, s: &StatusMsg) -> bool {
         s.mode != WireMode::Exploring || s.goals == 0 || self.goal.as_ref().is_some_and(|g| g.seq == s.goals)
     }
 }
@@ -644,350 +645,9 @@ pub(super) fn resume_from(path: &[[f64; 2]], p: [f64; 2]) -> Vec<[f64; 2]> {
     }
 }
 
-/// Records a goal applied to the base in the run's decision list (once per `seq`: a goal resumed
-/// after a lost link is the same decision).
-fn note_goal(goals: &mut Vec<((i32, i32), BinaryAngle)>, recorded: &mut Option<u32>, geom: &GridGeometry, g: &GoalMsg) {
-    if *recorded != Some(g.seq) {
-        *recorded = Some(g.seq);
-        goals.push((geom.cell_of(Meters::from_bits(g.x), Meters::from_bits(g.y)), BinaryAngle(g.theta)));
-    }
-}
-
-fn round3(v: f64) -> f64 {
-    (v * 1000.0).round() / 1000.0
-}
-
-/// Runs the simulated search `spec` through the node at the other end of `link` until the
-/// target is found, the search is exhausted, the time limit passes, or `stop` is set
-/// ([`super::run_bridge`] with [`super::Source::Sim`]).
-pub fn run_sim(link: &mut dyn Link, spec: SearchSpec, opts: &BridgeOptions, stop: &AtomicBool) -> Result<BridgeResult, BridgeError> {
-    let cfg = controller_config(&spec.controller, &spec.world, spec.planner);
-    let geom = GridGeometry { origin_x: cfg.origin_x_m, origin_y: cfg.origin_y_m };
-    let sim = Sim::new(spec.world.clone(), spec.sim.clone(), spec.seed);
-    let mut b = Bridge::new(link, opts, stop, sim);
-    let config_msg = ConfigMsg::from_config(&cfg);
-    b.setup(&config_msg)?;
-
-    let start = b.sim.pose();
-    let limit = spec.world.time_limit_s;
-    // As in the in-process loop: ground-truth labels unless `lives` runs the node's classifier
-    // (then the node must have been started with the same model, see `NodeOptions::model`).
-    let classifier = spec.planner.uses_classifier() && spec.model.is_some();
-    let use_labels = !classifier && spec.planner.uses_labels();
-    let mut classifier_check = ClassifierCheck { expected: classifier, seen: false };
-    let mut trajectory = vec![[start[0], start[1]]];
-    let mut goals = Vec::new();
-    let mut recorded_seq = None;
-    let (mut ticks, mut blocked_count, mut collisions) = (0u32, 0u32, 0u32);
-    let mut tally = RunTally::new(spec.sim.camera_range_m);
-    let mut base_blocked = false;
-    let mut outcome = "time-limit";
-    let mut need_start = true;
-    let realtime = opts.mode == TimeMode::RealTime;
-    let mut next_tick = Instant::now();
-
-    'run: loop {
-        if b.should_stop() {
-            outcome = "stopped";
-            break;
-        }
-        if let Some(e) = b.incompatible {
-            return Err(BridgeError::Incompatible(e));
-        }
-        if let Some(field) = b.config_invalid {
-            return Err(BridgeError::config_invalid(&config_msg, field));
-        }
-        if realtime && Instant::now() < next_tick {
-            // Between ticks: apply what the node says.
-            let wait = next_tick.saturating_duration_since(Instant::now()).min(Duration::from_millis(20));
-            for m in b.poll(wait) {
-                match m {
-                    CoreToHost::Goal(g) if b.open && b.apply_goal(&g) => note_goal(&mut goals, &mut recorded_seq, &geom, &g),
-                    CoreToHost::Stop(_) => b.sim.stop_base(),
-                    CoreToHost::Status(s) => {
-                        classifier_check.observe(&s)?;
-                        need_start = s.mode == WireMode::Idle;
-                        b.sim.set_goal_gaze(s.gaze.map(|h| BinaryAngle(h).to_radians()));
-                        match s.mode {
-                            WireMode::TargetFound => {
-                                outcome = "found";
-                                break 'run;
-                            }
-                            WireMode::Exhausted => {
-                                outcome = "exhausted";
-                                break 'run;
-                            }
-                            _ => {}
-                        }
-                    }
-                    _ => {}
-                }
-            }
-            continue;
-        }
-
-        // A tick: the base moved for a period (real time), then sense and send.
-        if realtime && ticks > 0 {
-            let before = b.sim.pose();
-            let moved = step_base(&mut b.sim, opts.period.as_secs_f64());
-            tally.step(before, b.sim.pose(), opts.period.as_secs_f64());
-            base_blocked = moved.blocked;
-            blocked_count += moved.blocked as u32;
-            trajectory.push(moved.position);
-            collisions += moved.collided as u32;
-            if b.sim.time_s() >= limit {
-                break;
-            }
-        }
-        let now_us = if realtime { (b.sim.time_s() * 1e6).round() as u64 } else { ticks as u64 * TICK_US };
-        // The controller is given the laser's pose in the odometry frame (`Sim::controller_pose`).
-        let p = b.sim.controller_pose();
-        let scan = b.sim.scan();
-        tally.scan(now_us, &scan);
-        let encoded = encode_sim_scan(&scan);
-        let detected = b.sim.detect().is_some();
-        let scan_msg = match ScanMsg::from_scan_input(now_us, &encoded.input(use_labels)) {
-            Ok(m) => m,
-            Err(e) => panic!("the simulator's {} beams must fit a scan frame: {e:?}", encoded.ranges_mm.len()),
-        };
-        let mut batch = Vec::new();
-        if need_start {
-            if ticks > 0 {
-                // The node is idle (it restarted, or missed Start): configure it again.
-                batch.extend(b.frame(&HostToCore::Config(config_msg)));
-            }
-            batch.extend(b.frame(&HostToCore::Command(WireCommand::Start)));
-        }
-        batch.extend(b.frame(&HostToCore::BaseStatus(BaseStatus { blocked: base_blocked })));
-        let pose = Pose2::from_f64(p[0], p[1], p[2]).unwrap_or_default();
-        batch.extend(b.frame(&HostToCore::Pose(PoseMsg::from_pose(now_us, &pose))));
-        if detected {
-            batch.extend(b.frame(&HostToCore::Detection(DetectionMsg { t_us: now_us, position: None })));
-        }
-        if let Some(Ok(mut o)) = opts.observer.as_ref().map(|o| o.0.lock()) {
-            let detection = detected.then_some(DetectionMsg { t_us: now_us, position: None });
-            o.tick(&PoseMsg::from_pose(now_us, &pose), &scan_msg, detection.as_ref());
-        }
-        let before = batch.len();
-        if opts.scan_segment_beams > 0 {
-            let segments = scan_msg.segments(opts.scan_segment_beams);
-            b.st.scan_frames = segments.len();
-            for seg in segments {
-                batch.extend(b.frame(&HostToCore::ScanSegment(seg)));
-            }
-        } else {
-            b.st.scan_frames = 1;
-            batch.extend(b.frame(&HostToCore::Scan(scan_msg)));
-        }
-        b.st.scan_frame_bytes = batch.len() - before;
-
-        if realtime {
-            if b.open {
-                // Every batch closes with a heartbeat: a node in real time echoes it at once (the
-                // link's round trip), and a node started in lockstep ticks on it, at this batch's
-                // time, instead of once per probe.
-                let (_, hb) = b.probe(now_us, true);
-                batch.extend(hb);
-                b.send(&batch);
-            }
-            ticks += 1;
-            super::advance_deadline(&mut next_tick, opts.period, Instant::now());
-            if let Some(pr) = &opts.progress {
-                pr.store(ticks, Ordering::Relaxed);
-            }
-            continue;
-        }
-
-        // Lockstep: send until the node has answered this batch. Its status may come with any
-        // attempt (a retry of a ticked batch brings the same outputs again); the goal it counts
-        // too, possibly with another attempt.
-        let mut attempts = 0u32;
-        let mut status_t: Option<StatusMsg> = None;
-        let mut answers = 0u32;
-        // Attempts in a row the node echoed without ticking (a damaged batch is echoed without
-        // a tick too, but never this many times running: the node ticks a partial scan after
-        // a few beats).
-        let mut echoed_idle = 0u32;
-        let mut idle_since = Instant::now();
-        // Statuses of other times meanwhile (a late answer to the last batch is one or two).
-        let mut other_statuses = 0u32;
-        let status = loop {
-            if !b.await_session().unwrap_or(false) || b.should_stop() {
-                if let Some(e) = b.incompatible {
-                    return Err(BridgeError::Incompatible(e));
-                }
-                outcome = "stopped";
-                break 'run;
-            }
-            if attempts > 0 {
-                b.st.retries += 1;
-            }
-            attempts += 1;
-            let (seq, hb) = b.probe(now_us, false);
-            let mut bytes = batch.clone();
-            bytes.extend(hb);
-            b.send(&bytes);
-            let sent = Instant::now();
-            let mut echoed = false;
-            let mut done = false;
-            while b.open && !echoed && !done && sent.elapsed() < b.opts.retry_timeout && !b.should_stop() {
-                for m in b.poll(Duration::from_millis(20)) {
-                    match m {
-                        CoreToHost::Status(s) if s.t_us == now_us => status_t = Some(s),
-                        CoreToHost::Status(_) => other_statuses += 1,
-                        // The echo of any attempt at this batch closes its answer.
-                        CoreToHost::Heartbeat(h) if h.t_us == now_us && h.seq & SEQ_BASE != 0 => echoed = h.seq <= seq,
-                        _ => {}
-                    }
-                }
-                // The tick's status and the goal it counts are here: done, echo or not.
-                done = status_t.is_some_and(|s| b.goal_consistent(&s));
-            }
-            echoed_idle = if echoed && status_t.is_none() { echoed_idle + 1 } else { 0 };
-            if echoed_idle <= 1 {
-                idle_since = sent;
-            }
-            // (Echoes without ticks and no other statuses: a line too damaged for a whole batch to
-            // arrive, which retries heal, or a node that ran before, which says so itself.)
-            if other_statuses >= 5 && echoed_idle >= NOT_TICKING_ECHOES && idle_since.elapsed() >= NOT_TICKING_FOR {
-                return Err(BridgeError::NotLockstep { t_us: now_us, echoed: echoed_idle });
-            }
-            if let Some(s) = status_t {
-                answers += 1;
-                // (After many answers without the goal — a long path on a very noisy line — go
-                // on with the last good one rather than retry for ever: the next tick asks
-                // again.)
-                if b.goal_consistent(&s) || answers >= 16 {
-                    break s;
-                }
-            }
-        };
-        ticks += 1;
-        if let Some(pr) = &opts.progress {
-            pr.store(ticks, Ordering::Relaxed);
-        }
-        classifier_check.observe(&status)?;
-        need_start = status.mode == WireMode::Idle;
-        match status.mode {
-            WireMode::TargetFound => {
-                outcome = "found";
-                break;
-            }
-            WireMode::Exhausted => {
-                outcome = "exhausted";
-                break;
-            }
-            _ => {}
-        }
-        if status.mode != WireMode::Exploring {
-            b.sim.stop_base();
-        } else if let Some(g) = b.goal.clone() {
-            if b.apply_goal(&g) {
-                note_goal(&mut goals, &mut recorded_seq, &geom, &g);
-            }
-        }
-        // Where the camera looks while walking (as the in-process loop does).
-        b.sim.set_goal_gaze(status.gaze.map(|h| BinaryAngle(h).to_radians()));
-        let before = b.sim.pose();
-        let moved = step_base(&mut b.sim, TICK_US as f64 / 1e6);
-        tally.step(before, b.sim.pose(), TICK_US as f64 / 1e6);
-        base_blocked = moved.blocked;
-        blocked_count += moved.blocked as u32;
-        trajectory.push(moved.position);
-        collisions += moved.collided as u32;
-        if b.sim.time_s() >= limit {
-            break;
-        }
-    }
-
-    let found = outcome == "found";
-    let status = b.st.node_status;
-    b.finish_stats();
-    let result = SearchResult {
-        world: spec.world_name.clone(),
-        scenario: spec.scenario_label().to_string(),
-        planner: spec.planner.to_string(),
-        seed: spec.seed,
-        found,
-        time_s: if found { round3(b.sim.time_s()) } else { limit },
-        path_m: round3(b.sim.path_length_m()),
-        ticks,
-        time_limit_s: limit,
-        outcome: outcome.to_string(),
-        goals: status.map_or(0, |s| s.goals),
-        blacklisted: status.map_or(0, |s| s.blacklisted),
-        blocked: blocked_count,
-        collisions,
-        labels: spec.planner.label_source(classifier).to_string(),
-        targets: b.sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
-        motion: Some(tally.motion()),
-        lidar_saw_target_s: tally.lidar_saw_target_s(),
-        target_in_camera_reach_s: tally.target_in_camera_reach_s(),
-        // The core's labels stay in the node: the link carries no per-beam labels back.
-        classifier: None,
-        sim: crate::search::SimSettings::changed(&spec.sim),
-        oracle_s: None,
-    };
-    Ok(BridgeResult {
-        result,
-        goals,
-        goals_received: b.goals_received,
-        stats: b.st,
-        events: b.events,
-        trajectory,
-        wall_s: b.started.elapsed().as_secs_f64(),
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::link::{mem_pair, Link};
-    use crate::sim::{Scenario, World};
-    use firmware::protocol::{AckReason, CoreDecoder, HelloAck, PROTOCOL_VERSION};
-
-    #[test]
-    fn hello_is_repeated_until_answered_and_an_incompatible_node_is_refused_clearly() {
-        let (mut node_end, mut bridge_end) = mem_pair();
-        // A node of version 99 that answers only the third Hello.
-        let fake = std::thread::spawn(move || {
-            let mut dec = CoreDecoder::new();
-            let mut buf = [0u8; 4096];
-            let mut hellos = 0;
-            let t0 = Instant::now();
-            while hellos < 3 && t0.elapsed() < Duration::from_secs(5) {
-                let n = node_end.read(&mut buf, Duration::from_millis(10)).unwrap_or(0);
-                for m in dec.feed(&buf[..n]).flatten() {
-                    if let HostToCore::Hello(h) = m {
-                        assert_eq!(h.version, PROTOCOL_VERSION);
-                        hellos += 1;
-                    }
-                }
-            }
-            let ack = HelloAck { version: 99, accepted: false, reason: AckReason::VersionMismatch };
-            let mut out = [0u8; 64];
-            node_end.write_all(encode(&CoreToHost::HelloAck(ack), &mut out).unwrap()).unwrap();
-            std::thread::sleep(Duration::from_millis(200));
-            hellos
-        });
-        let spec = SearchSpec::new(
-            "apartment",
-            World::builtin("apartment", Scenario::Easy).unwrap(),
-            Scenario::Easy,
-            crate::search::PlannerChoice::LivesGt,
-            1,
-        );
-        let opts = BridgeOptions {
-            hello_interval: Duration::from_millis(50),
-            max_wall: Some(Duration::from_secs(5)),
-            ..BridgeOptions::new(TimeMode::Lockstep)
-        };
-        let err = run_sim(&mut bridge_end, spec, &opts, &AtomicBool::new(false)).err().expect("refused");
-        assert_eq!(err, BridgeError::Incompatible(IncompatiblePeer { ours: PROTOCOL_VERSION, theirs: 99 }));
-        let text = err.to_string();
-        assert!(text.contains("v99") && text.contains("incompatible"), "{text}");
-        assert_eq!(fake.join().unwrap(), 3);
-    }
 
     #[test]
     fn an_interrupted_path_resumes_past_what_was_driven() {

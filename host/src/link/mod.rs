@@ -22,6 +22,7 @@ pub mod bridge;
 pub mod fault;
 pub mod node;
 pub mod robot;
+pub mod sim_bridge;
 pub mod source;
 
 pub use bridge::{BridgeError, BridgeEvent, BridgeEventKind, BridgeOptions, BridgeResult, LinkStats};

@@ -30,7 +30,6 @@ use super::{Link, Summary, TimeMode};
 use crate::range::{EncodedScan, RangeLimits};
 use crate::search::{PlannerChoice, SearchResult};
 use crate::sensors::vlp16::{PlanarScan, Vlp16Config, Vlp16Udp};
-use crate::sim::Sim;
 use firmware::protocol::{
     BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, GoalMsg, HostToCore, PoseMsg, ScanMsg, StatusMsg, WireCommand, WireMode,
     MAX_WIRE_BEAMS,
@@ -45,22 +44,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, SyncSender};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-
-impl Base for Sim {
-    fn time_s(&self) -> f64 {
-        Sim::time_s(self)
-    }
-    fn pose(&self) -> [f64; 3] {
-        Sim::pose(self)
-    }
-    fn set_path(&mut self, path: &[[f64; 2]], final_yaw: Option<f64>) {
-        // The node's goals are in its frame: the laser's, in the (drifting) odometry frame.
-        Sim::set_goal_path(self, path, final_yaw)
-    }
-    fn stop_base(&mut self) {
-        Sim::stop_base(self)
-    }
-}
 
 /// Where the robot's scans come from.
 #[derive(Clone, Debug, PartialEq)]
@@ -272,8 +255,7 @@ fn stamp(started: Instant, at: Instant) -> u64 {
 
 /// The grid origin for a robot first seen at `(x, y)`: centred, on the 0.1 m lattice.
 fn origin_for(x: f64, y: f64) -> [f64; 2] {
-    let half = firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64 / 2.0;
-    [((x - half) * 10.0).round() / 10.0, ((y - half) * 10.0).round() / 10.0]
+    crate::run::centred_origin([x, y])
 }
 
 /// Runs the search of a robot behind the base adapter through the node at the other end of

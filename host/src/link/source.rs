@@ -1,7 +1,8 @@
 //! Where a bridge's data comes from, and the one entry point that runs either: the simulator
 //! ([`super::bridge`]) or a real robot behind the base adapter ([`super::robot`]).
 
-use super::bridge::{run_sim, BridgeError, BridgeOptions, BridgeResult};
+use super::bridge::{BridgeError, BridgeOptions, BridgeResult};
+use super::sim_bridge::run_sim;
 use super::robot::{run_robot, RobotSpec};
 use super::Link;
 use crate::search::SearchSpec;

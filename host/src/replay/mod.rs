@@ -49,6 +49,7 @@ mod command;
 mod error;
 mod read;
 mod run;
+mod source;
 pub use command::*;
 pub use error::*;
 pub use read::*;

@@ -1,9 +1,10 @@
 //! Running the controller over a log ([`replay_log`]): the options, the grid's placement, the
 //! report and its summary line.
 
+use super::source::LogSource;
 use super::*;
-use crate::range::{EncodedScan, RangeLimits};
-use firmware::{Command, Config, Controller, Inputs, Mode, Pose2};
+use crate::run::{drive, Answer, Frame, InProcess};
+use firmware::{Config, Controller};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -408,76 +409,32 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         None => None,
     };
     let mut record_error: Option<String> = None;
-    let t0 = log.scans[0].t_s;
     // Time stamps that do not advance (the CSAIL log prints them with 6 significant digits, i.e.
     // in steps of 10 000 s) cannot drive the controller's clock: replay one scan per tick instead.
     let distinct = 1 + log.scans.windows(2).filter(|w| w[1].t_s != w[0].t_s).count();
     let synthetic_time = log.scans.len() > 1 && 2 * distinct < log.scans.len();
-    let mut rejected = Rejected {
-        no_pose: log.no_pose as u32,
-        no_odometry_yet: log.no_odometry_yet as u32,
-        stale_pose: log.stale_pose as u32,
-        stamp_backwards: log.scan_stamp_backwards as u32,
-        ..Rejected::default()
-    };
+    let mut source = LogSource::new(&log.scans, &stray, synthetic_time);
     let mut goals = Vec::new();
     let mut trajectory = Vec::new();
     let mut poses = Vec::new();
     let (mut first_pose, mut last_pose) = (None, [0.0; 3]);
-    let mut last_us = 0u64;
-    let mut last_start: Option<u64> = None;
-    let mut status = firmware::Status::default();
-    let mut strays = Vec::new();
+    let mut outside_grid = 0u32;
+    let mut before = (firmware::Status::default(), ctrl.matcher.stats.matched);
     let mut controller_rejections: BTreeMap<&'static str, u32> = BTreeMap::new();
     let (mut shifts, mut turns, mut scores) = (Vec::new(), Vec::new(), [0.0f64; 2]);
-    for (i, s) in log.scans.iter().enumerate() {
-        let t_us = if synthetic_time { i as u64 * crate::search::TICK_US } else { ((s.t_s - t0) * 1e6).round().max(0.0) as u64 };
-        let now_us = last_us.max(t_us);
-        last_us = now_us;
-        if stray[i] {
-            rejected.stray_pose += 1;
-            if strays.len() < BAD_RECORDS_KEPT {
-                strays.push(format!("{} at ({}, {})", s.at, compact(s.pose[0]), compact(s.pose[1])));
-            }
-            continue;
-        }
-        // A non-finite pose: no pose to map the scan at; non-finite beam angles: no beams.
-        let Some(pose) = Pose2::from_f64(s.pose[0], s.pose[1], s.pose[2]) else {
-            rejected.no_pose += 1;
-            continue;
-        };
-        let limits = RangeLimits::new(s.range_limits_m[0], s.range_limits_m[1]);
-        let Some(encoded) = EncodedScan::new(s.angle_min, s.angle_increment, s.ranges_m.iter().map(|&r| r as f64), &limits) else {
-            rejected.bad_angles += 1;
-            continue;
-        };
-        let start = match last_start {
-            None => true,
-            Some(t) => ctrl.mode() == Mode::Exhausted && now_us.saturating_sub(t) >= cfg.replan_interval_us,
-        };
-        if start {
-            last_start = Some(now_us);
-        }
-        let inputs = Inputs {
-            pose: Some(pose),
-            scan: Some(encoded.input(false)),
-            detection: None,
-            command: start.then_some(Command::Start),
-            base_blocked: false,
-        };
-        let refused_before = status.poses_rejected;
-        let scans_refused_before = status.scans_rejected;
-        let matched_before = ctrl.matcher.stats.matched;
-        let out = ctrl.tick(now_us, &inputs);
-        status = out.status;
+    let mut watch = |src: &LogSource<'_>, frame: &Frame, brain: &InProcess, answer: &Answer| {
+        let (ctrl, Some(out)) = (&brain.ctrl, brain.outputs()) else { return };
+        let (refused_before, matched_before) = before;
+        let status = out.status;
         let ms = &ctrl.matcher.stats;
+        before = (status, ms.matched);
         if ms.matched > matched_before {
             shifts.push(ms.last_move.dist_mm as f64);
             turns.push(ms.last_move.turn_mdeg as f64 / 1000.0);
             scores[0] += ms.last_predicted_per_mille as f64;
             scores[1] += ms.last_score_per_mille as f64;
         }
-        if status.scans_rejected > scans_refused_before {
+        if status.scans_rejected > refused_before.scans_rejected {
             let reason = match status.last_scan_error {
                 Some(firmware::ScanError::Empty) => "empty",
                 Some(firmware::ScanError::TooManyBeams(_)) => "too_many_beams",
@@ -488,17 +445,18 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             };
             *controller_rejections.entry(reason).or_insert(0) += 1;
         }
-        if status.poses_rejected > refused_before {
+        if status.poses_rejected > refused_before.poses_rejected {
             // A jump past the window's edge (in the controller's map frame): the core refused
             // the pose and did not draw the scan.
-            rejected.outside_grid += 1;
-            continue;
+            outside_grid += 1;
+            return;
         }
         if let (Some(rec), None) = (recorder.as_mut(), &record_error) {
-            if let Err(e) = rec.record_controller_tick(now_us, &inputs, &out, &ctrl) {
+            if let Err(e) = rec.record_controller_tick(frame.t_us, &frame.inputs(answer.command), out, ctrl) {
                 record_error = Some(e.to_string());
             }
         }
+        let s = src.record();
         trajectory.push([s.pose[0], s.pose[1]]);
         let used = ctrl.pose().map_or(s.pose, |p| {
             let (x, y, th) = p.to_f64();
@@ -509,7 +467,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         last_pose = s.pose;
         if let (true, Some(g)) = (out.new_goal, &out.goal) {
             goals.push(GoalRecord {
-                t_s: round3(now_us as f64 / 1e6),
+                t_s: round3(frame.t_us as f64 / 1e6),
                 x: round3(g.pose.x.to_num::<f64>()),
                 y: round3(g.pose.y.to_num::<f64>()),
                 heading_deg: round3(g.pose.theta.to_radians().to_degrees()),
@@ -519,7 +477,22 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
                 robot: [round3(s.pose[0]), round3(s.pose[1])],
             });
         }
-    }
+    };
+    let mut brain = InProcess::restarting(ctrl, cfg.replan_interval_us);
+    let Ok(_) = drive(&mut source, &mut brain, &mut [&mut watch]);
+    let LogSource { stray_pose, no_pose, bad_angles, strays, .. } = source;
+    let mut rejected = Rejected {
+        outside_grid,
+        no_pose: log.no_pose as u32 + no_pose,
+        bad_angles,
+        stray_pose,
+        no_odometry_yet: log.no_odometry_yet as u32,
+        stale_pose: log.stale_pose as u32,
+        stamp_backwards: log.scan_stamp_backwards as u32,
+        ..Rejected::default()
+    };
+    let ctrl = brain.ctrl;
+    let status = before.0;
     rejected.controller = status.scans_rejected;
     let record = recorder.zip(opts.record.as_ref()).map(|(rec, path)| {
         let messages = rec.summary().total_messages();
@@ -549,9 +522,9 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             "the log's time stamps do not advance ({distinct} distinct among {} scans): replayed at one scan per {} ms, \
              and the duration is that of the replayed scans",
             log.scans.len(),
-            crate::search::TICK_US / 1000
+            crate::run::TICK_US / 1000
         ));
-        (log.scans.len() - 1) as f64 * crate::search::TICK_US as f64 / 1e6
+        (log.scans.len() - 1) as f64 * crate::run::TICK_US as f64 / 1e6
     } else {
         log.span_s.map_or(0.0, |(a, b)| b - a)
     };

@@ -43,7 +43,7 @@ pub fn label_sign(code: u8) -> f32 {
 
 /// The simulator's range limits, as the search loop encodes its scans.
 pub(super) fn sim_limits() -> RangeLimits {
-    crate::search::sim_limits(&dataset::sim_config())
+    crate::run::sim_limits(&dataset::sim_config())
 }
 
 pub(super) fn pose_of(p: [f64; 3]) -> Result<Pose2> {
