@@ -478,7 +478,7 @@ enum Cmd {
         out: PathBuf,
     },
     /// List the controller parameters `--set` accepts, with their defaults.
-    Params,
+    Params(host::overrides::ParamsArgs),
     /// Replay a recorded log through the controller (no base to move): CARMEN logs (FLASER,
     /// ROBOTLASER1, ODOM; plain or gzip) and ROS 2 bags (MCAP or sqlite3) (docs/replay.md).
     Replay(host::replay::ReplayArgs),
@@ -1452,30 +1452,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
             load_spec(&RunArgs { world: world.to_string(), scenario, planner, seed })
         }),
         Cmd::ExportBag(args) => host::export_bag::run_command(&args),
-        Cmd::Params => {
-            let w = host::overrides::NAMES.iter().chain(host::overrides::SIM_NAMES).map(|n| n.0.len()).max().unwrap_or(0);
-            say!("The controller (`--set NAME=VALUE` on search, eval, replay, bridge; a value outside the core's");
-            say!("range is refused and the error gives the range):");
-            say!();
-            say!("  {:w$}  {:>8}  meaning", "NAME", "DEFAULT");
-            for (name, what) in host::overrides::NAMES {
-                let d = host::overrides::get(&firmware::Config::DEFAULT, name).unwrap_or_default();
-                say!("  {name:w$}  {d:>8}  {what}");
-            }
-            say!();
-            say!("The simulated robot (`--sim NAME=VALUE` on search, eval, bridge --source sim):");
-            say!();
-            say!("  {:w$}  {:>8}  meaning", "NAME", "DEFAULT");
-            let sim = host::search::default_sim();
-            for (name, what) in host::overrides::SIM_NAMES {
-                let d = host::overrides::get_sim(&sim, name).unwrap_or_default();
-                say!("  {name:w$}  {d:>8}  {what}");
-            }
-            say!();
-            say!("Everything else is fixed at build time: firmware/src/config.rs (`Config::DEFAULT`) and");
-            say!("firmware/src/capacity.rs.");
-            Ok(ExitCode::SUCCESS)
-        }
+        Cmd::Params(args) => host::overrides::run_params(&args),
         Cmd::Bench { reps, explore_s, searches } => {
             host::bench::run(reps, explore_s, searches);
             Ok(ExitCode::SUCCESS)

@@ -296,4 +296,56 @@ mod tests {
         let e = Config { camera_range_m: Meters::ZERO, ..Config::DEFAULT }.validate().unwrap_err();
         assert_eq!(std::format!("{e}"), "`camera_range_m` must be in (0, 51.2] m");
     }
+
+    /// Numbers to try for `p`: its type's ends, those around zero and around its default.
+    fn candidates(p: &ParamInfo, default: i64) -> impl Iterator<Item = i64> + '_ {
+        let (lo, hi) = p.raw_range;
+        [lo, hi, -1, 0, 1, 2, default.saturating_sub(1), default.saturating_add(1)].into_iter().filter(move |v| (lo..=hi).contains(v))
+    }
+
+    /// `Config::DEFAULT` with `p` set to `raw`, if its type holds it.
+    fn with(p: &ParamInfo, raw: i64) -> Option<Config> {
+        let mut c = Config::DEFAULT;
+        (p.set)(&mut c, raw).then_some(c)
+    }
+
+    /// `c` after crossing the wire: encoded by postcard and decoded again.
+    fn across_the_wire(c: &Config) -> Config {
+        let mut buf = [0u8; 512];
+        let bytes = postcard::to_slice(&ConfigMsg::from_config(c), &mut buf).unwrap();
+        postcard::from_bytes::<ConfigMsg>(bytes).unwrap().config()
+    }
+
+    #[test]
+    fn every_parameter_of_the_table_reaches_every_form() {
+        assert_eq!(PARAMS.len(), ConfigMsg::FIELDS.len());
+        for (i, p) in PARAMS.iter().enumerate() {
+            assert_eq!(ConfigMsg::field_index(p.field), Some(i as u8), "{}: row {i} is wire field {i}", p.field);
+            let Some(default) = (p.get)(&Config::DEFAULT) else {
+                // The budgets: not one number, but they cross the wire like the rest.
+                assert_eq!(p.unit, Unit::Budgets);
+                let c = Config { budgets: StageBudgets { plan_ops: 7, ..StageBudgets::DEFAULT }, ..Config::DEFAULT };
+                assert_eq!(across_the_wire(&c), c);
+                continue;
+            };
+            // A value in range other than the default crosses the wire and reads back.
+            let v = candidates(p, default)
+                .find(|&v| v != default && with(p, v).is_some_and(|c| c.validate().is_ok()))
+                .unwrap_or_else(|| panic!("{}: no value in range but the default", p.field));
+            let c = with(p, v).unwrap();
+            assert_ne!(c, Config::DEFAULT, "{}: set changes the field", p.field);
+            assert_eq!(across_the_wire(&c), c, "{} = {v}", p.field);
+            assert_eq!((p.get)(&across_the_wire(&c)), Some(v), "{}", p.field);
+            // A value outside its range is refused, naming it and its range; a field without a
+            // range takes any value of its type.
+            let refused = candidates(p, default).filter_map(|v| with(p, v)?.validate().err()).collect::<std::vec::Vec<_>>();
+            match p.allowed {
+                Some(allowed) => {
+                    let e = refused.first().unwrap_or_else(|| panic!("{}: nothing is out of its range", p.field));
+                    assert_eq!(*e, ConfigError { field: p.field, allowed }, "{}", p.field);
+                }
+                None => assert_eq!(refused, [], "{} has no range", p.field),
+            }
+        }
+    }
 }

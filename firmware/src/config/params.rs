@@ -23,7 +23,7 @@ macro_rules! config_params {
     ($gen:ident) => {
         $gen! {
             /// Viewpoint-selection rule. Default [`PlannerKind::Lives`].
-            planner: PlannerKind = PlannerKind::Lives, Planner, "viewpoint-selection rule (`--planner`)";
+            planner: PlannerKind = PlannerKind::Lives, Planner, "viewpoint-selection rule";
             /// World coordinates of the grids' lower-left corner (the search area, given at start).
             /// At most [`MAX_ORIGIN_M`] (32 716.8 m), so that the whole grid lies within the range of
             /// [`Meters`].

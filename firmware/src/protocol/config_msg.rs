@@ -75,13 +75,4 @@ mod tests {
         c2.budgets.plan_ops = 1;
         assert_eq!(ConfigMsg::from_config(&c2).config(), c2);
     }
-
-    #[test]
-    fn the_fields_are_the_tables_rows() {
-        assert_eq!(ConfigMsg::FIELDS.len(), 38);
-        for (i, p) in crate::config::PARAMS.iter().enumerate() {
-            assert_eq!(ConfigMsg::FIELDS[i], p.field);
-            assert_eq!(ConfigMsg::field_index(p.field), Some(i as u8));
-        }
-    }
 }

@@ -17,9 +17,9 @@
 //! into [`ScanSegmentMsg`]s of at most [`MAX_SEGMENT_BEAMS`] beams for a noisy line (protocol v2);
 //! the core's [`crate::protocol::Inbox`] puts them back together.
 
+pub use super::config_msg::{BudgetsMsg, ConfigMsg};
 use crate::capacity::{BEAMS, MAX_PATH_WAYPOINTS};
 use crate::config::PlannerKind;
-pub use super::config_msg::{BudgetsMsg, ConfigMsg};
 use crate::controller::{Command, Detection, Mode, Outputs, StageCost, Status};
 use crate::planner::Goal;
 use crate::scan::{BeamLabel, BeamScan, ScanError, ScanInput, RANGE_LIMIT_MM};
