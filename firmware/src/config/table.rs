@@ -57,7 +57,7 @@ pub struct ParamInfo {
     pub allowed: Option<&'static str>,
     /// The name `lives --set` knows it by (`None`: not settable there).
     pub set_name: Option<&'static str>,
-    /// Its type on the wire (`docs/protocol.md`'s words).
+    /// Its type on the wire (the wire column of `docs/params.md`).
     pub wire: &'static str,
     /// The value in `config` as a number (see [`Unit`]); `None` for the budgets.
     pub get: fn(&Config) -> Option<i64>,
@@ -79,7 +79,7 @@ impl ParamInfo {
 pub trait ParamValue: Copy + Sized {
     /// Its form in `ConfigMsg` (postcard-encoded as such).
     type Wire;
-    /// Its wire type in `docs/protocol.md`'s words.
+    /// Its wire type, as `docs/params.md` writes it.
     const WIRE: &'static str;
     /// The least and largest number [`ParamValue::to_raw`] gives.
     const RAW_RANGE: (i64, i64);
@@ -93,31 +93,39 @@ pub trait ParamValue: Copy + Sized {
     fn from_raw(raw: i64) -> Option<Self>;
 }
 
-/// Numbers that are their own wire form.
-macro_rules! plain_values {
-    ($($t:ty: $wire:literal),*) => {$(
+/// Types whose wire form is an integer, which is also the number [`ParamInfo`] hands out:
+/// `type => wire type, its words, to the wire, from the wire`.
+macro_rules! integer_values {
+    ($($t:ty => $wire:ty, $text:literal, $to:expr, $from:expr;)*) => {$(
         impl ParamValue for $t {
-            type Wire = $t;
-            const WIRE: &'static str = $wire;
+            type Wire = $wire;
+            const WIRE: &'static str = $text;
             const RAW_RANGE: (i64, i64) =
-                (<$t>::MIN as i64, if <$t>::MAX as u128 > i64::MAX as u128 { i64::MAX } else { <$t>::MAX as i64 });
-            fn to_wire(self) -> $t {
-                self
+                (<$wire>::MIN as i64, if <$wire>::MAX as u128 > i64::MAX as u128 { i64::MAX } else { <$wire>::MAX as i64 });
+            fn to_wire(self) -> $wire {
+                ($to)(self)
             }
-            fn from_wire(w: $t) -> $t {
-                w
+            fn from_wire(w: $wire) -> $t {
+                ($from)(w)
             }
             fn to_raw(self) -> Option<i64> {
-                i64::try_from(self).ok()
+                i64::try_from(self.to_wire()).ok()
             }
             fn from_raw(raw: i64) -> Option<$t> {
-                <$t>::try_from(raw).ok()
+                <$wire>::try_from(raw).ok().map(Self::from_wire)
             }
         }
     )*};
 }
 
-plain_values!(u8: "`u8`", u16: "`u16`", u64: "`u64`");
+integer_values! {
+    u8 => u8, "`u8`", |v| v, |w| w;
+    u16 => u16, "`u16`", |v| v, |w| w;
+    u64 => u64, "`u64`", |v| v, |w| w;
+    // Metres and weights: their Q16.16 bits.
+    Meters => i32, "Q16", Meters::to_bits, Meters::from_bits;
+    BinaryAngle => i32, "angle", |v: BinaryAngle| v.0, BinaryAngle;
+}
 
 impl ParamValue for bool {
     type Wire = bool;
@@ -133,48 +141,7 @@ impl ParamValue for bool {
         Some(self as i64)
     }
     fn from_raw(raw: i64) -> Option<bool> {
-        match raw {
-            0 => Some(false),
-            1 => Some(true),
-            _ => None,
-        }
-    }
-}
-
-/// Metres and weights: their Q16.16 bits.
-impl ParamValue for Meters {
-    type Wire = i32;
-    const WIRE: &'static str = "Q16";
-    const RAW_RANGE: (i64, i64) = (i32::MIN as i64, i32::MAX as i64);
-    fn to_wire(self) -> i32 {
-        self.to_bits()
-    }
-    fn from_wire(w: i32) -> Meters {
-        Meters::from_bits(w)
-    }
-    fn to_raw(self) -> Option<i64> {
-        Some(self.to_bits() as i64)
-    }
-    fn from_raw(raw: i64) -> Option<Meters> {
-        i32::try_from(raw).ok().map(Meters::from_bits)
-    }
-}
-
-impl ParamValue for BinaryAngle {
-    type Wire = i32;
-    const WIRE: &'static str = "angle";
-    const RAW_RANGE: (i64, i64) = (i32::MIN as i64, i32::MAX as i64);
-    fn to_wire(self) -> i32 {
-        self.0
-    }
-    fn from_wire(w: i32) -> BinaryAngle {
-        BinaryAngle(w)
-    }
-    fn to_raw(self) -> Option<i64> {
-        Some(self.0 as i64)
-    }
-    fn from_raw(raw: i64) -> Option<BinaryAngle> {
-        i32::try_from(raw).ok().map(BinaryAngle)
+        [false, true].get(usize::try_from(raw).ok()?).copied()
     }
 }
 
