@@ -9,6 +9,12 @@
 //! configuration against the ranges written on each field (they keep the core's integer arithmetic
 //! in range and every loop short); [`crate::Controller::set_config`] and the serial node refuse a
 //! configuration that fails it, with a [`ConfigError`] naming the field and its range.
+//!
+//! Each parameter is declared once, as a row of the table in `config/params.rs`: its field, type,
+//! default, unit, range (the check and the words of its error), `lives --set` name and a line of
+//! description. [`Config`], [`Config::DEFAULT`], [`Config::validate`], [`PARAMS`] (which a host
+//! lists and sets through) and the wire's [`crate::protocol::ConfigMsg`] are generated from it;
+//! `docs/params.md` is its listing (`lives params --markdown`).
 
 use crate::capacity::{CELL_MM, GRID_CELLS, MAX_ROBOT_RADIUS_CELLS};
 use crate::controller::Stage;
