@@ -81,16 +81,20 @@ pub trait ParamValue: Copy + Sized {
     type Wire;
     /// Its wire type, as `docs/params.md` writes it.
     const WIRE: &'static str;
-    /// The least and largest number [`ParamValue::to_raw`] gives.
-    const RAW_RANGE: (i64, i64);
+    /// The least and largest number [`ParamValue::to_raw`] gives (none by default).
+    const RAW_RANGE: (i64, i64) = (0, 0);
     /// The wire form (lossless).
     fn to_wire(self) -> Self::Wire;
     /// Back from the wire form (lossless).
     fn from_wire(w: Self::Wire) -> Self;
-    /// As one number (`None`: it is not one number).
-    fn to_raw(self) -> Option<i64>;
-    /// From one number (`None`: out of the type's range).
-    fn from_raw(raw: i64) -> Option<Self>;
+    /// As one number (`None`, the default: it is not one number).
+    fn to_raw(self) -> Option<i64> {
+        None
+    }
+    /// From one number (`None`: out of the type's range, or not one number).
+    fn from_raw(_raw: i64) -> Option<Self> {
+        None
+    }
 }
 
 /// Types whose wire form is an integer, which is also the number [`ParamInfo`] hands out:
@@ -167,18 +171,11 @@ impl ParamValue for PlannerKind {
 impl ParamValue for StageBudgets {
     type Wire = StageBudgets;
     const WIRE: &'static str = "5 × `u32`";
-    const RAW_RANGE: (i64, i64) = (0, 0);
     fn to_wire(self) -> StageBudgets {
         self
     }
     fn from_wire(w: StageBudgets) -> StageBudgets {
         w
-    }
-    fn to_raw(self) -> Option<i64> {
-        None
-    }
-    fn from_raw(_: i64) -> Option<StageBudgets> {
-        None
     }
 }
 
