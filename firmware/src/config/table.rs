@@ -47,7 +47,7 @@ impl Unit {
 /// One row of the parameter table, for a host to list, set and check generically.
 #[derive(Clone, Copy, Debug)]
 pub struct ParamInfo {
-    /// The field of [`Config`] (and of `ConfigMsg`, at this row's index in [`PARAMS`]).
+    /// The field of [`Config`] (and of `ConfigMsg`, at this row's index in [`super::PARAMS`]).
     pub field: &'static str,
     /// How people write its value.
     pub unit: Unit,
