@@ -68,13 +68,6 @@ pub struct ParamInfo {
     pub raw_range: (i64, i64),
 }
 
-impl ParamInfo {
-    /// The row of `field`.
-    pub fn of(field: &str) -> Option<&'static ParamInfo> {
-        super::PARAMS.iter().find(|p| p.field == field)
-    }
-}
-
 /// A type a parameter may have: how it crosses the wire, and the number [`ParamInfo`] gives it as.
 pub trait ParamValue: Copy + Sized {
     /// Its form in `ConfigMsg` (postcard-encoded as such).
