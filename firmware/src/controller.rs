@@ -108,6 +108,37 @@ pub enum Stage {
     Match,
 }
 
+impl Stage {
+    /// The stages with a budget ([`crate::config::StageBudgets`]), in the order of
+    /// [`Status::overruns`] (and of the wire).
+    pub const BUDGETED: [Stage; 5] = [Stage::Lidar, Stage::Visual, Stage::NonMap, Stage::Plan, Stage::Classify];
+
+    /// Its index in [`Status::overruns`] (`None`: it has no budget).
+    pub fn overrun_index(self) -> Option<usize> {
+        Self::BUDGETED.iter().position(|&s| s == self)
+    }
+}
+
+impl StageCost {
+    /// The work of `stage` the last time it ran (`None`: not counted here, scan matching).
+    pub fn of(&self, stage: Stage) -> Option<u32> {
+        let mut c = *self;
+        c.slot(stage).copied()
+    }
+
+    fn slot(&mut self, stage: Stage) -> Option<&mut u32> {
+        match stage {
+            Stage::Classify => Some(&mut self.classify),
+            Stage::Lidar => Some(&mut self.lidar),
+            Stage::Visual => Some(&mut self.visual),
+            Stage::NonMap => Some(&mut self.nonmap),
+            Stage::Plan => Some(&mut self.plan),
+            Stage::Gaze => Some(&mut self.gaze),
+            Stage::Match => None,
+        }
+    }
+}
+
 /// Told when each stage of a tick begins and ends (the MCU times stages with it). It sees no
 /// data and cannot change the tick; `()` observes nothing and compiles away.
 pub trait StageObserver {
@@ -151,13 +182,21 @@ pub struct Status {
     pub watchdog_trips: u32,
     /// Work per stage, last time each ran.
     pub cost: StageCost,
-    /// Stage runs above budget: lidar, visual, nonmap, plan, classify.
+    /// Stage runs above budget, in [`Stage::BUDGETED`]'s order (lidar, visual, nonmap, plan,
+    /// classify): [`Status::overruns_of`].
     pub overruns: [u32; 5],
     /// Dijkstra open-list overflows, cumulative.
     pub heap_overflows: u32,
     /// Which way the camera should face now while walking to the goal (`None`: the direction of
     /// travel, or the goal's heading once near it). See [`crate::Config::gaze`].
     pub gaze: Option<BinaryAngle>,
+}
+
+impl Status {
+    /// How many runs of `stage` were above its budget (0 for a stage without one).
+    pub fn overruns_of(&self, stage: Stage) -> u32 {
+        stage.overrun_index().map_or(0, |i| self.overruns[i])
+    }
 }
 
 /// What the controller asks of the robot this tick.
@@ -352,11 +391,15 @@ impl Controller {
         self.goal = None;
     }
 
-    fn budget_check(&mut self, stage: usize, work: u32) {
-        let b = &self.cfg.budgets;
-        let budget = [b.lidar_cells, b.visual_cells, b.nonmap_ops, b.plan_ops, b.classify_macs][stage];
-        if work > budget {
-            self.status.overruns[stage] += 1;
+    /// `stage` did `work`: its cost, and an overrun if that is above its budget.
+    fn spent(&mut self, stage: Stage, work: u32) {
+        if let Some(cost) = self.status.cost.slot(stage) {
+            *cost = work;
+        }
+        if let (Some(i), Some(budget)) = (stage.overrun_index(), self.cfg.budgets.of(stage)) {
+            if work > budget {
+                self.status.overruns[i] += 1;
+            }
         }
     }
 
@@ -429,19 +472,16 @@ impl Controller {
                         obs.begin(Stage::Classify);
                         let w = self.classifier.label_scan(&pose, &mut self.beams);
                         obs.end(Stage::Classify);
-                        self.status.cost.classify = w;
-                        self.budget_check(4, w);
+                        self.spent(Stage::Classify, w);
                     }
                     obs.begin(Stage::Lidar);
                     let w = self.lidar.integrate(&pose, &self.beams, self.cfg.lidar_max_range_m).work;
                     obs.end(Stage::Lidar);
-                    self.status.cost.lidar = w;
-                    self.budget_check(0, w);
+                    self.spent(Stage::Lidar, w);
                     obs.begin(Stage::Visual);
                     let w = self.visual.integrate(&self.lidar, &pose, self.cfg.camera_fov, self.cfg.camera_range_m);
                     obs.end(Stage::Visual);
-                    self.status.cost.visual = w;
-                    self.budget_check(1, w);
+                    self.spent(Stage::Visual, w);
                     let geom = self.lidar.geom;
                     obs.begin(Stage::NonMap);
                     let mut w = self.nonmap.integrate(
@@ -461,8 +501,7 @@ impl Controller {
                         self.cfg.nonmap_drop_vacated,
                     );
                     obs.end(Stage::NonMap);
-                    self.status.cost.nonmap = w;
-                    self.budget_check(2, w);
+                    self.spent(Stage::NonMap, w);
                 }
                 Err(e) => {
                     self.status.scans_rejected += 1;
@@ -507,7 +546,7 @@ impl Controller {
                     let (gaze, work) = self.planner.gaze(&self.cfg, &self.lidar, &self.visual, &self.nonmap, &pose, last_gaze);
                     obs.end(Stage::Gaze);
                     self.status.gaze = gaze.map(|(h, _)| h);
-                    self.status.cost.gaze = work;
+                    self.spent(Stage::Gaze, work);
                 }
             }
         }
@@ -617,8 +656,7 @@ impl Controller {
                 + self.planner.prepare(&self.cfg, &self.lidar, pose);
             obs.end(Stage::Plan);
             self.plan_prepared = true;
-            self.status.cost.plan = work;
-            self.budget_check(3, work);
+            self.spent(Stage::Plan, work);
             return false;
         }
         self.plan_prepared = false;
@@ -630,8 +668,7 @@ impl Controller {
         let work = self.planner.stats.work;
         self.status.plans += 1;
         self.status.heap_overflows += self.planner.stats.heap_overflows;
-        self.status.cost.plan = work;
-        self.budget_check(3, work);
+        self.spent(Stage::Plan, work);
         match best {
             None if self.goal.is_none() => {
                 self.mode = Mode::Exhausted;

@@ -479,10 +479,13 @@ fn a_stage_over_its_budget_is_counted() {
     let mut c = controller(Config { budgets: tight, ..Config::DEFAULT });
     let out = run_room(&mut c, 5, 5);
     let last = out.last().unwrap();
-    assert_eq!(last.status.overruns[0], 5, "every LiDAR update exceeded 10 cells");
-    assert_eq!(last.status.overruns[1], 0);
-    assert!(last.status.overruns[3] >= 1, "the planning step exceeded 10 work units");
-    assert!(last.status.cost.lidar > 10 && last.status.cost.plan > 10);
+    use firmware::controller::Stage;
+    assert_eq!(last.status.overruns_of(Stage::Lidar), 5, "every LiDAR update exceeded 10 cells");
+    assert_eq!(last.status.overruns_of(Stage::Visual), 0);
+    assert!(last.status.overruns_of(Stage::Plan) >= 1, "the planning step exceeded 10 work units");
+    assert_eq!(last.status.overruns_of(Stage::Gaze), 0, "no budget, no overrun");
+    assert_eq!(last.status.overruns, [5, 0, last.status.overruns_of(Stage::NonMap), last.status.overruns_of(Stage::Plan), 0]);
+    assert!(last.status.cost.of(Stage::Lidar).unwrap() > 10 && last.status.cost.of(Stage::Plan).unwrap() > 10);
     // The stages still ran to completion: a goal exists.
     assert!(last.goal.is_some());
 }

@@ -40,7 +40,7 @@ enum Cmd {
     Eval(cli::eval::EvalArgs),
     Tune(cli::tune::TuneArgs),
     /// List the controller parameters `--set` accepts, with their defaults.
-    Params,
+    Params(host::overrides::ParamsArgs),
     /// Replay a recorded log through the controller (no base to move): CARMEN logs (FLASER,
     /// ROBOTLASER1, ODOM; plain or gzip) and ROS 2 bags (MCAP or sqlite3) (docs/replay.md).
     Replay(host::replay::ReplayArgs),
@@ -104,7 +104,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Trace(cmd) => cli::trace::run(cmd),
         Cmd::Eval(args) => cli::eval::run(args),
         Cmd::Tune(args) => cli::tune::run(args),
-        Cmd::Params => cli::params::run(),
+        Cmd::Params(args) => host::overrides::run_params(&args),
         Cmd::Replay(args) => host::replay::run_command(&args),
         Cmd::Mapcheck(args) => host::mapcheck::run_command(&args, |world, scenario, planner, seed| {
             load_spec(&RunArgs { world: world.to_string(), scenario, planner, seed })

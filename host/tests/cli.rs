@@ -411,3 +411,18 @@ fn lidar_decode_refuses_a_file_without_a_packet_and_names_the_damage_it_skips() 
     assert_eq!((code, stderr.as_str()), (Some(0), ""));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn docs_params_md_is_what_lives_params_markdown_prints() {
+    let out = lives().args(["params", "--markdown"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/params.md");
+    let committed = std::fs::read_to_string(path).unwrap_or_default();
+    assert!(
+        committed == String::from_utf8(out.stdout).unwrap(),
+        "docs/params.md is not what `lives params --markdown` prints: regenerate it with\n  \
+         cargo run --release -p host --bin lives -- params --markdown > docs/params.md"
+    );
+    let text = lives().arg("params").output().unwrap();
+    assert!(text.status.success() && String::from_utf8_lossy(&text.stdout).contains("replan_interval_s"));
+}

@@ -17,8 +17,9 @@
 //! into [`ScanSegmentMsg`]s of at most [`MAX_SEGMENT_BEAMS`] beams for a noisy line (protocol v2);
 //! the core's [`crate::protocol::Inbox`] puts them back together.
 
+pub use super::config_msg::{BudgetsMsg, ConfigMsg};
 use crate::capacity::{BEAMS, MAX_PATH_WAYPOINTS};
-use crate::config::{Config, PlannerKind, StageBudgets, Weight};
+use crate::config::PlannerKind;
 use crate::controller::{Command, Detection, Mode, Outputs, StageCost, Status};
 use crate::planner::Goal;
 use crate::scan::{BeamLabel, BeamScan, ScanError, ScanInput, RANGE_LIMIT_MM};
@@ -578,257 +579,6 @@ impl From<WirePlanner> for PlannerKind {
     }
 }
 
-/// Per-stage work budgets (mirrors [`StageBudgets`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub struct BudgetsMsg {
-    /// [`StageBudgets::lidar_cells`].
-    pub lidar_cells: u32,
-    /// [`StageBudgets::visual_cells`].
-    pub visual_cells: u32,
-    /// [`StageBudgets::nonmap_ops`].
-    pub nonmap_ops: u32,
-    /// [`StageBudgets::plan_ops`].
-    pub plan_ops: u32,
-    /// [`StageBudgets::classify_macs`].
-    pub classify_macs: u32,
-}
-
-/// The controller's whole configuration (mirrors [`Config`] field by field, in its order).
-/// Metres and weights as Q16.16 bits, angles as binary angles, times in microseconds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub struct ConfigMsg {
-    /// [`Config::planner`].
-    pub planner: WirePlanner,
-    /// [`Config::origin_x_m`].
-    pub origin_x_m: i32,
-    /// [`Config::origin_y_m`].
-    pub origin_y_m: i32,
-    /// [`Config::lidar_max_range_m`].
-    pub lidar_max_range_m: i32,
-    /// [`Config::lidar_min_range_m`].
-    pub lidar_min_range_m: i32,
-    /// [`Config::camera_fov`].
-    pub camera_fov: i32,
-    /// [`Config::camera_range_m`].
-    pub camera_range_m: i32,
-    /// [`Config::robot_radius_m`].
-    pub robot_radius_m: i32,
-    /// [`Config::min_frontier_cells`].
-    pub min_frontier_cells: u16,
-    /// [`Config::w_dist_per_m`].
-    pub w_dist_per_m: i32,
-    /// [`Config::w_unknown_per_cell`].
-    pub w_unknown_per_cell: i32,
-    /// [`Config::unseen_unknown_eighths`].
-    pub unseen_unknown_eighths: u8,
-    /// [`Config::w_surface_per_ray`].
-    pub w_surface_per_ray: i32,
-    /// [`Config::w_frontier_per_cell`].
-    pub w_frontier_per_cell: i32,
-    /// [`Config::w_nonmap_per_point`].
-    pub w_nonmap_per_point: i32,
-    /// [`Config::nonmap_block_cap`].
-    pub nonmap_block_cap: u8,
-    /// [`Config::nonmap_view_cap`] (v3).
-    pub nonmap_view_cap: u16,
-    /// [`Config::look_around_here`].
-    pub look_around_here: bool,
-    /// [`Config::gaze`] (v2).
-    pub gaze: bool,
-    /// [`Config::gaze_min_gain`] (v2).
-    pub gaze_min_gain: i32,
-    /// [`Config::nonmap_viewpoints`].
-    pub nonmap_viewpoints: bool,
-    /// [`Config::nonmap_standoff_m`].
-    pub nonmap_standoff_m: i32,
-    /// [`Config::frontier_near_path_blocks`].
-    pub frontier_near_path_blocks: u8,
-    /// [`Config::nonmap_pool_radius_m`].
-    pub nonmap_pool_radius_m: i32,
-    /// [`Config::nonmap_wall_clearance_m`].
-    pub nonmap_wall_clearance_m: i32,
-    /// [`Config::nonmap_drop_vacated`] (v4).
-    pub nonmap_drop_vacated: bool,
-    /// [`Config::replan_interval_us`].
-    pub replan_interval_us: u64,
-    /// [`Config::switch_margin`].
-    pub switch_margin: i32,
-    /// [`Config::goal_tolerance_m`].
-    pub goal_tolerance_m: i32,
-    /// [`Config::goal_heading_tolerance`].
-    pub goal_heading_tolerance: i32,
-    /// [`Config::goal_timeout_us`].
-    pub goal_timeout_us: u64,
-    /// [`Config::blocked_timeout_us`].
-    pub blocked_timeout_us: u64,
-    /// [`Config::progress_m`].
-    pub progress_m: i32,
-    /// [`Config::blacklist_radius_m`].
-    pub blacklist_radius_m: i32,
-    /// [`Config::viewpoint_snap_radius_m`].
-    pub viewpoint_snap_radius_m: i32,
-    /// [`Config::watchdog_us`].
-    pub watchdog_us: u64,
-    /// [`Config::budgets`].
-    pub budgets: BudgetsMsg,
-    /// [`Config::scan_matching`] (v6).
-    pub scan_matching: bool,
-}
-
-impl ConfigMsg {
-    /// The fields' names ([`Config`]'s), in wire order: [`ErrorCode::ConfigInvalid`] names a
-    /// field by its index here.
-    pub const FIELDS: [&'static str; 38] = [
-        "planner",
-        "origin_x_m",
-        "origin_y_m",
-        "lidar_max_range_m",
-        "lidar_min_range_m",
-        "camera_fov",
-        "camera_range_m",
-        "robot_radius_m",
-        "min_frontier_cells",
-        "w_dist_per_m",
-        "w_unknown_per_cell",
-        "unseen_unknown_eighths",
-        "w_surface_per_ray",
-        "w_frontier_per_cell",
-        "w_nonmap_per_point",
-        "nonmap_block_cap",
-        "nonmap_view_cap",
-        "look_around_here",
-        "gaze",
-        "gaze_min_gain",
-        "nonmap_viewpoints",
-        "nonmap_standoff_m",
-        "frontier_near_path_blocks",
-        "nonmap_pool_radius_m",
-        "nonmap_wall_clearance_m",
-        "nonmap_drop_vacated",
-        "replan_interval_us",
-        "switch_margin",
-        "goal_tolerance_m",
-        "goal_heading_tolerance",
-        "goal_timeout_us",
-        "blocked_timeout_us",
-        "progress_m",
-        "blacklist_radius_m",
-        "viewpoint_snap_radius_m",
-        "watchdog_us",
-        "budgets",
-        "scan_matching",
-    ];
-
-    /// The index of the field called `name` in [`ConfigMsg::FIELDS`].
-    pub fn field_index(name: &str) -> Option<u8> {
-        Self::FIELDS.iter().position(|&f| f == name).map(|i| i as u8)
-    }
-
-    /// The wire form of `c` (lossless).
-    pub fn from_config(c: &Config) -> Self {
-        let b = &c.budgets;
-        Self {
-            planner: c.planner.into(),
-            origin_x_m: c.origin_x_m.to_bits(),
-            origin_y_m: c.origin_y_m.to_bits(),
-            lidar_max_range_m: c.lidar_max_range_m.to_bits(),
-            lidar_min_range_m: c.lidar_min_range_m.to_bits(),
-            camera_fov: c.camera_fov.0,
-            camera_range_m: c.camera_range_m.to_bits(),
-            robot_radius_m: c.robot_radius_m.to_bits(),
-            min_frontier_cells: c.min_frontier_cells,
-            w_dist_per_m: c.w_dist_per_m.to_bits(),
-            w_unknown_per_cell: c.w_unknown_per_cell.to_bits(),
-            unseen_unknown_eighths: c.unseen_unknown_eighths,
-            w_surface_per_ray: c.w_surface_per_ray.to_bits(),
-            w_frontier_per_cell: c.w_frontier_per_cell.to_bits(),
-            w_nonmap_per_point: c.w_nonmap_per_point.to_bits(),
-            nonmap_block_cap: c.nonmap_block_cap,
-            nonmap_view_cap: c.nonmap_view_cap,
-            look_around_here: c.look_around_here,
-            gaze: c.gaze,
-            gaze_min_gain: c.gaze_min_gain.to_bits(),
-            nonmap_viewpoints: c.nonmap_viewpoints,
-            nonmap_standoff_m: c.nonmap_standoff_m.to_bits(),
-            frontier_near_path_blocks: c.frontier_near_path_blocks,
-            nonmap_pool_radius_m: c.nonmap_pool_radius_m.to_bits(),
-            nonmap_wall_clearance_m: c.nonmap_wall_clearance_m.to_bits(),
-            nonmap_drop_vacated: c.nonmap_drop_vacated,
-            replan_interval_us: c.replan_interval_us,
-            switch_margin: c.switch_margin.to_bits(),
-            goal_tolerance_m: c.goal_tolerance_m.to_bits(),
-            goal_heading_tolerance: c.goal_heading_tolerance.0,
-            goal_timeout_us: c.goal_timeout_us,
-            blocked_timeout_us: c.blocked_timeout_us,
-            progress_m: c.progress_m.to_bits(),
-            blacklist_radius_m: c.blacklist_radius_m.to_bits(),
-            viewpoint_snap_radius_m: c.viewpoint_snap_radius_m.to_bits(),
-            watchdog_us: c.watchdog_us,
-            budgets: BudgetsMsg {
-                lidar_cells: b.lidar_cells,
-                visual_cells: b.visual_cells,
-                nonmap_ops: b.nonmap_ops,
-                plan_ops: b.plan_ops,
-                classify_macs: b.classify_macs,
-            },
-            scan_matching: c.scan_matching,
-        }
-    }
-
-    /// The core's configuration (lossless).
-    pub fn config(&self) -> Config {
-        let m = Meters::from_bits;
-        let w = Weight::from_bits;
-        let b = &self.budgets;
-        Config {
-            planner: self.planner.into(),
-            origin_x_m: m(self.origin_x_m),
-            origin_y_m: m(self.origin_y_m),
-            lidar_max_range_m: m(self.lidar_max_range_m),
-            lidar_min_range_m: m(self.lidar_min_range_m),
-            camera_fov: BinaryAngle(self.camera_fov),
-            camera_range_m: m(self.camera_range_m),
-            robot_radius_m: m(self.robot_radius_m),
-            min_frontier_cells: self.min_frontier_cells,
-            w_dist_per_m: w(self.w_dist_per_m),
-            w_unknown_per_cell: w(self.w_unknown_per_cell),
-            unseen_unknown_eighths: self.unseen_unknown_eighths,
-            w_surface_per_ray: w(self.w_surface_per_ray),
-            w_frontier_per_cell: w(self.w_frontier_per_cell),
-            w_nonmap_per_point: w(self.w_nonmap_per_point),
-            nonmap_block_cap: self.nonmap_block_cap,
-            nonmap_view_cap: self.nonmap_view_cap,
-            look_around_here: self.look_around_here,
-            gaze: self.gaze,
-            gaze_min_gain: w(self.gaze_min_gain),
-            nonmap_viewpoints: self.nonmap_viewpoints,
-            nonmap_standoff_m: m(self.nonmap_standoff_m),
-            frontier_near_path_blocks: self.frontier_near_path_blocks,
-            nonmap_pool_radius_m: m(self.nonmap_pool_radius_m),
-            nonmap_wall_clearance_m: m(self.nonmap_wall_clearance_m),
-            nonmap_drop_vacated: self.nonmap_drop_vacated,
-            replan_interval_us: self.replan_interval_us,
-            switch_margin: w(self.switch_margin),
-            goal_tolerance_m: m(self.goal_tolerance_m),
-            goal_heading_tolerance: BinaryAngle(self.goal_heading_tolerance),
-            goal_timeout_us: self.goal_timeout_us,
-            blocked_timeout_us: self.blocked_timeout_us,
-            progress_m: m(self.progress_m),
-            blacklist_radius_m: m(self.blacklist_radius_m),
-            viewpoint_snap_radius_m: m(self.viewpoint_snap_radius_m),
-            watchdog_us: self.watchdog_us,
-            budgets: StageBudgets {
-                lidar_cells: b.lidar_cells,
-                visual_cells: b.visual_cells,
-                nonmap_ops: b.nonmap_ops,
-                plan_ops: b.plan_ops,
-                classify_macs: b.classify_macs,
-            },
-            scan_matching: self.scan_matching,
-        }
-    }
-}
-
 /// Everything the host sends. The variant order is the wire tag (0, 1, 2, …): append only, and
 /// bump [`PROTOCOL_VERSION`].
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -1113,7 +863,7 @@ pub enum ErrorCode {
     /// A configuration arrived while the controller was not idle (stop it first).
     ConfigRefused,
     /// A configuration was refused because a field is outside the range the core works in
-    /// ([`Config::validate`]); the controller keeps its configuration (v5).
+    /// ([`crate::Config::validate`]); the controller keeps its configuration (v5).
     ConfigInvalid {
         /// The field: its index in [`ConfigMsg::FIELDS`] (wire order).
         field: u8,
@@ -1372,23 +1122,6 @@ mod tests {
 
         let bad = ScanInput { labels: Some(&labels[..3]), ..input };
         assert_eq!(ScanMsg::from_scan_input(5, &bad), Err(WireError::LabelCountMismatch));
-    }
-
-    #[test]
-    fn the_configuration_crosses_losslessly() {
-        let c = Config::DEFAULT;
-        assert_eq!(ConfigMsg::from_config(&c).config(), c);
-        let mut c2 = Config {
-            planner: PlannerKind::Nearest,
-            origin_x_m: Config::mm(-12_345),
-            camera_fov: BinaryAngle::from_degrees(60),
-            w_nonmap_per_point: Config::weight_milli(-2_500),
-            look_around_here: true,
-            scan_matching: true,
-            ..Config::DEFAULT
-        };
-        c2.budgets.plan_ops = 1;
-        assert_eq!(ConfigMsg::from_config(&c2).config(), c2);
     }
 
     #[test]

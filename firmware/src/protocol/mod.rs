@@ -32,6 +32,7 @@
 //! This module owns the wire format and nothing else: it does not tick the controller, read a
 //! clock or touch a port.
 
+pub mod config_msg;
 pub mod frame;
 #[cfg(test)]
 mod fuzz;

@@ -8,7 +8,6 @@ pub mod common;
 pub mod dataset;
 pub mod eval;
 pub mod node;
-pub mod params;
 pub mod search;
 pub mod soak;
 pub mod trace;
