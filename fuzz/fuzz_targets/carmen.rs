@@ -1,6 +1,6 @@
-//! `cargo fuzz run carmen`: see host::fuzz and docs/reliability.md.
+//! `cargo fuzz run carmen`: see host::measure::fuzz and docs/reliability.md.
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    host::fuzz::run("carmen", data);
+    host::measure::fuzz::run("carmen", data);
 });

@@ -1,6 +1,6 @@
-//! `cargo fuzz run cdr`: see host::fuzz and docs/reliability.md.
+//! `cargo fuzz run cdr`: see host::measure::fuzz and docs/reliability.md.
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    host::fuzz::run("cdr", data);
+    host::measure::fuzz::run("cdr", data);
 });

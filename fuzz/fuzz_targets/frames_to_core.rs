@@ -1,6 +1,6 @@
-//! `cargo fuzz run frames_to_core`: see host::fuzz and docs/reliability.md.
+//! `cargo fuzz run frames_to_core`: see host::measure::fuzz and docs/reliability.md.
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    host::fuzz::run("frames_to_core", data);
+    host::measure::fuzz::run("frames_to_core", data);
 });

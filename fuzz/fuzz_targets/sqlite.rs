@@ -1,6 +1,6 @@
-//! `cargo fuzz run sqlite`: see host::fuzz and docs/reliability.md.
+//! `cargo fuzz run sqlite`: see host::measure::fuzz and docs/reliability.md.
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    host::fuzz::run("sqlite", data);
+    host::measure::fuzz::run("sqlite", data);
 });

@@ -1,6 +1,6 @@
-//! `cargo fuzz run vlp16`: see host::fuzz and docs/reliability.md.
+//! `cargo fuzz run vlp16`: see host::measure::fuzz and docs/reliability.md.
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    host::fuzz::run("vlp16", data);
+    host::measure::fuzz::run("vlp16", data);
 });

@@ -1,6 +1,6 @@
-//! `cargo fuzz run world`: see host::fuzz and docs/reliability.md.
+//! `cargo fuzz run world`: see host::measure::fuzz and docs/reliability.md.
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    host::fuzz::run("world", data);
+    host::measure::fuzz::run("world", data);
 });

@@ -1,29 +1,17 @@
-//! `host`: the `lives` command-line program's library — the simulator, the in-process search loop,
-//! pictures and benchmarks. The controller itself is the `firmware` crate.
+//! `host`: the `lives` program's library, one folder per concern: `run` (the run loop: sources,
+//! brains, observers) with `search` and `robot_model` (the simulated search and robot),
+//! `overrides` (`--set`/`--sim`), `link` (serial node, bridge, robot adapter), `io` (logs, bags,
+//! sensors, recordings), `learn` (labels, dataset, training), `measure` (eval, bench, mapcheck,
+//! soak, fuzz, trace) and `render` (pictures). The controller itself is the `firmware` crate; the
+//! simulator is `lives-sim`, re-exported as [`sim`].
 
-pub mod bench;
-pub mod dataset;
-pub mod eval;
-pub mod export_bag;
-pub mod fuzz;
-pub mod labeller;
+pub mod io;
+pub mod learn;
 pub mod link;
-pub mod mapcheck;
-pub mod model;
+pub mod measure;
 pub mod overrides;
-pub mod picture;
-pub mod range;
-pub mod record;
 pub mod render;
-pub mod replay;
 pub mod robot_model;
 pub mod run;
 pub mod search;
-pub mod sensors;
-pub mod soak;
 pub use lives_sim as sim;
-pub mod trace;
-#[cfg(feature = "train")]
-pub mod train;
-#[cfg(feature = "train")]
-pub mod train_geo;

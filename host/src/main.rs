@@ -43,19 +43,19 @@ enum Cmd {
     Params(host::overrides::ParamsArgs),
     /// Replay a recorded log through the controller (no base to move): CARMEN logs (FLASER,
     /// ROBOTLASER1, ODOM; plain or gzip) and ROS 2 bags (MCAP or sqlite3) (docs/replay.md).
-    Replay(host::replay::ReplayArgs),
+    Replay(host::io::replay::ReplayArgs),
     /// Score a LiDAR map against a reference: walls recovered, phantom walls, free-space leak
     /// (a replayed log against its own poses or another log; a simulated search against the true
     /// world), and pose errors on ground-truth relations (docs/mapcheck.md).
-    Mapcheck(host::mapcheck::MapcheckArgs),
+    Mapcheck(host::measure::mapcheck::MapcheckArgs),
     /// Write a ROS 2 MCAP bag from a CARMEN log as a robot records one: LaserScan with +inf
-    /// readings, odometry starting a few scans late, a rotated laser mount (host::export_bag).
-    ExportBag(host::export_bag::ExportBagArgs),
+    /// readings, odometry starting a few scans late, a rotated laser mount (host::io::export_bag).
+    ExportBag(host::io::export_bag::ExportBagArgs),
     Worlds(cli::worlds::WorldsArgs),
     Bench(cli::bench::BenchArgs),
     /// VLP-16 LiDAR: decode a capture (.pcap or raw payloads) or listen on UDP (docs/vlp16.md).
     #[command(subcommand)]
-    Lidar(host::sensors::LidarCmd),
+    Lidar(host::io::sensors::LidarCmd),
 }
 
 /// Every option or positional that takes a value accepts a negative number as its value
@@ -105,14 +105,14 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Eval(args) => cli::eval::run(args),
         Cmd::Tune(args) => cli::tune::run(args),
         Cmd::Params(args) => host::overrides::run_params(&args),
-        Cmd::Replay(args) => host::replay::run_command(&args),
-        Cmd::Mapcheck(args) => host::mapcheck::run_command(&args, |world, scenario, planner, seed| {
+        Cmd::Replay(args) => host::io::replay::run_command(&args),
+        Cmd::Mapcheck(args) => host::measure::mapcheck::run_command(&args, |world, scenario, planner, seed| {
             load_spec(&RunArgs { world: world.to_string(), scenario, planner, seed })
         }),
-        Cmd::ExportBag(args) => host::export_bag::run_command(&args),
+        Cmd::ExportBag(args) => host::io::export_bag::run_command(&args),
         Cmd::Worlds(args) => cli::worlds::run(args),
         Cmd::Bench(args) => cli::bench::run(args),
-        Cmd::Lidar(cmd) => host::sensors::run(cmd),
+        Cmd::Lidar(cmd) => host::io::sensors::run(cmd),
     }
 }
 

@@ -356,7 +356,7 @@ fn utility_terms(v: &Viewpoint) -> String {
 }
 
 /// What an observer of [`try_run_observed`] sees right after each controller tick (for
-/// recordings, `host::record`). It reads; it cannot change the run.
+/// recordings, `host::io::record`). It reads; it cannot change the run.
 pub struct TickView<'a> {
     /// The tick's time, microseconds.
     pub t_us: u64,

@@ -350,8 +350,8 @@ fn lidar_decode_refuses_a_file_without_a_packet_and_names_the_damage_it_skips() 
     }
     // Nothing decoded is status 2 too: a pcap holding only its file header, a file cut inside its
     // first packet.
-    let clean = std::fs::read(host::sensors::vlp16::default_recording()).unwrap();
-    let pcap = std::fs::read(host::sensors::vlp16::default_recording().with_file_name("velodyne_vlp16.pcap")).unwrap();
+    let clean = std::fs::read(host::io::sensors::vlp16::default_recording()).unwrap();
+    let pcap = std::fs::read(host::io::sensors::vlp16::default_recording().with_file_name("velodyne_vlp16.pcap")).unwrap();
     let (hdr, cut) = (dir.join("hdr.pcap"), dir.join("cut.bin"));
     std::fs::write(&hdr, &pcap[..24]).unwrap();
     std::fs::write(&cut, &clean[..500]).unwrap();
@@ -407,7 +407,7 @@ fn lidar_decode_refuses_a_file_without_a_packet_and_names_the_damage_it_skips() 
     assert_eq!(lines[5], "warning: … and 5 more packets rejected");
     assert_eq!(lines[6], format!("error: {}: 10 packets rejected; the 990 packets around them were decoded", flags.display()));
     // The clean recording: status 0, nothing on stderr.
-    let (code, _, stderr) = decode(&host::sensors::vlp16::default_recording(), false);
+    let (code, _, stderr) = decode(&host::io::sensors::vlp16::default_recording(), false);
     assert_eq!((code, stderr.as_str()), (Some(0), ""));
     let _ = std::fs::remove_dir_all(&dir);
 }

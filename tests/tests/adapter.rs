@@ -500,7 +500,7 @@ fn stale_gone_and_lost_clients_are_stopped_and_the_goal_comes_back_when_data_flo
 #[test]
 fn a_vlp16_on_udp_feeds_the_node_through_the_robot_source() {
     let _g = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let capture = host::sensors::vlp16::default_recording();
+    let capture = host::io::sensors::vlp16::default_recording();
     let bytes = std::fs::read(&capture).unwrap_or_else(|e| panic!("the VLP-16 recording {} ({e})", capture.display()));
     assert_eq!(bytes.len() % 1206, 0, "raw 1206-byte payloads");
     // A free UDP port for the sensor (bound and released: nothing else runs here).

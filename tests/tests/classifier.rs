@@ -4,7 +4,7 @@
 use firmware::classifier::{ModelError, WORK_PER_CLASSIFY};
 use firmware::scan::BeamLabel;
 use firmware::{BinaryAngle, Command, Config, Controller, Inputs, Pose2, ScanInput};
-use host::model::{quantise, FloatInputs, FloatModel};
+use host::learn::model::{quantise, FloatInputs, FloatModel};
 
 fn blob(seed: u64) -> &'static [u8] {
     let model = FloatModel::random(seed);

@@ -3,8 +3,8 @@
 //! mounted 0.1 m / 0.05 m off the base and turned 90°) replays into the CARMEN replay's map.
 
 use firmware::Cell;
-use host::export_bag::{self, ExportOptions};
-use host::replay::{self, ReplayOptions, ReplayRun};
+use host::io::export_bag::{self, ExportOptions};
+use host::io::replay::{self, ReplayOptions, ReplayRun};
 
 mod common;
 

@@ -1,11 +1,11 @@
 //! The short, deterministic fuzz campaign (issue 29; `docs/reliability.md`): every committed
 //! input of `fuzz/corpus/<target>/` (seeds from the real fixtures, and every input a long
 //! campaign found a crash with), then a fixed number of seeded mutations of them, through the
-//! same functions the coverage-guided targets in `fuzz/` call (`host::fuzz`). No nightly
+//! same functions the coverage-guided targets in `fuzz/` call (`host::measure::fuzz`). No nightly
 //! toolchain; the same bytes on every run. A panic names the target, the input and the
 //! mutation, and writes the failing bytes to `target/fuzz-failures/` for `cargo fuzz run`.
 
-use host::fuzz::{run, Mutator, TARGETS};
+use host::measure::fuzz::{run, Mutator, TARGETS};
 use std::path::PathBuf;
 
 /// The repository's root.
@@ -66,7 +66,7 @@ fn every_target_has_a_corpus_and_a_libfuzzer_binary() {
         assert!(!corpus(t).is_empty(), "{t}");
         let bin = root().join("fuzz/fuzz_targets").join(format!("{t}.rs"));
         let text = std::fs::read_to_string(&bin).unwrap_or_else(|e| panic!("{}: {e}", bin.display()));
-        assert!(text.contains(&format!("host::fuzz::run(\"{t}\", data)")), "{}", bin.display());
+        assert!(text.contains(&format!("host::measure::fuzz::run(\"{t}\", data)")), "{}", bin.display());
     }
 }
 

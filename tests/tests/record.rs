@@ -6,7 +6,7 @@
 //! Needs python3 with `mcap` (`./scripts/test.sh` installs it into `target/py-mcap`; or set
 //! `LIVES_PYTHON` to an interpreter that has it).
 
-use host::record::{record_search, RecordOptions, Recorder};
+use host::io::record::{record_search, RecordOptions, Recorder};
 use host::search::{PlannerChoice, SearchSpec};
 use host::sim::{Scenario, World};
 use serde_json::Value;
@@ -181,7 +181,7 @@ fn a_bridge_recording_holds_the_protocol_messages_and_changes_nothing() {
     use firmware::node::TimeMode;
     use firmware::Config;
     use host::link::{mem_pair, run_bridge, BridgeOptions, NodeOptions, NodeProcess, Source};
-    use host::record::SharedRecording;
+    use host::io::record::SharedRecording;
     use std::sync::atomic::{AtomicBool, Ordering};
 
     // A short search: the built-in `apartment easy` of 2026-11-25, kept as an example.

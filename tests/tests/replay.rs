@@ -3,8 +3,8 @@
 //! replay reads them with.
 
 use firmware::Cell;
-use host::replay::cdr::{self, Header, LaserScan, Odometry, Time, Transform, TransformStamped};
-use host::replay::{self, Location, LogFormat, ReplayError, ReplayOptions, ReplayRun};
+use host::io::replay::cdr::{self, Header, LaserScan, Odometry, Time, Transform, TransformStamped};
+use host::io::replay::{self, Location, LogFormat, ReplayError, ReplayOptions, ReplayRun};
 use std::collections::BTreeMap;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -695,7 +695,7 @@ fn a_truncated_mcap_bag_names_the_offset_and_keeps_the_scans_before() {
 
 /// How many `/scan` messages of the MCAP file `bytes` (at `path`) are in the chunk at byte `at`.
 fn scans_in_chunk(path: &Path, bytes: &[u8], at: usize) -> u32 {
-    let c = host::replay::rosbag::read_mcap(path, bytes);
+    let c = host::io::replay::rosbag::read_mcap(path, bytes);
     assert!(c.error.is_none() && c.bad.total == 0, "{:?} {:?}", c.error, c.bad);
     c.messages.iter().filter(|m| m.topic == "/scan" && m.at == Location::Offset(at as u64)).count() as u32
 }
@@ -710,20 +710,20 @@ fn any_bit_flipped_in_a_zstd_chunk_costs_that_chunk_at_most() {
     let path = tmp("flips.mcap");
     write_mcap(&path, &bag_messages(YAW_90), 2048);
     let bytes = std::fs::read(&path).unwrap();
-    let whole = host::replay::rosbag::read_mcap(&path, &bytes);
+    let whole = host::io::replay::rosbag::read_mcap(&path, &bytes);
     assert!(whole.error.is_none() && whole.bad.total == 0);
     let chunks: Vec<(u8, usize, usize)> = records(&bytes).into_iter().filter(|r| r.0 == 0x06).collect();
     assert!(chunks.len() >= 3, "{} chunks", chunks.len());
     let (_, chunk_at, chunk_len) = chunks[1];
     let compression_len = u32::from_le_bytes(bytes[chunk_at + 9 + 28..chunk_at + 9 + 32].try_into().unwrap()) as usize;
     let data_at = chunk_at + 9 + 40 + compression_len;
-    let outside = |c: &host::replay::rosbag::BagContents| c.messages.iter().filter(|m| m.at != Location::Offset(chunk_at as u64)).count();
+    let outside = |c: &host::io::replay::rosbag::BagContents| c.messages.iter().filter(|m| m.at != Location::Offset(chunk_at as u64)).count();
     let (mut skipped, mut same) = (0, 0);
     for byte in data_at..chunk_at + 9 + chunk_len {
         for bit in 0..8 {
             let mut b = bytes.clone();
             b[byte] ^= 1 << bit;
-            let c = host::replay::rosbag::read_mcap(&path, &b);
+            let c = host::io::replay::rosbag::read_mcap(&path, &b);
             assert!(c.error.is_none(), "byte {byte} bit {bit}: {:?}", c.error);
             assert_eq!(outside(&c), outside(&whole), "byte {byte} bit {bit}");
             match &c.bad.first[..] {
@@ -1084,7 +1084,7 @@ fn a_damaged_attachment_record_is_stepped_over_not_a_panic() {
     let path = common::root().join("fuzz/corpus/mcap/regression-attachment-slice-panic.mcap");
     let bytes = std::fs::read(&path).unwrap();
     assert_eq!(bytes[8], 0x09, "an Attachment record first");
-    let c = host::replay::rosbag::read_mcap(&path, &bytes);
+    let c = host::io::replay::rosbag::read_mcap(&path, &bytes);
     assert!(c.messages.is_empty());
     let shown = c.error.as_ref().map(|e| e.to_string()).unwrap_or_default();
     assert!(shown.contains("regression-attachment-slice-panic.mcap: byte"), "{shown}");

@@ -1,10 +1,10 @@
 //! Scan matching on the raw MIT CSAIL log (issue 27): the controller's poses with
 //! `scan_matching` on, scored on the ground-truth relations of Kümmerle et al. 2009 against the
-//! raw odometry's, with `lives mapcheck`'s metric (`host::mapcheck::relation_errors`). Reads
+//! raw odometry's, with `lives mapcheck`'s metric (`host::measure::mapcheck::relation_errors`). Reads
 //! `tests/data/carmen/raw/`.
 
-use host::mapcheck::{read_poses, read_relations, relation_errors, PoseIndex, RelationStats};
-use host::replay::{self, ReplayOptions};
+use host::measure::mapcheck::{read_poses, read_relations, relation_errors, PoseIndex, RelationStats};
+use host::io::replay::{self, ReplayOptions};
 
 mod common;
 

@@ -6,8 +6,8 @@
 //! `a` (clockwise, 0.01°) has yaw −a and goes to beam round((−a + 180°) · 897 / 360°) (halves up).
 //! Beam 598 is exactly yaw +60° (598 · 360 / 897 = 240) and covers azimuths (299.80°, 300.20°].
 
-use host::sensors::pcap::CaptureError;
-use host::sensors::vlp16::{
+use host::io::sensors::pcap::CaptureError;
+use host::io::sensors::vlp16::{
     self, PacketError, PcapScans, PlanarScan, RejectReason, Skipped, Vlp16Config, Vlp16Error, Vlp16Packet, Vlp16Udp, DATA_PORT, PACKET_LEN,
 };
 use std::path::{Path, PathBuf};

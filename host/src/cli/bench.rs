@@ -17,6 +17,6 @@ pub struct BenchArgs {
 }
 
 pub fn run(args: BenchArgs) -> Result<ExitCode, String> {
-    host::bench::run(args.reps, args.explore_s, args.searches);
+    host::measure::bench::run(args.reps, args.explore_s, args.searches);
     Ok(ExitCode::SUCCESS)
 }

@@ -175,7 +175,7 @@ pub fn write_file(path: &Path, contents: impl AsRef<[u8]>) -> Result<(), String>
 /// Refuses the random worlds `first..=last` (`what` in the message) where they overlap the
 /// held-out worlds that `lives eval --heldout` reports; `advice` ends the message.
 pub fn refuse_heldout(first: u64, last: u64, what: &str, advice: &str) -> Result<(), String> {
-    use host::eval::{overlaps_heldout, HELDOUT_FIRST_SEED, HELDOUT_MAX_WORLDS};
+    use host::measure::eval::{overlaps_heldout, HELDOUT_FIRST_SEED, HELDOUT_MAX_WORLDS};
     if overlaps_heldout(first, last) {
         return Err(format!(
             "{what} overlap the held-out worlds {HELDOUT_FIRST_SEED}..{} that `lives eval --heldout` reports; {advice}",

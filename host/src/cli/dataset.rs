@@ -1,8 +1,8 @@
 //! `lives dataset`: the scan-classification dataset from procedural worlds.
 
 use super::common::{progress_bar, refuse_heldout, say};
-use host::dataset::{generate_with, DatasetSpec};
-use host::labeller::LabellerConfig;
+use host::learn::dataset::{generate_with, DatasetSpec};
+use host::learn::labeller::LabellerConfig;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;

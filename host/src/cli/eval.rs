@@ -1,7 +1,7 @@
 //! `lives eval`: the paper's Table I, every planner over the built-in worlds and scenarios.
 
 use super::common::{cores, count_bar, say, write_file, RobotArgs};
-use host::eval;
+use host::measure::eval;
 use host::search::{self, PlannerChoice, SearchSpec};
 use host::sim::Scenario;
 use std::path::PathBuf;
@@ -135,7 +135,7 @@ pub fn run(args: EvalArgs) -> Result<ExitCode, String> {
                 if r.found { format!("FOUND in {:.1} s", r.time_s) } else { "NOT FOUND".into() }
             );
             let path = dir.join(format!("{}-{}-{}.png", r.world, r.scenario, r.planner));
-            host::picture::write_png(&run, &path, &title).map_err(|e| format!("{}: {e}", path.display()))?;
+            host::render::picture::write_png(&run, &path, &title).map_err(|e| format!("{}: {e}", path.display()))?;
         }
     }
     say!("{md}");

@@ -51,7 +51,7 @@ pub fn run(args: SoakArgs) -> Result<ExitCode, String> {
     if !(sim_hours.is_finite() && sim_hours >= 0.0) {
         return Err(format!("--sim-hours {sim_hours}: expected hours, 0 or more"));
     }
-    let opts = host::soak::SoakOptions {
+    let opts = host::measure::soak::SoakOptions {
         wall: positive("minutes", minutes * 60.0)?,
         sim_hours,
         pull_every: positive("pull-every", pull_every)?,
@@ -62,12 +62,12 @@ pub fn run(args: SoakArgs) -> Result<ExitCode, String> {
         seed,
         growth_kib,
     };
-    let report = host::soak::run(&opts, &mut |line| eprintln!("{line}")).map_err(|e| format!("soak: {e}"))?;
+    let report = host::measure::soak::run(&opts, &mut |line| eprintln!("{line}")).map_err(|e| format!("soak: {e}"))?;
     if let Some(path) = &json {
         let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
         std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
     }
-    println!("{}", host::soak::summary(&report));
+    println!("{}", host::measure::soak::summary(&report));
     if report.failures.is_empty() {
         Ok(ExitCode::SUCCESS)
     } else {

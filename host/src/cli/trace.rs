@@ -44,7 +44,7 @@ pub fn run(cmd: TraceCmd) -> Result<ExitCode, String> {
             if !labels {
                 spec.model = Some(firmware::classifier::EMBEDDED_MODEL);
             }
-            let bytes = host::trace::record(spec, ticks)?;
+            let bytes = host::measure::trace::record(spec, ticks)?;
             std::fs::write(&out, &bytes).map_err(|e| format!("{}: {e}", out.display()))?;
             say!("{}: {} bytes, {} ticks", out.display(), bytes.len(), ticks);
             Ok(ExitCode::SUCCESS)
@@ -54,15 +54,15 @@ pub fn run(cmd: TraceCmd) -> Result<ExitCode, String> {
             // A damaged trace: its good records are printed, then the error (status 1; 2 when
             // not even the first record is good).
             let (printed, error) = if decode {
-                let r = host::trace::decode(&bytes).map_err(|e| format!("{}: {e}", file.display()))?;
+                let r = host::measure::trace::decode(&bytes).map_err(|e| format!("{}: {e}", file.display()))?;
                 for line in &r.records {
                     say!("{line}");
                 }
                 (!r.records.is_empty(), r.error)
             } else {
-                let r = host::trace::replay(&bytes).map_err(|e| format!("{}: {e}", file.display()))?;
+                let r = host::measure::trace::replay(&bytes).map_err(|e| format!("{}: {e}", file.display()))?;
                 for d in &r.records {
-                    say!("{}", host::trace::digest_line(d));
+                    say!("{}", host::measure::trace::digest_line(d));
                 }
                 (!r.records.is_empty(), r.error)
             };

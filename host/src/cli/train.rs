@@ -15,13 +15,13 @@ pub struct TrainArgs {
     #[arg(long)]
     data: PathBuf,
     /// Where to write the f32 checkpoint.
-    #[arg(long, default_value = host::train::DEFAULT_CHECKPOINT_PATH)]
+    #[arg(long, default_value = host::learn::train::DEFAULT_CHECKPOINT_PATH)]
     out: PathBuf,
     /// Passes over the training samples (the paper: 20–50 on a GPU; 10 epochs took 5.5–7 min on ~43 k samples here).
-    #[arg(long, default_value_t = host::train::DEFAULT_EPOCHS)]
+    #[arg(long, default_value_t = host::learn::train::DEFAULT_EPOCHS)]
     epochs: usize,
     /// Samples per optimiser step (the paper: 4096).
-    #[arg(long, default_value_t = host::train::DEFAULT_BATCH)]
+    #[arg(long, default_value_t = host::learn::train::DEFAULT_BATCH)]
     batch: usize,
     /// Adam learning rate.
     #[arg(long, default_value_t = 1e-3)]
@@ -80,7 +80,7 @@ pub struct TrainArgs {
 }
 
 pub fn train(args: TrainArgs) -> Result<ExitCode, String> {
-    let cfg = host::train::TrainConfig {
+    let cfg = host::learn::train::TrainConfig {
         data: args.data,
         epochs: args.epochs,
         batch: args.batch,
@@ -103,7 +103,7 @@ pub fn train(args: TrainArgs) -> Result<ExitCode, String> {
         lr_decay: args.lr_decay,
         command: std::env::args().collect::<Vec<_>>().join(" "),
     };
-    let progress = |e: &host::train::EpochLog| {
+    let progress = |e: &host::learn::train::EpochLog| {
         say!(
             "epoch {:3}: loss {:.4}, val accuracy teacher-forced {:.2} %, autoregressive {:.2} %, {:.0} s",
             e.epoch,
@@ -115,13 +115,13 @@ pub fn train(args: TrainArgs) -> Result<ExitCode, String> {
     };
     let (model, log) = match args.resume {
         Some(p) => {
-            let (init, _) = host::train::load_checkpoint(&p).map_err(|e| e.to_string())?;
-            host::train::train_from(&cfg, init, progress)
+            let (init, _) = host::learn::train::load_checkpoint(&p).map_err(|e| e.to_string())?;
+            host::learn::train::train_from(&cfg, init, progress)
         }
-        None => host::train::train(&cfg, progress),
+        None => host::learn::train::train(&cfg, progress),
     }
     .map_err(|e| e.to_string())?;
-    host::train::save_checkpoint(&model, Some(&log), &args.out).map_err(|e| e.to_string())?;
+    host::learn::train::save_checkpoint(&model, Some(&log), &args.out).map_err(|e| e.to_string())?;
     say!("trained {} epochs on {} samples in {:.0} s; checkpoint {}", log.epochs.len(), log.samples[0], log.total_s, args.out.display());
     Ok(ExitCode::SUCCESS)
 }
@@ -148,9 +148,9 @@ pub struct CalibrateBiasArgs {
 pub fn calibrate_bias(args: CalibrateBiasArgs) -> Result<ExitCode, String> {
     let CalibrateBiasArgs { checkpoint, data, out, deltas } = args;
     let t0 = Instant::now();
-    let (mut model, log) = host::train::load_checkpoint(&checkpoint).map_err(|e| e.to_string())?;
-    let eps = host::train::load_split(&data, host::dataset::Split::Val).map_err(|e| e.to_string())?;
-    let cands = host::train::calibrate_scan_bias(&model, &eps, &deltas).map_err(|e| e.to_string())?;
+    let (mut model, log) = host::learn::train::load_checkpoint(&checkpoint).map_err(|e| e.to_string())?;
+    let eps = host::learn::train::load_split(&data, host::learn::dataset::Split::Val).map_err(|e| e.to_string())?;
+    let cands = host::learn::train::calibrate_scan_bias(&model, &eps, &deltas).map_err(|e| e.to_string())?;
     say!("| delta | float accuracy, all steps | warm steps | map recall | non-map recall | always map |\n|---|---|---|---|---|---|");
     for c in &cands {
         let a = &c.accuracy;
@@ -166,7 +166,7 @@ pub fn calibrate_bias(args: CalibrateBiasArgs) -> Result<ExitCode, String> {
     }
     let best = cands.iter().max_by(|a, b| a.accuracy.all.accuracy().total_cmp(&b.accuracy.all.accuracy())).ok_or("no candidate shifts")?;
     model.scan.fc_b.iter_mut().for_each(|v| *v += best.delta);
-    host::train::save_checkpoint(&model, log.as_ref(), &out).map_err(|e| e.to_string())?;
+    host::learn::train::save_checkpoint(&model, log.as_ref(), &out).map_err(|e| e.to_string())?;
     say!(
         "best shift {} ({:.2} %); checkpoint {} ({:.0} s)",
         best.delta,
@@ -182,16 +182,16 @@ pub fn calibrate_bias(args: CalibrateBiasArgs) -> Result<ExitCode, String> {
 #[derive(clap::Args)]
 pub struct QuantiseArgs {
     /// The f32 checkpoint (`lives train --out`).
-    #[arg(long, default_value = host::train::DEFAULT_CHECKPOINT_PATH)]
+    #[arg(long, default_value = host::learn::train::DEFAULT_CHECKPOINT_PATH)]
     checkpoint: PathBuf,
     /// The dataset whose validation split calibrates and evaluates (default: the one the checkpoint was trained on).
     #[arg(long)]
     data: Option<PathBuf>,
     /// Where to write the blob.
-    #[arg(long, default_value = host::train::DEFAULT_BLOB_PATH)]
+    #[arg(long, default_value = host::learn::train::DEFAULT_BLOB_PATH)]
     out: PathBuf,
     /// Where to write the model card (`-` for none).
-    #[arg(long, default_value = host::train::DEFAULT_CARD_PATH)]
+    #[arg(long, default_value = host::learn::train::DEFAULT_CARD_PATH)]
     card: String,
     /// A second checkpoint (trained with or without --no-label-history) for the label-history ablation.
     #[arg(long)]
@@ -209,7 +209,7 @@ pub struct QuantiseArgs {
 
 pub fn quantise(args: QuantiseArgs) -> Result<ExitCode, String> {
     let QuantiseArgs { checkpoint, data, out, card, ablation, calibration, unseen_seconds, notes } = args;
-    let mut cfg = host::train::QuantiseConfig::new(checkpoint);
+    let mut cfg = host::learn::train::QuantiseConfig::new(checkpoint);
     cfg.data = data;
     cfg.out = out;
     cfg.card = (card != "-").then(|| PathBuf::from(card));
@@ -221,7 +221,7 @@ pub fn quantise(args: QuantiseArgs) -> Result<ExitCode, String> {
         Some(p) => Some(std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?),
         None => None,
     };
-    let r = host::train::quantise_and_evaluate(&cfg, |line| say!("{line}")).map_err(|e| e.to_string())?;
+    let r = host::learn::train::quantise_and_evaluate(&cfg, |line| say!("{line}")).map_err(|e| e.to_string())?;
     say!(
         "int8 per-point accuracy (autoregressive, as on the robot): validation {:.2} %{}",
         100.0 * r.val.int8_ar_raw.all.accuracy(),

@@ -3,9 +3,9 @@
 //! buildings. (Built with `--features train`.)
 
 use super::common::{say, write_file};
-use host::dataset::Split;
-use host::train::{load_split, unseen_episodes, Confusion};
-use host::train_geo::{evaluate_float, evaluate_int8, quantise, rollout_samples, samples, train, GeoTrainConfig};
+use host::learn::dataset::Split;
+use host::learn::train::{load_split, unseen_episodes, Confusion};
+use host::learn::train_geo::{evaluate_float, evaluate_int8, quantise, rollout_samples, samples, train, GeoTrainConfig};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -56,7 +56,7 @@ pub struct TrainGeoArgs {
     #[arg(long, default_value_t = 3)]
     dagger_rounds: usize,
     /// The tanh table's input range: the largest hidden pre-activation seen, at most this.
-    #[arg(long, default_value_t = host::train_geo::DEFAULT_PRE_CLIP)]
+    #[arg(long, default_value_t = host::learn::train_geo::DEFAULT_PRE_CLIP)]
     pre_clip: f32,
 }
 
@@ -81,7 +81,7 @@ pub fn train_geo(args: TrainGeoArgs) -> Result<ExitCode, String> {
     let history = (!no_label_history).then_some((history_episode_stride, flip, dagger_rounds));
     let (data, out, card) = (data.as_path(), out.as_path(), card.as_deref());
     let t0 = Instant::now();
-    let e = |e: host::train::TrainError| e.0;
+    let e = |e: host::learn::train::TrainError| e.0;
     let train_eps = load_split(data, Split::Train).map_err(e)?;
     let val_eps = load_split(data, Split::Val).map_err(e)?;
     let unseen = unseen_episodes(unseen_seconds, 1).map_err(e)?;
@@ -109,8 +109,8 @@ pub fn train_geo(args: TrainGeoArgs) -> Result<ExitCode, String> {
             // DAgger: each round rolls the current model out through the firmware (its own
             // outputs become the history), adds those samples to the pool and trains a new model
             // on the pool; the first round rolls out the scan-only model.
-            let subset: Vec<host::train::Episode> = train_eps.iter().step_by(episode_stride.max(1)).cloned().collect();
-            let mut pool: Vec<host::train_geo::Sample> = Vec::new();
+            let subset: Vec<host::learn::train::Episode> = train_eps.iter().step_by(episode_stride.max(1)).cloned().collect();
+            let mut pool: Vec<host::learn::train_geo::Sample> = Vec::new();
             let (mut cur_m, mut cur_q) = (m.clone(), q.clone());
             for round in 0..rounds.max(1) {
                 let more = rollout_samples(&cur_q.blob, &subset, 2, beam_stride, flip, seed + round as u64).map_err(e)?;
@@ -255,7 +255,7 @@ pub fn classifier_eval(args: ClassifierEvalArgs) -> Result<ExitCode, String> {
     let ClassifierEvalArgs { model, seconds, json } = args;
     let blob = std::fs::read(&model).map_err(|e| format!("{}: {e}", model.display()))?;
     let eps = unseen_episodes(seconds, 1).map_err(|e| e.0)?;
-    let per = host::train_geo::evaluate_blob_per_episode(&blob, &eps).map_err(|e| format!("{}: {}", model.display(), e.0))?;
+    let per = host::learn::train_geo::evaluate_blob_per_episode(&blob, &eps).map_err(|e| format!("{}: {}", model.display(), e.0))?;
     let mut pooled = Confusion::default();
     per.iter().for_each(|(_, c)| pooled.merge(c));
     let mean = per.iter().map(|(_, c)| c.accuracy()).sum::<f64>() / per.len().max(1) as f64;

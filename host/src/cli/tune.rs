@@ -39,9 +39,9 @@ pub struct TuneArgs {
 
 pub fn run(args: TuneArgs) -> Result<ExitCode, String> {
     let TuneArgs { worlds, first_world, planners, scenarios, grid, threads, out } = args;
-    let grid: Vec<(String, Vec<String>)> = grid.iter().map(|g| host::eval::parse_grid_axis(g)).collect::<Result<_, _>>()?;
+    let grid: Vec<(String, Vec<String>)> = grid.iter().map(|g| host::measure::eval::parse_grid_axis(g)).collect::<Result<_, _>>()?;
     // Reject unknown names and bad values before spending minutes.
-    for a in host::eval::grid_assignments(&grid) {
+    for a in host::measure::eval::grid_assignments(&grid) {
         let mut c = firmware::Config::DEFAULT;
         for x in &a {
             host::overrides::apply(&mut c, x)?;
@@ -57,7 +57,7 @@ pub fn run(args: TuneArgs) -> Result<ExitCode, String> {
     }
     let pb = count_bar();
     let t0 = Instant::now();
-    let scores = host::eval::tune(
+    let scores = host::measure::eval::tune(
         &grid,
         &planners,
         &scenarios,

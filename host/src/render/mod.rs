@@ -21,6 +21,7 @@ use std::fmt;
 mod draw;
 mod legend;
 mod strip;
+pub mod picture;
 pub use draw::*;
 pub use legend::*;
 pub use strip::*;

@@ -1,0 +1,337 @@
+//! Reading a log into memory: detecting its format, the CARMEN, ROS 2 bag and VLP-16 readers, and
+//! the multi-file logs ([`read_log`]).
+
+use super::*;
+use std::io::{BufRead, Read};
+use std::path::{Path, PathBuf};
+
+/// A log read into memory.
+#[derive(Debug)]
+pub struct LogData {
+    /// The file (or bag directory).
+    pub file: PathBuf,
+    /// Its format.
+    pub format: LogFormat,
+    /// Scans, time order.
+    pub scans: Vec<ScanRecord>,
+    /// Odometry messages read.
+    pub odometry: usize,
+    /// Scans that could not be given a pose (bag frames not connected).
+    pub no_pose: usize,
+    /// Bag scans stamped before the first odometry.
+    pub no_odometry_yet: usize,
+    /// Bag scans whose nearest odometry is more than [`rosbag::MAX_POSE_AGE_NS`] away.
+    pub stale_pose: usize,
+    /// Bag scans stamped before the scan before them.
+    pub scan_stamp_backwards: usize,
+    /// Bag transforms rejected (the scans are placed without them).
+    pub transforms_rejected: rosbag::RejectedTransforms,
+    /// Time span of everything time-stamped that was read, seconds.
+    pub span_s: Option<(f64, f64)>,
+    /// Topics or line types used.
+    pub sources: Vec<String>,
+    /// Assumptions made, for the user.
+    pub warnings: Vec<String>,
+    /// Bad records skipped.
+    pub bad_records: BadRecords,
+    /// The damage reading stopped at.
+    pub error: Option<ReplayError>,
+}
+
+impl LogData {
+    /// Nothing read yet from `file`.
+    fn new(file: &Path, format: LogFormat) -> Self {
+        LogData {
+            file: file.to_path_buf(),
+            format,
+            scans: Vec::new(),
+            odometry: 0,
+            no_pose: 0,
+            no_odometry_yet: 0,
+            stale_pose: 0,
+            scan_stamp_backwards: 0,
+            transforms_rejected: rosbag::RejectedTransforms::default(),
+            span_s: None,
+            sources: Vec::new(),
+            warnings: Vec::new(),
+            bad_records: BadRecords::default(),
+            error: None,
+        }
+    }
+}
+
+pub(super) fn widen(span: &mut Option<(f64, f64)>, t: f64) {
+    *span = Some(match *span {
+        None => (t, t),
+        Some((a, b)) => (a.min(t), b.max(t)),
+    });
+}
+
+/// Counts the bytes a reader hands out (the compressed offset of a gzip failure).
+pub(super) struct Counting<R> {
+    inner: R,
+    n: std::rc::Rc<std::cell::Cell<u64>>,
+}
+
+impl<R: Read> Read for Counting<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let k = self.inner.read(buf)?;
+        self.n.set(self.n.get() + k as u64);
+        Ok(k)
+    }
+}
+
+/// A VLP-16 capture (`host::io::sensors::vlp16`, default configuration: the ±1° band, 897 beams,
+/// 0.3–100 m): one scan per rotation, stamped with the sensor's time. A capture holds no pose:
+/// the sensor is placed at the origin facing +x for every scan (a warning says so), which is
+/// right for a sensor that stood still.
+pub(super) fn read_vlp16(file: &Path) -> Result<LogData, ReplayError> {
+    let cfg = crate::io::sensors::vlp16::Vlp16Config::default();
+    let (_, capture) = crate::io::sensors::vlp16::read_capture(file, &cfg).map_err(|e| ReplayError::Io {
+        file: file.to_path_buf(),
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
+    })?;
+    let mut log = LogData::new(file, LogFormat::Vlp16);
+    log.sources.push("vlp16".to_string());
+    log.warnings
+        .push("a VLP-16 capture holds no pose: every scan is placed at the origin, facing +x (a sensor that stood still)".to_string());
+    for (i, s) in capture.scans.into_iter().chain(capture.partial).enumerate() {
+        let t_s = s.stamp_us as f64 / 1e6;
+        widen(&mut log.span_s, t_s);
+        log.scans.push(ScanRecord {
+            t_s,
+            pose: [0.0, 0.0, 0.0],
+            angle_min: s.angle_min_rad,
+            angle_increment: s.angle_increment_rad,
+            ranges_m: s.ranges_m,
+            range_limits_m: s.range_limits_m,
+            at: Location::Line(i + 1),
+        });
+    }
+    if let Some(e) = capture.error {
+        log.warnings.push(format!("the capture's reading stopped early: {e}"));
+    }
+    Ok(log)
+}
+
+pub(super) fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
+    let mut log = LogData::new(file, format);
+    let counter = std::rc::Rc::new(std::cell::Cell::new(0u64));
+    let mut reader: Box<dyn BufRead> = match format {
+        LogFormat::CarmenGzip => {
+            let src = Counting { inner: std::io::Cursor::new(bytes), n: counter.clone() };
+            Box::new(std::io::BufReader::new(flate2::read::MultiGzDecoder::new(src)))
+        }
+        _ => Box::new(std::io::Cursor::new(bytes)),
+    };
+    let mut line_no = 0usize;
+    let mut buf = Vec::new();
+    let mut seen = [false; 3];
+    loop {
+        buf.clear();
+        match reader.read_until(b'\n', &mut buf) {
+            Ok(0) => break,
+            Ok(_) => {}
+            // Only the gzip decoder can fail here (plain text is read from memory).
+            Err(e) => {
+                log.error =
+                    Some(ReplayError::Gzip { file: file.to_path_buf(), lines: line_no, offset: counter.get(), reason: e.to_string() });
+                break;
+            }
+        }
+        line_no += 1;
+        // A NUL (or other control byte) costs its line only, wherever it is in the file.
+        if let Some(k) = buf.iter().position(|&b| is_control(b)) {
+            log.bad_records.add(ReplayError::NotText { file: file.to_path_buf(), line: line_no, control: Some((k + 1, buf[k])) });
+            continue;
+        }
+        let Ok(text) = std::str::from_utf8(&buf) else {
+            log.bad_records.add(ReplayError::NotText { file: file.to_path_buf(), line: line_no, control: None });
+            continue;
+        };
+        match carmen::parse_line(text) {
+            Ok(None) => {}
+            Ok(Some(rec)) => {
+                widen(&mut log.span_s, rec.t_s());
+                match rec {
+                    carmen::CarmenRecord::Odom { .. } => {
+                        log.odometry += 1;
+                        seen[2] = true;
+                    }
+                    carmen::CarmenRecord::Scan(s) => {
+                        seen[(s.kind == carmen::LineKind::RobotLaser1) as usize] = true;
+                        log.scans.push(ScanRecord {
+                            t_s: s.t_s,
+                            pose: s.laser_pose,
+                            angle_min: s.angle_min,
+                            angle_increment: s.angle_increment,
+                            ranges_m: s.ranges_m,
+                            range_limits_m: [0.0, s.range_max_m],
+                            at: Location::Line(line_no),
+                        });
+                    }
+                }
+            }
+            // The line ends where it ends: skip it and read on.
+            Err(error) => log.bad_records.add(ReplayError::CarmenLine { file: file.to_path_buf(), line: line_no, error }),
+        }
+    }
+    for (i, name) in ["FLASER", "ROBOTLASER1", "ODOM"].iter().enumerate() {
+        if seen[i] {
+            log.sources.push(name.to_string());
+        }
+    }
+    // Logs are written in time order; a stable sort mends small reorderings between line types.
+    log.scans.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+    log
+}
+
+pub(super) fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -> LogData {
+    let contents = match (format, bytes) {
+        (LogFormat::Ros2Mcap, Some(b)) => rosbag::read_mcap(file, &b),
+        _ => rosbag::read_db3(file),
+    };
+    let mut warnings = Vec::new();
+    if !contents.skipped_encodings.is_empty() {
+        warnings.push(format!("skipped topics not encoded as CDR: {}", contents.skipped_encodings.join(", ")));
+    }
+    let mut scans = rosbag::scans_from_messages(file, contents.messages);
+    warnings.extend(scans.warnings);
+    // Damaged chunks and bad rows first: they come before any message decoding in the file's
+    // own order of reading.
+    let mut bad_records = contents.bad;
+    bad_records.append(std::mem::take(&mut scans.bad_records));
+    LogData {
+        file: file.to_path_buf(),
+        format,
+        scans: scans.scans,
+        odometry: scans.odometry,
+        no_pose: scans.no_pose,
+        no_odometry_yet: scans.no_odometry_yet,
+        stale_pose: scans.stale_pose,
+        scan_stamp_backwards: scans.scan_stamp_backwards,
+        transforms_rejected: scans.transforms_rejected,
+        span_s: contents.span_ns.map(|(a, b)| (a as f64 / 1e9, b as f64 / 1e9)),
+        sources: contents.topics.iter().map(|(t, ty)| format!("{t} ({ty})")).collect(),
+        warnings,
+        bad_records,
+        error: contents.error,
+    }
+}
+
+pub(super) fn io_err(file: &Path) -> impl Fn(std::io::Error) -> ReplayError + '_ {
+    move |source| ReplayError::Io { file: file.to_path_buf(), source }
+}
+
+/// A control byte in a text log: below 0x20 except tab, line feed and carriage return, or DEL.
+pub(super) fn is_control(b: u8) -> bool {
+    (b < 0x20 && b != b'\t' && b != b'\n' && b != b'\r') || b == 0x7f
+}
+
+/// Whether the first bytes of a file are text, give or take some damage: at most 1 in 64 control
+/// bytes other than NUL and fewer NULs than anything else. A NUL or a stray control byte in a
+/// CARMEN log costs its line (`read_carmen`), not the file; binary data (about one byte in eight
+/// a control byte) is not text.
+pub(super) fn looks_like_text(head: &[u8]) -> bool {
+    let nul = head.iter().filter(|&&b| b == 0).count();
+    let other = head.iter().filter(|&&b| b != 0 && is_control(b)).count();
+    !head.is_empty() && other * 64 <= head.len() && nul * 2 < head.len()
+}
+
+/// How a ROS 1 bag (format 2.0) starts.
+pub const ROS1_BAG_MAGIC: &[u8] = b"#ROSBAG V2.0\n";
+
+/// The format of a file from its first bytes (a ROS 1 bag is none of them).
+pub fn detect(head: &[u8]) -> Option<LogFormat> {
+    if head.starts_with(ROS1_BAG_MAGIC) {
+        return None;
+    }
+    if head.starts_with(&[0x1f, 0x8b]) {
+        Some(LogFormat::CarmenGzip)
+    } else if head.starts_with(rosbag::MCAP_MAGIC) {
+        Some(LogFormat::Ros2Mcap)
+    } else if head.starts_with(b"SQLite format 3\0") {
+        Some(LogFormat::Ros2Sqlite3)
+    } else if crate::io::sensors::pcap::looks_like_pcap(head) || crate::io::sensors::vlp16::frames_packet(head) {
+        Some(LogFormat::Vlp16)
+    } else if looks_like_text(&head[..head.len().min(4096)]) {
+        Some(LogFormat::Carmen)
+    } else {
+        None
+    }
+}
+
+pub(super) fn read_one(file: &Path) -> Result<LogData, ReplayError> {
+    let bytes = std::fs::read(file).map_err(io_err(file))?;
+    let format = detect(&bytes).ok_or_else(|| match bytes.starts_with(ROS1_BAG_MAGIC) {
+        true => ReplayError::Ros1Bag { file: file.to_path_buf() },
+        false => ReplayError::UnknownFormat { file: file.to_path_buf() },
+    })?;
+    Ok(match format {
+        LogFormat::Carmen | LogFormat::CarmenGzip => read_carmen(file, format, bytes),
+        LogFormat::Ros2Mcap => read_bag(file, format, Some(bytes)),
+        LogFormat::Ros2Sqlite3 => {
+            drop(bytes);
+            read_bag(file, format, None)
+        }
+        LogFormat::Vlp16 => {
+            drop(bytes);
+            read_vlp16(file)?
+        }
+    })
+}
+
+/// Reads a log file, or a rosbag2 directory (its `.mcap` / `.db3` files in name order, stopping
+/// at the first damaged one).
+pub fn read_log(path: &Path) -> Result<LogData, ReplayError> {
+    if !path.is_dir() {
+        return read_one(path);
+    }
+    let mut files: Vec<PathBuf> = std::fs::read_dir(path)
+        .map_err(io_err(path))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "mcap" || e == "db3"))
+        .collect();
+    files.sort();
+    let mut all: Option<LogData> = None;
+    for f in files {
+        let part = read_one(&f)?;
+        let stop = part.error.is_some();
+        all = Some(match all.take() {
+            None => part,
+            Some(mut a) => {
+                a.scans.extend(part.scans);
+                a.odometry += part.odometry;
+                a.no_pose += part.no_pose;
+                a.no_odometry_yet += part.no_odometry_yet;
+                a.stale_pose += part.stale_pose;
+                a.scan_stamp_backwards += part.scan_stamp_backwards;
+                let (t, p) = (&mut a.transforms_rejected, part.transforms_rejected);
+                t.odometry_jump += p.odometry_jump;
+                t.tf_loop += p.tf_loop;
+                t.stamp_backwards += p.stamp_backwards;
+                t.invalid += p.invalid;
+                if let Some((lo, hi)) = part.span_s {
+                    widen(&mut a.span_s, lo);
+                    widen(&mut a.span_s, hi);
+                }
+                for s in part.sources {
+                    if !a.sources.contains(&s) {
+                        a.sources.push(s);
+                    }
+                }
+                a.warnings.extend(part.warnings);
+                a.bad_records.append(part.bad_records);
+                a.error = part.error;
+                a
+            }
+        });
+        if stop {
+            break;
+        }
+    }
+    let mut log = all.ok_or_else(|| ReplayError::UnknownFormat { file: path.to_path_buf() })?;
+    log.file = path.to_path_buf();
+    log.scans.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+    Ok(log)
+}

@@ -1,0 +1,197 @@
+//! From bag messages to scans at poses ([`scans_from_messages`]): odometry and `tf` at each scan's stamp.
+
+use super::super::cdr::{self, CdrError};
+use super::super::{BadRecords, Location, ReplayError, ScanRecord};
+use super::*;
+use std::collections::HashMap;
+use std::path::Path;
+
+/// What the messages gave.
+#[derive(Debug, Default)]
+pub struct BagScans {
+    /// Scans with their laser poses, time order.
+    pub scans: Vec<ScanRecord>,
+    /// Scans whose frame could not be placed in a tree with a root.
+    pub no_pose: usize,
+    /// Scans stamped before the first odometry sample (e.g. the scanner started first).
+    pub no_odometry_yet: usize,
+    /// Scans whose nearest odometry sample is more than [`MAX_POSE_AGE_NS`] away.
+    pub stale_pose: usize,
+    /// Scans whose header stamp is before the previous scan's on the same frame.
+    pub scan_stamp_backwards: usize,
+    /// Transforms rejected.
+    pub transforms_rejected: RejectedTransforms,
+    /// Odometry messages.
+    pub odometry: usize,
+    /// Transforms received (tf and tf_static).
+    pub transforms: usize,
+    /// Notes for the user (assumptions made).
+    pub warnings: Vec<String>,
+    /// Messages that did not decode (skipped).
+    pub bad_records: BadRecords,
+}
+
+pub(super) enum Decoded {
+    Scan(cdr::LaserScan),
+    Odom(cdr::Odometry),
+    Tf(Vec<cdr::TransformStamped>),
+}
+
+/// A header stamp in nanoseconds; `fallback` (the receive time) when the stamp is zero or
+/// negative (a bag whose publisher did not stamp).
+pub(super) fn stamp_ns(h: &cdr::Header, fallback: u64) -> u64 {
+    let ns = h.stamp.sec as i64 * 1_000_000_000 + h.stamp.nanosec as i64;
+    if ns > 0 {
+        ns as u64
+    } else {
+        fallback
+    }
+}
+
+/// Decodes the messages (skipping and counting those that do not decode), builds the frame tree
+/// with every moving transform at its header stamp, and returns every scan with the laser's pose
+/// at the scan's header stamp (transforms interpolated to it; receive times where a message has
+/// no stamp).
+pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagScans {
+    let mut out = BagScans::default();
+    // Receive-time order (a stable sort keeps file order for equal stamps).
+    messages.sort_by_key(|m| m.t_ns);
+    let mut decoded = Vec::with_capacity(messages.len());
+    for m in &messages {
+        let d: Result<Decoded, CdrError> = match m.kind {
+            MsgType::LaserScan => cdr::decode_laser_scan(&m.data).map(Decoded::Scan),
+            MsgType::Odometry => cdr::decode_odometry(&m.data).map(Decoded::Odom),
+            MsgType::Tf | MsgType::TfStatic => cdr::decode_tf_message(&m.data).map(Decoded::Tf),
+        };
+        match d {
+            Ok(d) => decoded.push((m, d)),
+            Err(error) => out.bad_records.add(ReplayError::Message { file: file.to_path_buf(), at: m.at, topic: m.topic.clone(), error }),
+        }
+    }
+    let mut tree = FrameTree::default();
+    let mut rej = RejectedTransforms::default();
+    let count = |r: Result<(), EdgeReject>, rej: &mut RejectedTransforms| match r {
+        Ok(()) => {}
+        Err(EdgeReject::Invalid) => rej.invalid += 1,
+        Err(EdgeReject::Loop) => rej.tf_loop += 1,
+        Err(EdgeReject::Backwards) => rej.stamp_backwards += 1,
+        Err(EdgeReject::Jump) => rej.odometry_jump += 1,
+    };
+    // tf_static describes the robot's fixed geometry: it holds for the whole bag.
+    for (m, d) in &decoded {
+        if let (MsgType::TfStatic, Decoded::Tf(ts)) = (m.kind, d) {
+            for t in ts {
+                out.transforms += 1;
+                count(tree.set_static(&t.header.frame_id, &t.child_frame_id, &t.transform), &mut rej);
+            }
+        }
+    }
+    // Every moving transform, at its stamp (a scan is placed with samples before and after it).
+    let mut odom_child: Option<String> = None;
+    for (m, d) in &decoded {
+        match d {
+            Decoded::Tf(ts) if m.kind == MsgType::Tf => {
+                for t in ts {
+                    out.transforms += 1;
+                    count(tree.push(&t.header.frame_id, &t.child_frame_id, stamp_ns(&t.header, m.t_ns), &t.transform), &mut rej);
+                }
+            }
+            Decoded::Odom(o) => {
+                out.odometry += 1;
+                let r = tree.push(&o.header.frame_id, &o.child_frame_id, stamp_ns(&o.header, m.t_ns), &o.pose);
+                if r.is_ok() && odom_child.is_none() {
+                    odom_child = Some(frame(&o.child_frame_id));
+                }
+                count(r, &mut rej);
+            }
+            _ => {}
+        }
+    }
+    let mut assumed: Vec<String> = Vec::new();
+    let mut last_stamp: HashMap<String, u64> = HashMap::new();
+    let mut first_unplaced: Vec<String> = Vec::new();
+    for (m, d) in decoded {
+        let Decoded::Scan(s) = d else { continue };
+        let laser = frame(&s.header.frame_id);
+        let t = stamp_ns(&s.header, m.t_ns);
+        if last_stamp.get(&laser).is_some_and(|&prev| t < prev) {
+            out.scan_stamp_backwards += 1;
+            continue;
+        }
+        last_stamp.insert(laser.clone(), t);
+        let mut target = laser.clone();
+        if !tree.edges.contains_key(&laser) {
+            if let Some(child) = &odom_child {
+                // The laser's frame is in no transform: assume it sits at the odometry's body
+                // frame (say so once).
+                if !assumed.contains(&laser) {
+                    out.warnings.push(format!(
+                        "no transform places laser frame `{laser}` (topic {}): assumed mounted at `{child}` with no offset",
+                        m.topic
+                    ));
+                    assumed.push(laser.clone());
+                }
+                target = child.clone();
+            }
+        }
+        match tree.resolve_at(&target, t) {
+            Ok((pose, _root, depth)) if depth > 0 => out.scans.push(scan_record(&s, &pose, m.t_ns, m.at)),
+            Ok(_) | Err(PoseError::NoPose) => out.no_pose += 1,
+            Err(e) => {
+                if first_unplaced.len() < 3 {
+                    first_unplaced.push(format!("{} ({} s)", m.at, t as f64 / 1e9));
+                }
+                match e {
+                    PoseError::NoOdometryYet => out.no_odometry_yet += 1,
+                    _ => out.stale_pose += 1,
+                }
+            }
+        }
+    }
+    if out.no_odometry_yet + out.stale_pose > 0 {
+        out.warnings.push(format!(
+            "{} scans stamped before the first odometry and {} whose nearest odometry is more than {} s from their stamp \
+             were not used (not placed at the frame tree's origin): first at {}",
+            out.no_odometry_yet,
+            out.stale_pose,
+            MAX_POSE_AGE_NS as f64 / 1e9,
+            first_unplaced.join(", ")
+        ));
+    }
+    if out.scan_stamp_backwards > 0 {
+        out.warnings.push(format!("{} scans stamped before the scan before them were not used", out.scan_stamp_backwards));
+    }
+    if rej.invalid > 0 {
+        out.warnings.push(format!("{} transforms ignored (not finite, zero quaternion, or a frame its own parent)", rej.invalid));
+    }
+    if rej.odometry_jump + rej.tf_loop + rej.stamp_backwards > 0 {
+        out.warnings.push(format!(
+            "transforms rejected: {} odometry_jump (moved more than {MAX_JUMP_M} m + {MAX_SPEED_M_S} m/s since the sample before), \
+             {} tf_loop (would close a cycle of frames), {} stamp_backwards; the others were used",
+            rej.odometry_jump, rej.tf_loop, rej.stamp_backwards
+        ));
+    }
+    out.transforms_rejected = rej;
+    out
+}
+
+/// A scan in the replay's terms: the laser's planar pose and ranges by the ROS conventions.
+pub(super) fn scan_record(s: &cdr::LaserScan, pose: &Iso, t_ns: u64, at: Location) -> ScanRecord {
+    let x_axis = pose.rotate([1.0, 0.0, 0.0]);
+    let z_axis = pose.rotate([0.0, 0.0, 1.0]);
+    let yaw = x_axis[1].atan2(x_axis[0]);
+    // Upside down: a beam at +a in the laser frame points to −a about the world's z.
+    let sign = if z_axis[2] < 0.0 { -1.0 } else { 1.0 };
+    // The readings as recorded: the range rule (REP 117) is applied once, with the scan's own
+    // limits, when the scan is encoded for the core (`crate::io::range`).
+    let ranges_m = s.ranges.clone();
+    ScanRecord {
+        t_s: t_ns as f64 / 1e9,
+        pose: [pose.t[0], pose.t[1], yaw],
+        angle_min: sign * s.angle_min as f64,
+        angle_increment: sign * s.angle_increment as f64,
+        ranges_m,
+        range_limits_m: [s.range_min as f64, s.range_max as f64],
+        at,
+    }
+}

@@ -1,0 +1,12 @@
+//! The classifier pipeline: the labeller that makes ground-truth labels from the simulator, the
+//! scan dataset, the float reference model and its quantiser, and the training of both networks
+//! (`LabelPoseNet` and the geometric classifier; `--features train`). Nothing here runs on the
+//! robot: it produces the int8 blobs the core loads.
+
+pub mod dataset;
+pub mod labeller;
+pub mod model;
+#[cfg(feature = "train")]
+pub mod train;
+#[cfg(feature = "train")]
+pub mod train_geo;

@@ -1,0 +1,345 @@
+//! `lives mapcheck`: a log or a simulated search scored, and the report as a table.
+
+use super::*;
+use crate::io::replay::{self, TimedPose};
+use crate::search::{PlannerChoice, SearchSpec};
+use crate::sim::Scenario;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// `lives mapcheck` arguments.
+#[derive(clap::Args, Debug)]
+pub struct MapcheckArgs {
+    /// The log to replay and score (as `lives replay` reads it); omit it with `--world`.
+    #[arg(required_unless_present = "world", conflicts_with = "world")]
+    pub file: Option<PathBuf>,
+    /// Score against the map drawn from another log of the same building (e.g. the SLAM-corrected
+    /// CSAIL log) instead of this log's own poses; needs `--align`.
+    #[arg(long, value_name = "OTHER.log", requires = "align")]
+    pub reference: Option<PathBuf>,
+    /// Poses `timestamp x y theta` in the `--reference` log's frame, keyed by this log's time
+    /// stamps: they place the reference in this run's frame (least squares over every match).
+    #[arg(long, value_name = "POSES.txt", requires = "reference")]
+    pub align: Option<PathBuf>,
+    /// Ground-truth relations `t1 t2 x y z roll pitch yaw` (Kümmerle et al. 2009): report the
+    /// relation errors of the log's poses and of the controller's.
+    #[arg(long, value_name = "FILE", conflicts_with = "world")]
+    pub relations: Option<PathBuf>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Write a picture of the scored grid here (two pixels per cell): free white, free-space leak
+    /// orange, matched wall black, phantom wall magenta, lost reference wall red, unknown grey.
+    #[arg(long, value_name = "FILE.png")]
+    pub png: Option<PathBuf>,
+    /// Do not run a classifier.
+    #[arg(long, conflicts_with = "model")]
+    pub no_classifier: bool,
+    /// The int8 classifier blob to run (as `lives replay` and `lives search`).
+    #[arg(long, value_name = "BLOB")]
+    pub model: Option<PathBuf>,
+    /// The controller's LiDAR range for a log, metres (as `lives replay --max-range`).
+    #[arg(long, value_name = "METRES", conflicts_with = "world")]
+    pub max_range: Option<f64>,
+    /// Override a controller parameter (repeatable; `lives params` lists them).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Simulate a search in this world instead (as `lives search --world`) and score its map
+    /// against the true world.
+    #[arg(long)]
+    pub world: Option<String>,
+    /// easy or hard (with `--world`; default easy).
+    #[arg(long, requires = "world")]
+    pub scenario: Option<Scenario>,
+    /// The planner (with `--world`; default lives).
+    #[arg(long, requires = "world")]
+    pub planner: Option<PlannerChoice>,
+    /// The seed (with `--world`; default 1).
+    #[arg(long, requires = "world")]
+    pub seed: Option<u64>,
+    /// Change the simulated robot (with `--world`; as `lives search --sim`).
+    #[arg(long = "sim", value_name = "NAME=VALUE", requires = "world")]
+    pub sim: Vec<String>,
+}
+
+/// Runs `lives mapcheck`. `load_spec(world, scenario, planner, seed)` builds a search as `lives
+/// search` does. Exit status 0, 1 when the log was not clean (as `lives replay`), `Err` (status 2)
+/// on bad input.
+pub fn run_command(
+    args: &MapcheckArgs,
+    load_spec: impl FnOnce(&str, Option<Scenario>, PlannerChoice, u64) -> Result<SearchSpec, String>,
+) -> Result<std::process::ExitCode, String> {
+    let (report, clean) = match (&args.world, &args.file) {
+        (Some(world), _) => {
+            let planner = args.planner.unwrap_or(PlannerChoice::Lives);
+            let mut spec = load_spec(world, args.scenario, planner, args.seed.unwrap_or(1))?;
+            for a in &args.sim {
+                crate::overrides::apply_sim(&mut spec.sim, &mut spec.controller, a)?;
+            }
+            for a in &args.set {
+                crate::overrides::apply(&mut spec.controller, a)?;
+            }
+            if args.model.is_some() && !planner.uses_classifier() {
+                return Err(format!("--model is the classifier `lives` runs; `{planner}` runs none"));
+            }
+            spec.model = crate::learn::model::model_option(args.model.as_deref(), args.no_classifier)?;
+            (check_search(&spec, args.png.as_deref())?, true)
+        }
+        (None, Some(file)) => check_log(file, args)?,
+        (None, None) => return Err("give a log to replay, or --world".into()),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?);
+    } else {
+        print!("{}", table(&report));
+    }
+    Ok(if clean { std::process::ExitCode::SUCCESS } else { std::process::ExitCode::from(1) })
+}
+
+/// Replays `file` and scores it (the bool: the log was clean).
+pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bool), String> {
+    // The options exactly as `lives replay` takes them.
+    let opts = replay::options(args.model.as_deref(), args.no_classifier, &args.set, args.max_range)?;
+    // Read every input file before the replay, so a bad one fails fast.
+    let relations = args.relations.as_deref().map(|p| read_relations(p).map(|r| (p, r))).transpose()?;
+    let align = args.align.as_deref().map(|p| read_poses(p).map(|r| (p, r))).transpose()?;
+    let other = args.reference.as_deref().map(|p| replay::read_log(p).map_err(|e| e.to_string())).transpose()?;
+    let t0 = Instant::now();
+    let log = replay::read_log(file).map_err(|e| e.to_string())?;
+    let read_s = t0.elapsed().as_secs_f64();
+    let log_poses: Vec<TimedPose> = log.scans.iter().map(|s| TimedPose { t_s: s.t_s, pose: s.pose }).collect();
+    let own = (other.is_none()).then(|| log.scans.clone());
+    let run = replay::replay_log(log, &opts, t0, read_s).map_err(|e| e.to_string())?;
+    let clean = run.bad_records.total == 0 && run.error.is_none();
+    let cfg = run.controller.config();
+    let range = cfg.lidar_max_range_m.to_num::<f64>();
+    let min_range = cfg.lidar_min_range_m.to_num::<f64>();
+    let geom = run.controller.lidar.geom;
+    let origin = [geom.origin_x.to_num::<f64>(), geom.origin_y.to_num::<f64>()];
+    let grid = MapGrid::of(&run.controller.lidar);
+    let mut reference = Reference::new(grid.n, range);
+    let (kind, ref_file, alignment) = match (&other, &align) {
+        (Some(other), Some((apath, aposes))) => {
+            let index = PoseIndex::new(&run.poses);
+            let pairs: Vec<([f64; 3], [f64; 3])> = aposes.iter().filter_map(|p| index.at(p.t_s).map(|q| (q, p.pose))).collect();
+            let Some((t, rms, max)) = fit_rigid(&pairs) else {
+                return Err(format!(
+                    "{}: none of its {} time stamps matches a scan the replay of {} used (within {} ms)",
+                    apath.display(),
+                    aposes.len(),
+                    file.display(),
+                    MATCH_S * 1e3
+                ));
+            };
+            let to_grid = inverse(&t);
+            project_scans(&mut reference, &drawable(&other.scans), &to_grid, origin, min_range, range);
+            let a = Alignment {
+                file: apath.display().to_string(),
+                poses: aposes.len(),
+                matched: pairs.len(),
+                transform: t,
+                rms_m: rms,
+                max_m: max,
+            };
+            ("other-log", Some(other.file.display().to_string()), Some(a))
+        }
+        (None, _) => {
+            let own = own.unwrap_or_default();
+            project_scans(&mut reference, &drawable(&own), &[0.0, 0.0, 0.0], origin, min_range, range);
+            ("log-poses", Some(file.display().to_string()), None)
+        }
+        (Some(_), None) => return Err("--reference needs --align POSES.txt (its poses keyed by this log's time stamps)".into()),
+    };
+    let (map, classes) = score_cells(&grid, &reference, range, RAYS);
+    if let Some(p) = &args.png {
+        write_png(p, grid.n, &classes)?;
+    }
+    let relations = relations.map(|(p, rels)| RelationsReport {
+        file: p.display().to_string(),
+        relations: rels.len(),
+        log_poses: relation_errors(&PoseIndex::new(&log_poses), &rels),
+        controller: relation_errors(&PoseIndex::new(&run.poses), &rels),
+        align_poses: align.as_ref().map(|(_, a)| relation_errors(&PoseIndex::new(a), &rels)),
+    });
+    let report = MapcheckReport {
+        subject: file.display().to_string(),
+        reference: ReferenceInfo {
+            kind: kind.into(),
+            file: ref_file,
+            viewpoints: reference.viewpoints.len(),
+            rays_per_viewpoint: RAYS,
+            alignment,
+        },
+        grid_origin: origin,
+        cell_m: cell_m(),
+        grid_size_m: grid.n as f64 * cell_m(),
+        clearing_range_m: range,
+        map,
+        relations,
+        replay: Some(run.report),
+        search: None,
+    };
+    Ok((report, clean))
+}
+
+/// Runs the search `spec` and scores its final LiDAR grid against the true world.
+pub fn check_search(spec: &SearchSpec, png: Option<&Path>) -> Result<MapcheckReport, String> {
+    use crate::sim::geometry::{SceneBuilder, NO_OWNER};
+    let run = crate::search::try_run(spec, |_| {}).map_err(|e| format!("the classifier model does not validate: {e}"))?;
+    let cfg = run.controller.config();
+    let range = cfg.lidar_max_range_m.to_num::<f64>();
+    let geom = run.controller.lidar.geom;
+    let origin = [geom.origin_x.to_num::<f64>(), geom.origin_y.to_num::<f64>()];
+    let grid = MapGrid::of(&run.controller.lidar);
+    // The static true world: walls, furniture, clutter and the placed targets (people move).
+    let world = run.sim.world();
+    let mut b = SceneBuilder::new();
+    for w in &world.walls {
+        b.wall(w[0], w[1]);
+    }
+    for (i, o) in world.obstacles.iter().enumerate() {
+        b.shape(&o.shape, o.kind, i as u32);
+    }
+    for (i, s) in run.sim.target_shapes().iter().enumerate() {
+        b.shape(s, crate::sim::HitKind::Target, crate::sim::geometry::TARGET_OWNER_BASE + i as u32);
+    }
+    let scene = b.build(0.5);
+    // One scan per tick, taken at trajectory[k] (the last entry is where the base stopped after
+    // the last tick, not scanned).
+    let scanned = &run.trajectory[..run.trajectory.len().min(run.result.ticks as usize)];
+    let beams = spec.sim.beams.max(1);
+    let sim_range = spec.sim.lidar_max_range_m.min(range);
+    let mut reference = Reference::new(grid.n, range);
+    let c = cell_m();
+    for p in scanned {
+        reference.viewpoints.push([(p[0] - origin[0]) / c, (p[1] - origin[1]) / c]);
+        for k in 0..beams {
+            let a = 2.0 * std::f64::consts::PI * k as f64 / beams as f64;
+            let d = [a.cos(), a.sin()];
+            if let Some(h) = scene.raycast(*p, d, sim_range, NO_OWNER) {
+                if h.t < spec.sim.lidar_min_range_m {
+                    continue;
+                }
+                // Just behind the surface, so a wall on a cell boundary goes to the far cell.
+                let t = h.t + 1e-6;
+                reference.mark((p[0] + t * d[0] - origin[0]) / c, (p[1] + t * d[1] - origin[1]) / c);
+            }
+        }
+    }
+    let (map, classes) = score_cells(&grid, &reference, range, RAYS);
+    if let Some(p) = png {
+        write_png(p, grid.n, &classes)?;
+    }
+    let r = &run.result;
+    Ok(MapcheckReport {
+        subject: format!("world {} {} {} seed {}", r.world, r.scenario, r.planner, r.seed),
+        reference: ReferenceInfo {
+            kind: "true-world".into(),
+            file: None,
+            viewpoints: reference.viewpoints.len(),
+            rays_per_viewpoint: RAYS,
+            alignment: None,
+        },
+        grid_origin: origin,
+        cell_m: c,
+        grid_size_m: grid.n as f64 * c,
+        clearing_range_m: range,
+        map,
+        relations: None,
+        replay: None,
+        search: Some(run.result),
+    })
+}
+
+pub(super) fn pct(v: Option<f64>) -> String {
+    v.map_or("n/a".into(), |v| format!("{:.1} %", 100.0 * v))
+}
+
+pub(super) fn pm(mean: Option<f64>, std: Option<f64>, digits: usize) -> String {
+    match (mean, std) {
+        (Some(m), Some(s)) => format!("{m:.digits$} ± {s:.digits$}"),
+        _ => "n/a".into(),
+    }
+}
+
+/// The human-readable table.
+pub fn table(r: &MapcheckReport) -> String {
+    let mut s = String::new();
+    let m = &r.map;
+    let _ = writeln!(s, "mapcheck {}", r.subject);
+    if let Some(p) = &r.replay {
+        let _ = writeln!(
+            s,
+            "  replay: {} scans read, {} used, {} rejected ({} outside the grid); grid {:.1} m at ({:.1}, {:.1}), clearing range {:.1} m",
+            p.scans_read,
+            p.scans_used,
+            p.scans_rejected,
+            p.rejected.outside_grid,
+            r.grid_size_m,
+            r.grid_origin[0],
+            r.grid_origin[1],
+            r.clearing_range_m
+        );
+    }
+    if let Some(q) = &r.search {
+        let _ = writeln!(
+            s,
+            "  search: {} after {:.1} s, {} ticks; grid {:.1} m at ({:.1}, {:.1}), LiDAR range {:.1} m",
+            q.outcome, q.time_s, q.ticks, r.grid_size_m, r.grid_origin[0], r.grid_origin[1], r.clearing_range_m
+        );
+    }
+    let what = match r.reference.kind.as_str() {
+        "log-poses" => "the log's own scans at its own poses".to_string(),
+        "other-log" => format!("the scans of {} at its poses", r.reference.file.as_deref().unwrap_or("?")),
+        _ => "the true world's walls and obstacles the run's noise-free rays hit".to_string(),
+    };
+    let _ =
+        writeln!(s, "  reference: {what}; {} viewpoints × {} rays for the leak", r.reference.viewpoints, r.reference.rays_per_viewpoint);
+    if let Some(a) = &r.reference.alignment {
+        let _ = writeln!(
+            s,
+            "  aligned by {}: {} of {} poses matched, transform ({:.3} m, {:.3} m, {:.2}°), residual RMS {:.2} m, max {:.2} m",
+            a.file,
+            a.matched,
+            a.poses,
+            a.transform[0],
+            a.transform[1],
+            a.transform[2].to_degrees(),
+            a.rms_m,
+            a.max_m
+        );
+    }
+    let _ = writeln!(s, "  {:<18} {:>8}   cells (within {TOLERANCE_M} m, at {} m cells)", "figure", "value", r.cell_m);
+    let _ = writeln!(
+        s,
+        "  {:<18} {:>8}   {} of {} reference wall cells in the grid ({} more in the margin outside it)",
+        "walls recovered",
+        pct(m.walls_recovered),
+        m.recovered_cells,
+        m.reference_wall_cells,
+        m.reference_walls_outside_grid
+    );
+    let _ =
+        writeln!(s, "  {:<18} {:>8}   {} of {} occupied cells", "phantom walls", pct(m.phantom_walls), m.phantom_cells, m.occupied_cells);
+    let _ = writeln!(s, "  {:<18} {:>8}   {} of {} free cells", "free-space leak", pct(m.free_space_leak), m.leak_cells, m.free_cells);
+    if let Some(rel) = &r.relations {
+        let _ = writeln!(s, "  relations {} ({} relations): translation (m) and rotation (°), mean ± std", rel.file, rel.relations);
+        let mut row = |name: &str, st: &RelationStats| {
+            let _ = writeln!(
+                s,
+                "  {:<18} {:>5} used   {:>15} m   {:>15}°",
+                name,
+                st.used,
+                pm(st.trans_mean_m, st.trans_std_m, 2),
+                pm(st.rot_mean_deg, st.rot_std_deg, 2)
+            );
+        };
+        row("log poses", &rel.log_poses);
+        row("controller", &rel.controller);
+        if let Some(a) = &rel.align_poses {
+            row("--align poses", a);
+        }
+    }
+    s
+}
