@@ -119,6 +119,21 @@ impl Stage {
     }
 }
 
+impl crate::config::StageBudgets {
+    /// The budget of `stage` (`None`: it has none). Here rather than beside the budgets so that
+    /// the configuration does not depend on the controller.
+    pub fn of(&self, stage: Stage) -> Option<u32> {
+        match stage {
+            Stage::Lidar => Some(self.lidar_cells),
+            Stage::Visual => Some(self.visual_cells),
+            Stage::NonMap => Some(self.nonmap_ops),
+            Stage::Plan => Some(self.plan_ops),
+            Stage::Classify => Some(self.classify_macs),
+            Stage::Gaze | Stage::Match => None,
+        }
+    }
+}
+
 impl StageCost {
     /// The work of `stage` the last time it ran (`None`: not counted here, scan matching).
     pub fn of(&self, stage: Stage) -> Option<u32> {

@@ -17,7 +17,6 @@
 //! `docs/params.md` is its listing (`lives params --markdown`).
 
 use crate::capacity::{CELL_MM, GRID_CELLS, MAX_ROBOT_RADIUS_CELLS};
-use crate::controller::Stage;
 use fixed_point::{BinaryAngle, Meters};
 use serde::{Deserialize, Serialize};
 
@@ -105,18 +104,6 @@ impl StageBudgets {
     /// The defaults ([`Config::DEFAULT`]'s).
     pub const DEFAULT: StageBudgets =
         StageBudgets { lidar_cells: 400_000, visual_cells: 40_000, nonmap_ops: 100_000, plan_ops: 12_000_000, classify_macs: 2_000_000 };
-
-    /// The budget of `stage` (`None`: it has none).
-    pub fn of(&self, stage: Stage) -> Option<u32> {
-        match stage {
-            Stage::Lidar => Some(self.lidar_cells),
-            Stage::Visual => Some(self.visual_cells),
-            Stage::NonMap => Some(self.nonmap_ops),
-            Stage::Plan => Some(self.plan_ops),
-            Stage::Classify => Some(self.classify_macs),
-            Stage::Gaze | Stage::Match => None,
-        }
-    }
 }
 
 const fn m(millimetres: i32) -> Meters {
