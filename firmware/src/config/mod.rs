@@ -30,8 +30,10 @@ pub use table::{ParamInfo, ParamValue, Unit};
 /// A utility weight: Q16.16, "utility points per unit of the term".
 pub type Weight = fixed_point::fixed::types::I16F16;
 
-/// Which viewpoint-selection rule the planner uses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// Which viewpoint-selection rule the planner uses. It crosses the wire as itself (postcard: the
+/// variant's index), so the variant order is wire order: append only, and bump the protocol
+/// version.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum PlannerKind {
     /// LIVES, structured: object proposals, rooms and a global tour with precedence over them
     /// and the frontier viewpoints of both maps, the non-map term in the view utility

@@ -3,7 +3,6 @@
 //! field's type crosses the wire and is handed to a host as a number ([`ParamValue`]).
 
 use super::{Config, ConfigError, PlannerKind, StageBudgets};
-use crate::protocol::message::WirePlanner;
 use fixed_point::{BinaryAngle, Meters};
 
 /// How people write a parameter's value (`lives --set`, `lives params`), and what
@@ -143,14 +142,14 @@ impl ParamValue for bool {
 }
 
 impl ParamValue for PlannerKind {
-    type Wire = WirePlanner;
+    type Wire = PlannerKind;
     const WIRE: &'static str = "enum (`PlannerKind::ALL`'s order)";
     const RAW_RANGE: (i64, i64) = (0, PlannerKind::ALL.len() as i64 - 1);
-    fn to_wire(self) -> WirePlanner {
-        self.into()
+    fn to_wire(self) -> PlannerKind {
+        self
     }
-    fn from_wire(w: WirePlanner) -> PlannerKind {
-        w.into()
+    fn from_wire(w: PlannerKind) -> PlannerKind {
+        w
     }
     fn to_raw(self) -> Option<i64> {
         PlannerKind::ALL.iter().position(|&k| k == self).map(|i| i as i64)

@@ -3,7 +3,7 @@
 //!
 //! Each field crosses in its type's wire form ([`ParamValue::Wire`]): metres and weights as
 //! Q16.16 bits (`i32`), angles as binary-angle bits (`i32`), times in microseconds (`u64`), counts
-//! and flags as they are, the planner as [`super::message::WirePlanner`], the budgets as five `u32`s. The rows'
+//! and flags as they are, the planner as [`crate::config::PlannerKind`], the budgets as five `u32`s. The rows'
 //! order is the wire order; the golden frames (`protocol/golden.rs`) pin the bytes.
 
 use crate::config::{config_params, Config, ParamValue, PlannerKind, StageBudgets, Weight};

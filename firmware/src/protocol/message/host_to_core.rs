@@ -266,52 +266,8 @@ pub struct BaseStatus {
     pub blocked: bool,
 }
 
-/// The planner kind on the wire (mirrors [`PlannerKind`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum WirePlanner {
-    /// [`PlannerKind::Lives`].
-    Lives,
-    /// [`PlannerKind::Multisensor`].
-    Multisensor,
-    /// [`PlannerKind::Nearest`].
-    Nearest,
-    /// [`PlannerKind::ExploreLite`].
-    ExploreLite,
-    /// [`PlannerKind::Rrt`].
-    Rrt,
-    /// [`PlannerKind::LivesGreedy`].
-    LivesGreedy,
-    /// [`PlannerKind::LivesNoNonMap`].
-    LivesNoNonMap,
-}
-
-impl From<PlannerKind> for WirePlanner {
-    fn from(p: PlannerKind) -> Self {
-        match p {
-            PlannerKind::Lives => Self::Lives,
-            PlannerKind::Multisensor => Self::Multisensor,
-            PlannerKind::Nearest => Self::Nearest,
-            PlannerKind::ExploreLite => Self::ExploreLite,
-            PlannerKind::Rrt => Self::Rrt,
-            PlannerKind::LivesGreedy => Self::LivesGreedy,
-            PlannerKind::LivesNoNonMap => Self::LivesNoNonMap,
-        }
-    }
-}
-
-impl From<WirePlanner> for PlannerKind {
-    fn from(p: WirePlanner) -> Self {
-        match p {
-            WirePlanner::Lives => Self::Lives,
-            WirePlanner::Multisensor => Self::Multisensor,
-            WirePlanner::Nearest => Self::Nearest,
-            WirePlanner::ExploreLite => Self::ExploreLite,
-            WirePlanner::Rrt => Self::Rrt,
-            WirePlanner::LivesGreedy => Self::LivesGreedy,
-            WirePlanner::LivesNoNonMap => Self::LivesNoNonMap,
-        }
-    }
-}
+/// The planner kind on the wire: [`PlannerKind`] itself (its variant order is the wire's).
+pub type WirePlanner = PlannerKind;
 
 /// Everything the host sends. The variant order is the wire tag (0, 1, 2, …): append only, and
 /// bump [`PROTOCOL_VERSION`].
