@@ -72,8 +72,9 @@ pub struct Inputs<'a> {
 }
 
 /// Work per stage in the last tick that ran it (work units: cells or points touched;
-/// multiply-accumulates for the classifier).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// multiply-accumulates for the classifier). It crosses the wire as itself (`StageCostMsg`):
+/// the field order is the wire's.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct StageCost {
     /// Scan classification (int8 network).
     pub classify: u32,

@@ -104,28 +104,8 @@ impl From<ScanError> for WireScanError {
     }
 }
 
-/// Work per stage (mirrors [`StageCost`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub struct StageCostMsg {
-    /// [`StageCost::classify`].
-    pub classify: u32,
-    /// [`StageCost::lidar`].
-    pub lidar: u32,
-    /// [`StageCost::visual`].
-    pub visual: u32,
-    /// [`StageCost::nonmap`].
-    pub nonmap: u32,
-    /// [`StageCost::plan`].
-    pub plan: u32,
-    /// [`StageCost::gaze`] (v2).
-    pub gaze: u32,
-}
-
-impl From<StageCost> for StageCostMsg {
-    fn from(c: StageCost) -> Self {
-        Self { classify: c.classify, lidar: c.lidar, visual: c.visual, nonmap: c.nonmap, plan: c.plan, gaze: c.gaze }
-    }
-}
+/// Work per stage on the wire: [`StageCost`] itself (its field order is the wire's).
+pub type StageCostMsg = StageCost;
 
 /// Receive counters: frames decoded, and frames dropped by cause. All wrap at 2³².
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
