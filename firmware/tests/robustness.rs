@@ -8,19 +8,7 @@ use common::*;
 use firmware::scan::BeamLabel;
 use firmware::{BinaryAngle, Command, Config, Inputs, Mode, Pose2, ScanInput};
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n.max(1)
-    }
-}
+use fixed_point::SplitMix64 as Rng;
 
 #[test]
 fn random_inputs_never_panic_and_keep_the_invariants() {
@@ -47,28 +35,28 @@ fn random_run(seed: u64, ticks: u32) {
         let good_pose = (4.0 + rng.below(600) as f64 / 100.0, 3.0 + rng.below(500) as f64 / 100.0, rng.below(628) as f64 / 100.0);
         let pose = match rng.below(10) {
             0 => Some(Pose2::new(
-                fixed_point::Meters::from_bits(rng.next() as i32),
-                fixed_point::Meters::from_bits(rng.next() as i32),
-                BinaryAngle(rng.next() as i32),
+                fixed_point::Meters::from_bits(rng.next_u64() as i32),
+                fixed_point::Meters::from_bits(rng.next_u64() as i32),
+                BinaryAngle(rng.next_u64() as i32),
             )),
             1 => None,
             _ => Some(pose(good_pose.0, good_pose.1, good_pose.2)),
         };
         let (mut ranges, mut labels) = scan_of(&world, good_pose, 897);
         match rng.below(8) {
-            0 => ranges = (0..rng.below(3000)).map(|_| rng.next() as u16).collect(),
+            0 => ranges = (0..rng.below(3000)).map(|_| rng.next_u64() as u16).collect(),
             1 => ranges.clear(),
             2 => labels.truncate(rng.below(897) as usize),
             _ => {}
         }
         let increment = match rng.below(10) {
             0 => BinaryAngle(0),
-            1 => BinaryAngle(rng.next() as i32),
+            1 => BinaryAngle(rng.next_u64() as i32),
             _ => BinaryAngle::from_fraction(1, ranges.len().max(1) as i64),
         };
         let with_labels = rng.below(2) == 0;
         let scan = (rng.below(6) != 0).then(|| ScanInput {
-            angle_min: BinaryAngle(rng.next() as i32),
+            angle_min: BinaryAngle(rng.next_u64() as i32),
             angle_increment: increment,
             ranges_mm: &ranges,
             labels: with_labels.then_some(&labels[..]),
@@ -134,7 +122,7 @@ fn random_config(rng: &mut Rng) -> Config {
     let angle = |rng: &mut Rng| match rng.below(3) {
         0 => BinaryAngle(1),
         1 => BinaryAngle(-1),
-        _ => BinaryAngle(rng.next() as i32).add(BinaryAngle(1)),
+        _ => BinaryAngle(rng.next_u64() as i32).add(BinaryAngle(1)),
     };
     // Mostly a grid holding the room, sometimes anywhere (the robot then is off the grid).
     let origin = |rng: &mut Rng| if rng.below(4) == 0 { length(rng, Meters::MIN, MAX_ORIGIN_M) } else { Meters::ZERO };
@@ -148,15 +136,15 @@ fn random_config(rng: &mut Rng) -> Config {
         camera_fov: angle(rng),
         camera_range_m: length(rng, tiny, GRID_SIDE_M),
         robot_radius_m: length(rng, Meters::ZERO, MAX_ROBOT_RADIUS_M),
-        min_frontier_cells: rng.next() as u16 >> rng.below(16),
+        min_frontier_cells: rng.next_u64() as u16 >> rng.below(16),
         w_dist_per_m: weight(rng),
         w_unknown_per_cell: weight(rng),
         unseen_unknown_eighths: rng.below(9) as u8,
         w_surface_per_ray: weight(rng),
         w_frontier_per_cell: weight(rng),
         w_nonmap_per_point: weight(rng),
-        nonmap_block_cap: rng.next() as u8,
-        nonmap_view_cap: rng.next() as u16,
+        nonmap_block_cap: rng.next_u64() as u8,
+        nonmap_view_cap: rng.next_u64() as u16,
         look_around_here: rng.below(2) == 0,
         gaze: rng.below(2) == 0,
         gaze_min_gain: weight(rng),
@@ -168,19 +156,19 @@ fn random_config(rng: &mut Rng) -> Config {
         nonmap_drop_vacated: rng.below(2) == 0,
         scan_matching: rng.below(2) == 0,
         // Plan every tick half the time.
-        replan_interval_us: if rng.below(2) == 0 { 0 } else { rng.next() >> rng.below(64) },
+        replan_interval_us: if rng.below(2) == 0 { 0 } else { rng.next_u64() >> rng.below(64) },
         switch_margin: weight(rng),
         goal_tolerance_m: length(rng, tiny, GRID_SIDE_M),
         goal_heading_tolerance: angle(rng),
-        goal_timeout_us: rng.next() >> rng.below(64),
-        blocked_timeout_us: rng.next() >> rng.below(64),
+        goal_timeout_us: rng.next_u64() >> rng.below(64),
+        blocked_timeout_us: rng.next_u64() >> rng.below(64),
         progress_m: length(rng, tiny, GRID_SIDE_M),
         blacklist_radius_m: length(rng, Meters::ZERO, GRID_SIDE_M),
         viewpoint_snap_radius_m: length(rng, Meters::ZERO, MAX_VIEWPOINT_SNAP_RADIUS_M),
-        watchdog_us: 1_000_000 + (rng.next() >> rng.below(64)).min(u64::MAX / 2),
+        watchdog_us: 1_000_000 + (rng.next_u64() >> rng.below(64)).min(u64::MAX / 2),
         budgets: Config::DEFAULT.budgets,
     };
-    c.budgets.plan_ops = rng.next() as u32;
+    c.budgets.plan_ops = rng.next_u64() as u32;
     c
 }
 

@@ -31,6 +31,7 @@
 mod angle;
 mod pose;
 mod quant;
+mod splitmix;
 mod tables;
 mod trig;
 
@@ -38,6 +39,7 @@ pub use angle::BinaryAngle;
 pub use fixed;
 pub use pose::Pose2;
 pub use quant::*;
+pub use splitmix::SplitMix64;
 pub use trig::{atan2, cos, hypot, isqrt_u64, sin, sin_cos, sqrt};
 
 /// Metres, as a Q16.16 fixed-point number (range ±32 768 m, resolution 2⁻¹⁶ m ≈ 15 µm).

@@ -186,20 +186,8 @@ pub const fn requantize_i8(acc: i32, m: QuantizedMultiplier) -> i8 {
 mod tests {
     use super::*;
 
-    /// splitmix64: a tiny deterministic generator for the randomized tests.
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-        fn unit(&mut self) -> f64 {
-            (self.next() >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    /// splitmix64: the randomized tests' inputs.
+    use crate::SplitMix64 as Rng;
 
     /// `rounding_divide_by_pot` in 64 bits, as gemmlowp states it: the specification of the int32
     /// form.
@@ -226,7 +214,7 @@ mod tests {
                 let half = 1i64 << (exponent - 1);
                 [half - 1, half, half + 1, 3 * half, 3 * half + 1].map(|v| v.clamp(i32::MIN as i64, i32::MAX as i64) as i32)
             });
-            let random = (0..2000).map(|_| rng.next() as i32);
+            let random = (0..2000).map(|_| rng.next_u64() as i32);
             for x in edges.into_iter().chain(ties.into_iter().flatten().flat_map(|t| [t, -t])).chain(random) {
                 assert_eq!(rounding_divide_by_pot(x, exponent), rounding_divide_by_pot_i64(x, exponent), "{x} / 2^{exponent}");
             }
@@ -336,7 +324,7 @@ mod tests {
             let m = QuantizedMultiplier::from_f64(real).unwrap();
             assert!(m.is_normalised(), "{real} -> {m:?}");
             let mag = (rng.unit() * (1u64 << 24) as f64) as i64;
-            let acc = if rng.next() & 1 == 0 { mag } else { -mag } as i32;
+            let acc = if rng.next_u64() & 1 == 0 { mag } else { -mag } as i32;
             let got = requantize(acc, m) as f64;
             // Against the multiplier's exact value, and against the real number it came from.
             let e_repr = (got - acc as f64 * m.to_f64()).abs();

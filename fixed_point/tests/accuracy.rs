@@ -9,16 +9,7 @@ use std::f64::consts::PI;
 const N: usize = 200_000;
 
 /// SplitMix64: a fixed, seedable input stream so the tests see the same inputs every run.
-struct Inputs(u64);
-impl Inputs {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-}
+use fixed_point::SplitMix64 as Inputs;
 
 fn wrap_pi(a: f64) -> f64 {
     let r = (a + PI).rem_euclid(2.0 * PI) - PI;
@@ -35,7 +26,7 @@ fn sin_cos_within_bound_of_f64_and_agree_with_cordic() {
     let (mut worst, mut worst_cordic_gap) = (0f64, 0f64);
     for i in 0..N {
         // Every 7th input is a "nice" angle (multiples of 1°) to cover the table knots.
-        let a = if i % 7 == 0 { BinaryAngle::from_fraction((i / 7) as i64 % 360, 360) } else { BinaryAngle(rng.next() as i32) };
+        let a = if i % 7 == 0 { BinaryAngle::from_fraction((i / 7) as i64 % 360, 360) } else { BinaryAngle(rng.next_u64() as i32) };
         let r = a.to_radians();
         let (s, c) = (sin(a).to_num::<f64>(), cos(a).to_num::<f64>());
         worst = worst.max((s - r.sin()).abs()).max((c - r.cos()).abs());
@@ -54,16 +45,16 @@ fn atan2_within_bound_of_f64_and_agree_with_cordic() {
     for i in 0..N {
         let (y, x) = match i % 4 {
             // full i32 range
-            0 => (rng.next() as i32, rng.next() as i32),
+            0 => (rng.next_u64() as i32, rng.next_u64() as i32),
             // metres-sized vectors in Q16.16 (±40 m)
-            1 => (((rng.next() % 5_242_880) as i32) - 2_621_440, ((rng.next() % 5_242_880) as i32) - 2_621_440),
+            1 => (((rng.next_u64() % 5_242_880) as i32) - 2_621_440, ((rng.next_u64() % 5_242_880) as i32) - 2_621_440),
             // tiny vectors (a few LSBs): worst case for ratio precision
-            2 => ((rng.next() % 64) as i32 - 32, (rng.next() % 64) as i32 - 32),
+            2 => ((rng.next_u64() % 64) as i32 - 32, (rng.next_u64() % 64) as i32 - 32),
             // axis-aligned and diagonals
             _ => {
-                let k = (rng.next() % 5) as i32 - 2;
-                let m = (rng.next() % 1000) as i32 + 1;
-                [(0, m), (m, 0), (m * k, m), (-m, m * k)][(rng.next() % 4) as usize]
+                let k = (rng.next_u64() % 5) as i32 - 2;
+                let m = (rng.next_u64() % 1000) as i32 + 1;
+                [(0, m), (m, 0), (m * k, m), (-m, m * k)][(rng.next_u64() % 4) as usize]
             }
         };
         if x == 0 && y == 0 {
@@ -87,7 +78,7 @@ fn atan2_within_bound_of_f64_and_agree_with_cordic() {
 fn sqrt_is_exact_floor_and_matches_fixed() {
     let mut rng = Inputs(3);
     for i in 0..N {
-        let bits = if i % 3 == 0 { (rng.next() % 1_000_000) as i32 } else { (rng.next() >> 33) as i32 };
+        let bits = if i % 3 == 0 { (rng.next_u64() % 1_000_000) as i32 } else { (rng.next_u64() >> 33) as i32 };
         let v = Meters::from_bits(bits);
         let got = sqrt(v);
         assert_eq!(got, v.sqrt(), "sqrt({v}) differs from fixed's");
@@ -102,7 +93,7 @@ fn sqrt_is_exact_floor_and_matches_fixed() {
 fn isqrt_is_exact() {
     let mut rng = Inputs(4);
     for _ in 0..N {
-        let n = rng.next() >> (rng.next() % 64);
+        let n = rng.next_u64() >> (rng.next_u64() % 64);
         let r = isqrt_u64(n);
         assert!((r as u128) * (r as u128) <= n as u128 && ((r + 1) as u128) * ((r + 1) as u128) > n as u128, "isqrt({n}) = {r}");
     }
@@ -113,8 +104,8 @@ fn isqrt_is_exact() {
 fn hypot_is_floor_of_f64() {
     let mut rng = Inputs(5);
     for _ in 0..N {
-        let dx = Meters::from_bits(rng.next() as i32 >> 4);
-        let dy = Meters::from_bits(rng.next() as i32 >> 4);
+        let dx = Meters::from_bits(rng.next_u64() as i32 >> 4);
+        let dy = Meters::from_bits(rng.next_u64() as i32 >> 4);
         let got = hypot(dx, dy).to_num::<f64>();
         let want = dx.to_num::<f64>().hypot(dy.to_num::<f64>());
         let err = got - want;
@@ -128,9 +119,9 @@ fn pose_compose_inverse_transform_match_f64() {
     let mut worst = 0f64;
     for _ in 0..N / 2 {
         let mut p = || {
-            let x = (rng.next() % 6_000_000) as f64 / 100_000.0 - 30.0;
-            let y = (rng.next() % 6_000_000) as f64 / 100_000.0 - 30.0;
-            let t = (rng.next() % 6_283_185) as f64 / 1e6 - PI;
+            let x = (rng.next_u64() % 6_000_000) as f64 / 100_000.0 - 30.0;
+            let y = (rng.next_u64() % 6_000_000) as f64 / 100_000.0 - 30.0;
+            let t = (rng.next_u64() % 6_283_185) as f64 / 1e6 - PI;
             Pose2::from_f64(x, y, t).unwrap()
         };
         let (a, b) = (p(), p());

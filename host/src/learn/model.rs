@@ -96,29 +96,7 @@ pub struct Trace {
 }
 
 /// splitmix64: the tiny seeded generator behind [`FloatModel::random`].
-#[derive(Clone, Debug)]
-pub struct SplitMix64(pub u64);
-
-impl SplitMix64 {
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Uniform in [−a, a).
-    pub fn symmetric(&mut self, a: f64) -> f32 {
-        ((self.unit() * 2.0 - 1.0) * a) as f32
-    }
-}
+pub use fixed_point::SplitMix64;
 
 fn linear_tanh(w: &[f32], b: &[f32], x: &[f32], pre: &mut Vec<f32>) -> Vec<f32> {
     let n = x.len();
