@@ -4,6 +4,8 @@
 #
 #   scripts/fuzz-long.sh [SECONDS] [TARGET...]      (all targets when none is named)
 #   FUZZ_RUNS=10000000 scripts/fuzz-long.sh 0 TARGET...   (a number of inputs instead of a time)
+#   TRACE_COMPARES=0 scripts/fuzz-long.sh ...   (no comparison tracing: about 3x the inputs per
+#                                                second on frames_to_core, coarser guidance)
 #
 # Needs the nightly toolchain and cargo-fuzz (installed here when missing). Works on a copy of the
 # committed corpus (fuzz/corpus-run/, not committed) so new inputs do not pile up in git; a crash
@@ -27,7 +29,9 @@ LOGS="$ROOT/target/fuzz-logs"
 mkdir -p "$LOGS"
 # No sanitizer: about twice the inputs per second of AddressSanitizer; the Rust code is memory
 # safe, and what the campaign looks for is panics, aborts, hangs and memory use (-rss_limit_mb).
-(cd fuzz && CARGO_BUILD_JOBS=2 nice -n 19 cargo +nightly fuzz build -s none --release --target-dir "$TDIR")
+TC=()
+[ "${TRACE_COMPARES:-1}" = 0 ] && { TC=(--no-trace-compares); TDIR="$TDIR-notc"; }
+(cd fuzz && CARGO_BUILD_JOBS=2 nice -n 19 cargo +nightly fuzz build -s none --release "${TC[@]}" --target-dir "$TDIR")
 BIN="$TDIR/x86_64-unknown-linux-gnu/release"
 for t in "${TARGETS[@]}"; do
     work="fuzz/corpus-run/$t"

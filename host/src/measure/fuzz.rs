@@ -27,9 +27,9 @@
 //! | `model` | `model::validate_blob` (geometric and `LabelPoseNet` blobs) | a blob that validates installs in a `Controller` |
 //! | `adapter` | `link::adapter::parse_line` per line | — |
 //!
-//! Allocation is bounded by the code under test, not by the fuzzer: the long campaign runs with
-//! `-malloc_limit_mb=512` (`docs/reliability.md`), so any single allocation of more than 512 MiB
-//! from a small input is a failure.
+//! Allocation is bounded by the code under test, not by the fuzzer: the campaign builds without a
+//! sanitizer, where libFuzzer cannot check single allocations, so it runs with `-rss_limit_mb=2048`
+//! and an allocation beyond the address space aborts as a crash (`docs/reliability.md`).
 
 use crate::io::replay::{carmen, cdr, rosbag, ReplayError};
 use crate::io::sensors::vlp16;
