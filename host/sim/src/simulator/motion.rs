@@ -1,9 +1,9 @@
 //! How the base and the people move: paths, gaze, the turn-then-drive law with obstacle sliding,
 //! and people who wait and turn round.
 
-use super::super::geometry::{dist, norm, sub, wrap_angle, Scene};
-use super::super::P2;
 use super::*;
+use crate::geometry::{dist, norm, sub, wrap_angle, Scene};
+use crate::P2;
 
 impl Sim {
     /// Walls, obstacles and the placed targets (no people).

@@ -6,9 +6,9 @@ use std::f64::consts::PI;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
-use super::super::geometry::{norm, ray_circle, sub, wrap_angle, NO_OWNER, TARGET_OWNER_BASE};
-use super::super::{HitKind, Material, P2};
 use super::*;
+use crate::geometry::{norm, ray_circle, sub, wrap_angle, NO_OWNER, TARGET_OWNER_BASE};
+use crate::{HitKind, Material, P2};
 
 impl Sim {
     /// First hit of a ray against the scene and the people, within `max_t`.

@@ -1,9 +1,9 @@
 use super::*;
 use std::f64::consts::PI;
 
-use super::super::geometry::{dist, wrap_angle};
-use super::super::{HitKind, Material, Shape, World};
+use crate::geometry::{dist, wrap_angle};
 use crate::Scenario;
+use crate::{HitKind, Material, Shape, World};
 
 /// A closed 10 × 4 m room, the robot starting at (2, 2), plus `extra` (TOML tables).
 fn room_world(name: &str, extra: &str) -> World {

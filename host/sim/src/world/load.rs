@@ -6,9 +6,9 @@ use std::path::Path;
 
 use toml::Spanned;
 
-use super::super::geometry::{dist, polygon_area};
-use super::super::{HitKind, Material, Shape, P2};
 use super::*;
+use crate::geometry::{dist, polygon_area};
+use crate::{HitKind, Material, Shape, P2};
 
 /// 1-based line of a byte offset.
 pub(super) fn line_of(text: &str, offset: usize) -> usize {
@@ -474,7 +474,7 @@ impl World {
     /// Read and parse a world file.
     pub fn load(path: &Path) -> Result<World, WorldError> {
         let file = path.display().to_string();
-        let bytes = super::super::read_at_most(path, MAX_WORLD_FILE_BYTES)
+        let bytes = crate::read_at_most(path, MAX_WORLD_FILE_BYTES)
             .map_err(|e| WorldError::Io { file: file.clone(), message: format!("cannot read: {e}") })?;
         let Some(bytes) = bytes else {
             return Err(WorldError::Io { file, message: format!("larger than a world file may be ({MAX_WORLD_FILE_BYTES} bytes)") });

@@ -1,6 +1,6 @@
 use super::load::line_of;
-use std::path::Path;
 use super::*;
+use std::path::Path;
 
 const TINY: &str = r#"# a tiny world
 name = "tiny"

@@ -1,7 +1,7 @@
 //! Writing a world back as a TOML file ([`World::to_toml_string`]).
 
-use super::super::{HitKind, Material, Shape, P2};
 use super::*;
+use crate::{HitKind, Material, Shape, P2};
 
 impl World {
     /// The world as a complete, standalone TOML file that [`World::from_toml_str`] reads back to

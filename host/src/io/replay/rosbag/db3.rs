@@ -1,11 +1,11 @@
 //! rosbag2 sqlite3 bags (`.db3`, feature `db3`).
 
+use super::*;
 #[cfg(feature = "db3")]
-use super::super::Location;
+use crate::io::replay::Location;
+use crate::io::replay::ReplayError;
 #[cfg(feature = "db3")]
 use std::collections::HashMap;
-use super::super::ReplayError;
-use super::*;
 use std::path::Path;
 
 /// Without the `db3` feature (no SQLite compiled in): the error says how to get it.

@@ -1,6 +1,6 @@
 //! The `tf` frame tree: transforms by frame pair, interpolated to a stamp, with the rejections counted.
 
-use super::super::cdr::Transform;
+use crate::io::replay::cdr::Transform;
 use std::collections::HashMap;
 
 /// A rigid transform in 3D, for walking the frame tree.

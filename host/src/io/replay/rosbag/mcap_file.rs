@@ -1,7 +1,7 @@
 //! MCAP files: the record walk, bounded chunk decompression and the messages of the ROS 2 topics read.
 
-use super::super::{Location, ReplayError};
 use super::*;
+use crate::io::replay::{Location, ReplayError};
 use std::collections::HashMap;
 use std::path::Path;
 

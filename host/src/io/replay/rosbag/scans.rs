@@ -1,8 +1,8 @@
 //! From bag messages to scans at poses ([`scans_from_messages`]): odometry and `tf` at each scan's stamp.
 
-use super::super::cdr::{self, CdrError};
-use super::super::{BadRecords, Location, ReplayError, ScanRecord};
 use super::*;
+use crate::io::replay::cdr::{self, CdrError};
+use crate::io::replay::{BadRecords, Location, ReplayError, ScanRecord};
 use std::collections::HashMap;
 use std::path::Path;
 

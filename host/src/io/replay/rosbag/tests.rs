@@ -1,6 +1,6 @@
-use super::super::cdr::{self, Transform};
-use super::super::{Location, ReplayError};
 use super::*;
+use crate::io::replay::cdr::{self, Transform};
+use crate::io::replay::{Location, ReplayError};
 use std::path::Path;
 
 fn iso(x: f64, y: f64, yaw: f64) -> Iso {

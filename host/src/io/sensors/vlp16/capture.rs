@@ -13,8 +13,8 @@ pub enum Vlp16Error {
     Config(ConfigError),
     /// Opening or reading a file, or the socket.
     Io { path: Option<PathBuf>, source: io::Error },
-    /// The pcap file could not be read ([`super::super::pcap::CaptureError`]).
-    Capture(super::super::pcap::CaptureError),
+    /// The pcap file could not be read ([`crate::io::sensors::pcap::CaptureError`]).
+    Capture(crate::io::sensors::pcap::CaptureError),
     /// A raw payload file ends inside a packet.
     TruncatedPayload { path: PathBuf, offset: u64, len: u64 },
     /// The file has no bytes.
@@ -52,8 +52,8 @@ impl std::error::Error for Vlp16Error {
     }
 }
 
-impl From<super::super::pcap::CaptureError> for Vlp16Error {
-    fn from(e: super::super::pcap::CaptureError) -> Self {
+impl From<crate::io::sensors::pcap::CaptureError> for Vlp16Error {
+    fn from(e: crate::io::sensors::pcap::CaptureError) -> Self {
         Self::Capture(e)
     }
 }
@@ -229,7 +229,7 @@ pub fn stream_pcap<R: Read>(
     cfg: &Vlp16Config,
     on_scan: &mut dyn FnMut(PlanarScan),
 ) -> Result<PcapScans, Vlp16Error> {
-    use super::super::pcap::{Frame, PcapStream, Record};
+    use crate::io::sensors::pcap::{Frame, PcapStream, Record};
     let mut dec = Decoder::new(*cfg)?;
     let mut stream = PcapStream::new(path, reader)?;
     let mut error = None;
@@ -393,7 +393,7 @@ impl<R: Read> RawWindow<R> {
             self.end -= self.pos;
             self.pos = 0;
             let want = self.buf.len() - self.end;
-            let got = super::super::pcap::read_full(&mut self.reader, &mut self.buf[self.end..]);
+            let got = crate::io::sensors::pcap::read_full(&mut self.reader, &mut self.buf[self.end..]);
             let got_n = *got.as_ref().unwrap_or(&0);
             self.end += got_n;
             self.eof = got_n < want;
@@ -435,10 +435,10 @@ pub fn stream_capture(
 ) -> Result<(CaptureFormat, PcapScans), Vlp16Error> {
     let mut file = open(path)?;
     let mut magic = [0u8; 4];
-    let n =
-        super::super::pcap::read_full(&mut file, &mut magic).map_err(|source| Vlp16Error::Io { path: Some(path.to_path_buf()), source })?;
+    let n = crate::io::sensors::pcap::read_full(&mut file, &mut magic)
+        .map_err(|source| Vlp16Error::Io { path: Some(path.to_path_buf()), source })?;
     let reader = io::Read::chain(&magic[..n], file);
-    if super::super::pcap::looks_like_pcap(&magic[..n]) {
+    if crate::io::sensors::pcap::looks_like_pcap(&magic[..n]) {
         Ok((CaptureFormat::Pcap, stream_pcap(path, reader, cfg, on_scan)?))
     } else {
         Ok((CaptureFormat::Raw, stream_raw(path, reader, cfg, on_scan)?))
