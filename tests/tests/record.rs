@@ -180,8 +180,8 @@ fn a_killed_lives_search_leaves_a_readable_recording() {
 fn a_bridge_recording_holds_the_protocol_messages_and_changes_nothing() {
     use firmware::node::TimeMode;
     use firmware::Config;
-    use host::link::{mem_pair, run_bridge, BridgeOptions, NodeOptions, NodeProcess, Source};
     use host::io::record::SharedRecording;
+    use host::link::{mem_pair, run_bridge, BridgeOptions, NodeOptions, NodeProcess, Source};
     use std::sync::atomic::{AtomicBool, Ordering};
 
     // A short search: the built-in `apartment easy` of 2026-11-25, kept as an example.

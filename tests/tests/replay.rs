@@ -717,7 +717,8 @@ fn any_bit_flipped_in_a_zstd_chunk_costs_that_chunk_at_most() {
     let (_, chunk_at, chunk_len) = chunks[1];
     let compression_len = u32::from_le_bytes(bytes[chunk_at + 9 + 28..chunk_at + 9 + 32].try_into().unwrap()) as usize;
     let data_at = chunk_at + 9 + 40 + compression_len;
-    let outside = |c: &host::io::replay::rosbag::BagContents| c.messages.iter().filter(|m| m.at != Location::Offset(chunk_at as u64)).count();
+    let outside =
+        |c: &host::io::replay::rosbag::BagContents| c.messages.iter().filter(|m| m.at != Location::Offset(chunk_at as u64)).count();
     let (mut skipped, mut same) = (0, 0);
     for byte in data_at..chunk_at + 9 + chunk_len {
         for bit in 0..8 {

@@ -3,8 +3,8 @@
 //! raw odometry's, with `lives mapcheck`'s metric (`host::measure::mapcheck::relation_errors`). Reads
 //! `tests/data/carmen/raw/`.
 
-use host::measure::mapcheck::{read_poses, read_relations, relation_errors, PoseIndex, RelationStats};
 use host::io::replay::{self, ReplayOptions};
+use host::measure::mapcheck::{read_poses, read_relations, relation_errors, PoseIndex, RelationStats};
 
 mod common;
 

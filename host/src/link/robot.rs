@@ -28,8 +28,8 @@ use super::bridge::{resume_from, Base, Bridge, BridgeError, BridgeOptions, Bridg
 use super::SerialLink;
 use super::{Link, Summary, TimeMode};
 use crate::io::range::{EncodedScan, RangeLimits};
-use crate::search::{PlannerChoice, SearchResult};
 use crate::io::sensors::vlp16::{PlanarScan, Vlp16Config, Vlp16Udp};
+use crate::search::{PlannerChoice, SearchResult};
 use firmware::protocol::{
     BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, GoalMsg, HostToCore, PoseMsg, ScanMsg, StatusMsg, WireCommand, WireMode,
     MAX_WIRE_BEAMS,

@@ -2,8 +2,8 @@
 //! ([`super::bridge`]) or a real robot behind the base adapter ([`super::robot`]).
 
 use super::bridge::{BridgeError, BridgeOptions, BridgeResult};
-use super::sim_bridge::run_sim;
 use super::robot::{run_robot, RobotSpec};
+use super::sim_bridge::run_sim;
 use super::Link;
 use crate::search::SearchSpec;
 use std::sync::atomic::AtomicBool;

@@ -20,8 +20,8 @@ use std::fmt;
 
 mod draw;
 mod legend;
-mod strip;
 pub mod picture;
+mod strip;
 pub use draw::*;
 pub use legend::*;
 pub use strip::*;

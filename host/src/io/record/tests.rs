@@ -1,8 +1,8 @@
 use super::*;
 use crate::search::{self, PlannerChoice, SearchSpec};
 use crate::sim::{Scenario, World};
-use firmware::grid::{Cell, PackedGrid};
 use base64::Engine as _;
+use firmware::grid::{Cell, PackedGrid};
 use serde_json::Value;
 
 fn tmp(name: &str) -> PathBuf {

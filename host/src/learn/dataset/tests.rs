@@ -1,6 +1,6 @@
 use super::*;
 use std::collections::BTreeMap;
-use std::fs::{self};
+use std::fs;
 use std::path::{Path, PathBuf};
 
 use crate::learn::labeller::Agreement;

@@ -1,9 +1,9 @@
 //! Samples: episodes read from the dataset, the label histories, batches, rollouts and the loss.
 
 use super::*;
+use crate::io::range::{encode_range, RangeLimits};
 use crate::learn::dataset::{self, DatasetReader, Split};
 use crate::learn::model::{normalise_pose_f32, normalise_scan_f32, FloatInputs};
-use crate::io::range::{encode_range, RangeLimits};
 use candle_core::{Device, Tensor};
 use firmware::capacity::BEAMS;
 use firmware::classifier::{Normalisation, HISTORY, LABEL_ROWS, POSE_FEATURES};

@@ -28,7 +28,7 @@
 //!   split and in the built-in (unseen) worlds ([`unseen_episodes`]) → `docs/model-card.md`
 //!   ([`model_card`]).
 
-use crate::learn::dataset::{self};
+use crate::learn::dataset;
 use std::fmt;
 
 mod accuracy;

@@ -1,7 +1,7 @@
 //! A live sensor on UDP ([`Vlp16Udp`]) and the decoding benchmark.
 
 use super::*;
-use std::io::{self};
+use std::io;
 use std::net::{SocketAddr, UdpSocket};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
