@@ -16,7 +16,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_EACH="${1:-600}"
 shift || true
-ALL=(frames_to_core frames_to_host world carmen vlp16 pcap mcap sqlite cdr model adapter)
+ALL=(frames_to_core frames_to_host world carmen vlp16 pcap mcap sqlite ros1bag cdr model adapter)
 TARGETS=("$@")
 [ ${#TARGETS[@]} -eq 0 ] && TARGETS=("${ALL[@]}")
 

@@ -662,7 +662,7 @@ fn a_truncated_mcap_bag_names_the_offset_and_keeps_the_scans_before() {
     let cut_path = tmp("cut.mcap");
     std::fs::write(&cut_path, &bytes[..cut]).unwrap();
     let run = replay::replay(&cut_path, &no_classifier()).unwrap();
-    let Some(ReplayError::Mcap { file, offset, reason }) = &run.error else { panic!("{:?}", run.error) };
+    let Some(ReplayError::Bag { file, offset, reason }) = &run.error else { panic!("{:?}", run.error) };
     assert_eq!(file, &cut_path);
     assert!(*offset < cut as u64, "the damaged record starts before the cut: {offset} vs {cut}");
     assert!(reason.contains("truncated"), "{reason}");
@@ -684,7 +684,7 @@ fn a_truncated_mcap_bag_names_the_offset_and_keeps_the_scans_before() {
     std::fs::write(&bad_path, &bad).unwrap();
     let run = replay::replay(&bad_path, &no_classifier()).unwrap();
     assert!(run.error.is_none(), "{:?}", run.error);
-    let [ReplayError::McapChunk { offset, reason, .. }] = &run.bad_records.first[..] else { panic!("{:?}", run.bad_records) };
+    let [ReplayError::BagChunk { offset, reason, .. }] = &run.bad_records.first[..] else { panic!("{:?}", run.bad_records) };
     assert_eq!(*offset, chunk_at as u64);
     assert!(reason.starts_with("damaged Chunk record, skipped: its zstd data"), "{reason}");
     assert_eq!(run.report.skipped_records.by_reason, BTreeMap::from([("damaged_chunk", 1)]));
@@ -732,7 +732,7 @@ fn any_bit_flipped_in_a_zstd_chunk_costs_that_chunk_at_most() {
                     assert_eq!(c.messages.len(), whole.messages.len(), "byte {byte} bit {bit}");
                     same += 1;
                 }
-                [ReplayError::McapChunk { offset, .. }] => {
+                [ReplayError::BagChunk { offset, .. }] => {
                     assert_eq!(*offset, chunk_at as u64);
                     skipped += 1;
                 }
@@ -807,7 +807,7 @@ fn a_wrong_mcap_record_length_names_the_record_and_what_it_needed() {
         assert!(run.report.scans_read > 0 && run.report.scans_read < SCANS, "{}", run.report.scans_read);
         assert_eq!(run.report.scans_used, run.report.scans_read);
         match run.error {
-            Some(ReplayError::Mcap { offset, reason, .. }) => (offset, reason),
+            Some(ReplayError::Bag { offset, reason, .. }) => (offset, reason),
             e => panic!("{e:?}"),
         }
     };
@@ -841,7 +841,7 @@ fn a_wrong_mcap_record_length_names_the_record_and_what_it_needed() {
     std::fs::write(&p, &bad).unwrap();
     let run = replay::replay(&p, &no_classifier()).unwrap();
     assert!(run.error.is_none(), "{:?}", run.error);
-    let [ReplayError::McapChunk { offset, reason, .. }] = &run.bad_records.first[..] else { panic!("{:?}", run.bad_records) };
+    let [ReplayError::BagChunk { offset, reason, .. }] = &run.bad_records.first[..] else { panic!("{:?}", run.bad_records) };
     assert_eq!(*offset, chunk_at as u64);
     assert!(
         reason.starts_with(&format!(

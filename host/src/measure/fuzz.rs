@@ -23,7 +23,8 @@
 //! | `pcap` | `decode_pcap_bytes` | the same |
 //! | `mcap` | `rosbag::read_mcap` | every offset it reports is within the file |
 //! | `sqlite` | `rosbag::read_db3` on the bytes as a file | — |
-//! | `cdr` | `decode_laser_scan`, `decode_odometry`, `decode_tf_message` | — |
+//! | `ros1bag` | `rosbag::read_bag1` | every offset it reports is within the file |
+//! | `cdr` | `decode_laser_scan`, `decode_odometry`, `decode_tf_message`, CDR and ROS 1 | — |
 //! | `model` | `model::validate_blob` (geometric and `LabelPoseNet` blobs) | a blob that validates installs in a `Controller` |
 //! | `adapter` | `link::adapter::parse_line` per line | — |
 //!
@@ -39,7 +40,7 @@ use std::path::Path;
 /// The targets, by name (the directory names under `fuzz/corpus/` and the binaries under
 /// `fuzz/fuzz_targets/`).
 pub const TARGETS: &[&str] =
-    &["frames_to_core", "frames_to_host", "world", "carmen", "vlp16", "pcap", "mcap", "sqlite", "cdr", "model", "adapter"];
+    &["frames_to_core", "frames_to_host", "world", "carmen", "vlp16", "pcap", "mcap", "sqlite", "ros1bag", "cdr", "model", "adapter"];
 
 /// Runs target `name` on `data`. Panics on an unknown name.
 pub fn run(name: &str, data: &[u8]) {
@@ -52,6 +53,7 @@ pub fn run(name: &str, data: &[u8]) {
         "pcap" => pcap(data),
         "mcap" => mcap(data),
         "sqlite" => sqlite(data),
+        "ros1bag" => ros1bag(data),
         "cdr" => cdr_messages(data),
         "model" => model(data),
         "adapter" => adapter(data),
@@ -208,10 +210,19 @@ pub fn pcap(data: &[u8]) {
 
 /// An MCAP bag: every offset reported lies within the file.
 pub fn mcap(data: &[u8]) {
-    let c = rosbag::read_mcap(Path::new("fuzz.mcap"), data);
+    bag(data, rosbag::read_mcap(Path::new("fuzz.mcap"), data));
+}
+
+/// A ROS 1 bag: as `mcap`.
+pub fn ros1bag(data: &[u8]) {
+    bag(data, rosbag::read_bag1(Path::new("fuzz.bag"), data));
+}
+
+/// What a bag read from `data` gave: every offset within the file, then the scan builder.
+fn bag(data: &[u8], c: rosbag::BagContents) {
     let within = |e: &ReplayError| match e {
-        ReplayError::Mcap { offset, .. } | ReplayError::McapChunk { offset, .. } => assert!(*offset <= data.len() as u64, "{e}"),
-        other => panic!("not an MCAP error: {other}"),
+        ReplayError::Bag { offset, .. } | ReplayError::BagChunk { offset, .. } => assert!(*offset <= data.len() as u64, "{e}"),
+        other => panic!("not a bag error: {other}"),
     };
     c.error.iter().for_each(within);
     c.bad.first.iter().for_each(within);
@@ -221,7 +232,7 @@ pub fn mcap(data: &[u8]) {
         }
     }
     // What the bag gave goes on to the scan builder, as in `lives replay`.
-    let _ = rosbag::scans_from_messages(Path::new("fuzz.mcap"), c.messages);
+    let _ = rosbag::scans_from_messages(Path::new("fuzz.bag"), c.messages);
 }
 
 /// A sqlite3 bag: the bytes written to a file of this process's own, then read as `lives
@@ -243,9 +254,11 @@ pub fn sqlite(data: &[u8]) {
 
 /// CDR messages: the three decoders on the same bytes.
 pub fn cdr_messages(data: &[u8]) {
-    let _ = cdr::decode_laser_scan(data);
-    let _ = cdr::decode_odometry(data);
-    let _ = cdr::decode_tf_message(data);
+    for wire in [cdr::Wire::Cdr, cdr::Wire::Ros1] {
+        let _ = cdr::decode_laser_scan(data, wire);
+        let _ = cdr::decode_odometry(data, wire);
+        let _ = cdr::decode_tf_message(data, wire);
+    }
 }
 
 /// A classifier blob of either format: validates or is an error; one that validates installs in

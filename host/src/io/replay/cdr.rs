@@ -1,5 +1,6 @@
 //! A small, careful reader (and writer) of OMG CDR for the three ROS 2 message types replay needs:
-//! `sensor_msgs/msg/LaserScan`, `nav_msgs/msg/Odometry` and `tf2_msgs/msg/TFMessage`.
+//! `sensor_msgs/msg/LaserScan`, `nav_msgs/msg/Odometry` and `tf2_msgs/msg/TFMessage`, and of the
+//! same three types in ROS 1's serialisation ([`Wire::Ros1`]).
 //!
 //! ROS 2 serialises messages as CDR with a 4-byte encapsulation header: byte 1 is the
 //! representation (`0x00` CDR big-endian, `0x01` CDR little-endian, `0x06`/`0x07` XCDR2 plain
@@ -8,6 +9,11 @@
 //! there). Strings are a `uint32` length that includes the terminating NUL, then the bytes.
 //! Sequences are a `uint32` count, then the elements. Fixed arrays (`float64[36]` covariances)
 //! have no count.
+//!
+//! ROS 1 serialises the same fields in order with no encapsulation header and no alignment,
+//! little-endian; a string is a `uint32` byte count and the bytes (no NUL); `time` is two
+//! `uint32`s; and `std_msgs/Header` starts with a `uint32 seq`, which is read and dropped. The
+//! same reader serves both ([`CdrReader::ros1`]): one set of field lists, two layouts.
 //!
 //! The reader checks every length against the bytes left before it reads or allocates, and every
 //! error names the byte offset (from the start of the serialised message, header included) and
@@ -79,12 +85,36 @@ impl fmt::Display for CdrError {
 
 impl std::error::Error for CdrError {}
 
+/// How a message is serialised: a bag says it per topic (MCAP's `message_encoding`, rosbag2's
+/// `serialization_format`; a ROS 1 bag is all `ros1`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wire {
+    /// OMG CDR with its encapsulation header (ROS 2).
+    Cdr,
+    /// ROS 1 serialisation.
+    Ros1,
+}
+
+impl Wire {
+    /// The wire of a bag's encoding name (`cdr`, `ros1`); `None` for one replay does not read.
+    pub fn of_encoding(name: &str) -> Option<Wire> {
+        match name {
+            "cdr" => Some(Wire::Cdr),
+            "ros1" => Some(Wire::Ros1),
+            _ => None,
+        }
+    }
+}
+
 /// A cursor over one serialised message.
 pub struct CdrReader<'a> {
     buf: &'a [u8],
     pos: usize,
     little: bool,
     max_align: usize,
+    /// Where alignment is counted from: the end of the encapsulation header (0 for ROS 1).
+    base: usize,
+    ros1: bool,
 }
 
 /// Size of the encapsulation header.
@@ -104,7 +134,21 @@ impl<'a> CdrReader<'a> {
             0x0007 => (true, 4),
             other => return Err(CdrError { offset: 0, kind: CdrErrorKind::Encapsulation(other) }),
         };
-        Ok(CdrReader { buf, pos: HEADER, little, max_align })
+        Ok(CdrReader { buf, pos: HEADER, little, max_align, base: HEADER, ros1: false })
+    }
+
+    /// A reader of ROS 1 serialisation: no header, no alignment, little-endian, strings without
+    /// NUL, headers with `seq`.
+    pub fn ros1(buf: &'a [u8]) -> Self {
+        CdrReader { buf, pos: 0, little: true, max_align: 1, base: 0, ros1: true }
+    }
+
+    /// A reader of `buf` as `wire` says.
+    pub fn of(buf: &'a [u8], wire: Wire) -> Result<Self, CdrError> {
+        match wire {
+            Wire::Cdr => Self::new(buf),
+            Wire::Ros1 => Ok(Self::ros1(buf)),
+        }
     }
 
     /// The current byte offset (header included).
@@ -118,7 +162,7 @@ impl<'a> CdrReader<'a> {
 
     fn align(&mut self, size: usize) {
         let a = size.min(self.max_align);
-        let rel = self.pos - HEADER;
+        let rel = self.pos - self.base;
         // Padding that runs past the end leaves the cursor at the end (errors name real offsets).
         self.pos = (self.pos + (a - rel % a) % a).min(self.buf.len());
     }
@@ -169,6 +213,9 @@ impl<'a> CdrReader<'a> {
         let start = self.pos;
         let n = self.u32(what)? as usize;
         let bytes = self.take(n, what)?;
+        if self.ros1 {
+            return Ok(String::from_utf8_lossy(bytes).into_owned());
+        }
         match bytes.split_last() {
             Some((0, text)) => Ok(String::from_utf8_lossy(text).into_owned()),
             _ => Err(CdrError { offset: start, kind: CdrErrorKind::BadString { what } }),
@@ -288,6 +335,14 @@ pub struct TransformStamped {
 }
 
 fn header(r: &mut CdrReader) -> Result<Header, CdrError> {
+    if r.ros1 {
+        r.u32("header.seq")?;
+        // ROS 1 time is unsigned; stamps past 2038 wrap negative and count as unstamped.
+        let sec = r.u32("header.stamp.secs")? as i32;
+        let nanosec = r.u32("header.stamp.nsecs")?;
+        let frame_id = r.string("header.frame_id")?;
+        return Ok(Header { stamp: Time { sec, nanosec }, frame_id });
+    }
     let sec = r.i32("header.stamp.sec")?;
     let nanosec = r.u32("header.stamp.nanosec")?;
     let frame_id = r.string("header.frame_id")?;
@@ -301,8 +356,8 @@ fn transform(r: &mut CdrReader, what: &'static str) -> Result<Transform, CdrErro
 }
 
 /// Decodes a serialised `sensor_msgs/msg/LaserScan`.
-pub fn decode_laser_scan(buf: &[u8]) -> Result<LaserScan, CdrError> {
-    let mut r = CdrReader::new(buf)?;
+pub fn decode_laser_scan(buf: &[u8], wire: Wire) -> Result<LaserScan, CdrError> {
+    let mut r = CdrReader::of(buf, wire)?;
     Ok(LaserScan {
         header: header(&mut r)?,
         angle_min: r.f32("angle_min")?,
@@ -318,8 +373,8 @@ pub fn decode_laser_scan(buf: &[u8]) -> Result<LaserScan, CdrError> {
 }
 
 /// Decodes a serialised `nav_msgs/msg/Odometry`.
-pub fn decode_odometry(buf: &[u8]) -> Result<Odometry, CdrError> {
-    let mut r = CdrReader::new(buf)?;
+pub fn decode_odometry(buf: &[u8], wire: Wire) -> Result<Odometry, CdrError> {
+    let mut r = CdrReader::of(buf, wire)?;
     let header = header(&mut r)?;
     let child_frame_id = r.string("child_frame_id")?;
     let pose = transform(&mut r, "pose.pose")?;
@@ -329,10 +384,11 @@ pub fn decode_odometry(buf: &[u8]) -> Result<Odometry, CdrError> {
     Ok(Odometry { header, child_frame_id, pose })
 }
 
-/// Decodes a serialised `tf2_msgs/msg/TFMessage`.
-pub fn decode_tf_message(buf: &[u8]) -> Result<Vec<TransformStamped>, CdrError> {
-    let mut r = CdrReader::new(buf)?;
-    // Each element is at least 4 + 4 + 4 (+ NUL) + 4 + 56 bytes; 64 is a safe lower bound.
+/// Decodes a serialised `tf2_msgs/msg/TFMessage` (ROS 1: also `tf/tfMessage`, the same fields).
+pub fn decode_tf_message(buf: &[u8], wire: Wire) -> Result<Vec<TransformStamped>, CdrError> {
+    let mut r = CdrReader::of(buf, wire)?;
+    // Each element is at least 4 + 4 + 4 (+ NUL) + 4 + 56 bytes in CDR, 4 + 8 + 4 + 4 + 56 in
+    // ROS 1; 64 is a safe lower bound.
     let n = r.count("transforms", 64)?;
     let mut out = Vec::with_capacity(n);
     for _ in 0..n {
@@ -547,9 +603,43 @@ mod tests {
         }]
     }
 
+    /// The same `TFMessage` in ROS 1's serialisation: no header, no padding, strings without
+    /// NUL, and the header's `seq` first.
+    #[rustfmt::skip]
+    static TF_ROS1_BYTES: [u8; 88] = [
+        0x01, 0x00, 0x00, 0x00,             // 1 transform
+        0x2a, 0x00, 0x00, 0x00,             // header.seq = 42 (dropped)
+        0x07, 0x00, 0x00, 0x00,             // stamp.secs = 7
+        0x10, 0x27, 0x00, 0x00,             // stamp.nsecs = 10000
+        0x04, 0x00, 0x00, 0x00, b'o', b'd', b'o', b'm', // "odom"
+        0x04, 0x00, 0x00, 0x00, b'b', b'a', b's', b'e', // "base"
+        0, 0, 0, 0, 0, 0, 0xf8, 0x3f,       // x = 1.5
+        0, 0, 0, 0, 0, 0, 0x00, 0xc0,       // y = -2.0
+        0, 0, 0, 0, 0, 0, 0, 0,             // z = 0
+        0, 0, 0, 0, 0, 0, 0, 0,             // qx = 0
+        0, 0, 0, 0, 0, 0, 0, 0,             // qy = 0
+        0, 0, 0, 0, 0, 0, 0, 0,             // qz = 0
+        0, 0, 0, 0, 0, 0, 0xf0, 0x3f,       // qw = 1
+    ];
+
+    #[test]
+    fn golden_ros1_tf_message_parses_and_every_truncation_is_an_error() {
+        assert_eq!(decode_tf_message(&TF_ROS1_BYTES, Wire::Ros1).unwrap(), tf_value());
+        for n in 0..TF_ROS1_BYTES.len() {
+            let e = decode_tf_message(&TF_ROS1_BYTES[..n], Wire::Ros1).unwrap_err();
+            assert!(e.offset <= n, "{e}");
+        }
+        // A string longer than the message is refused, not allocated.
+        let mut b = TF_ROS1_BYTES;
+        b[16..20].copy_from_slice(&u32::MAX.to_le_bytes());
+        let e = decode_tf_message(&b, Wire::Ros1).unwrap_err();
+        assert_eq!(e.offset, 20, "{e}");
+        assert!(matches!(e.kind, CdrErrorKind::Truncated { what: "header.frame_id", .. }), "{e}");
+    }
+
     #[test]
     fn golden_tf_message_parses_and_emits() {
-        assert_eq!(decode_tf_message(&TF_BYTES).unwrap(), tf_value());
+        assert_eq!(decode_tf_message(&TF_BYTES, Wire::Cdr).unwrap(), tf_value());
         assert_eq!(encode_tf_message(&tf_value()), TF_BYTES.to_vec());
     }
 
@@ -564,12 +654,12 @@ mod tests {
         for i in 0..7 {
             be[44 + 8 * i..52 + 8 * i].reverse();
         }
-        assert_eq!(decode_tf_message(&be).unwrap(), tf_value());
+        assert_eq!(decode_tf_message(&be, Wire::Cdr).unwrap(), tf_value());
         // XCDR2: float64 aligns to 4, so the 4 padding bytes before x disappear.
         let mut x2 = TF_BYTES.to_vec();
         x2[1] = 0x07;
         x2.drain(37..41);
-        assert_eq!(decode_tf_message(&x2).unwrap(), tf_value());
+        assert_eq!(decode_tf_message(&x2, Wire::Cdr).unwrap(), tf_value());
     }
 
     fn scan() -> LaserScan {
@@ -590,7 +680,7 @@ mod tests {
     #[test]
     fn laser_scan_and_odometry_round_trip() {
         let s = scan();
-        assert_eq!(decode_laser_scan(&encode_laser_scan(&s)).unwrap(), s);
+        assert_eq!(decode_laser_scan(&encode_laser_scan(&s), Wire::Cdr).unwrap(), s);
         let o = Odometry {
             header: Header { stamp: Time { sec: 3, nanosec: 4 }, frame_id: "odom".into() },
             child_frame_id: "base_link".into(),
@@ -600,14 +690,14 @@ mod tests {
         // After the 4-byte header: stamp 8, "odom" 4 + 5 → 17, pad → 20, "base_link" 4 + 10 → 34,
         // pad → 40 (float64 alignment), then 7 + 36 + 6 + 36 float64s.
         assert_eq!(bytes.len(), 4 + 40 + 8 * (7 + 36 + 6 + 36));
-        assert_eq!(decode_odometry(&bytes).unwrap(), o);
+        assert_eq!(decode_odometry(&bytes, Wire::Cdr).unwrap(), o);
     }
 
     #[test]
     fn every_truncation_is_an_error_with_an_offset_never_a_panic() {
         let bytes = encode_laser_scan(&scan());
         for n in 0..bytes.len() {
-            let e = decode_laser_scan(&bytes[..n]).unwrap_err();
+            let e = decode_laser_scan(&bytes[..n], Wire::Cdr).unwrap_err();
             assert!(e.offset <= n, "offset {} beyond {n} bytes", e.offset);
         }
         // A huge sequence count is refused before anything is allocated.
@@ -615,7 +705,7 @@ mod tests {
         let count_at = 4 + 4 + 4 + 4 + 6 + 2 + 7 * 4; // header, stamp, "laser" (10 B) + pad, 7 floats
         assert_eq!(&bad[count_at..count_at + 4], &5u32.to_le_bytes());
         bad[count_at..count_at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
-        let e = decode_laser_scan(&bad).unwrap_err();
+        let e = decode_laser_scan(&bad, Wire::Cdr).unwrap_err();
         assert_eq!(e, CdrError { offset: count_at, kind: CdrErrorKind::BadCount { what: "ranges", count: u32::MAX } });
         // Random byte flips: an error or a value, never a panic.
         let mut state = 0x2545_f491_4f6c_dd1du64;
@@ -626,19 +716,19 @@ mod tests {
             let mut m = bytes.clone();
             let i = (state % m.len() as u64) as usize;
             m[i] = (state >> 32) as u8;
-            let _ = decode_laser_scan(&m);
-            let _ = decode_tf_message(&m);
-            let _ = decode_odometry(&m);
+            let _ = decode_laser_scan(&m, Wire::Cdr);
+            let _ = decode_tf_message(&m, Wire::Cdr);
+            let _ = decode_odometry(&m, Wire::Cdr);
         }
     }
 
     #[test]
     fn unknown_encapsulation_and_missing_nul_are_named() {
-        assert_eq!(decode_tf_message(&[0, 1]).unwrap_err().kind, CdrErrorKind::NoHeader);
-        assert_eq!(decode_tf_message(&[0, 0x0a, 0, 0]).unwrap_err().kind, CdrErrorKind::Encapsulation(0x000a));
+        assert_eq!(decode_tf_message(&[0, 1], Wire::Cdr).unwrap_err().kind, CdrErrorKind::NoHeader);
+        assert_eq!(decode_tf_message(&[0, 0x0a, 0, 0], Wire::Cdr).unwrap_err().kind, CdrErrorKind::Encapsulation(0x000a));
         let mut b = TF_BYTES.to_vec();
         b[24] = b'!'; // the NUL ending "odom"
-        let e = decode_tf_message(&b).unwrap_err();
+        let e = decode_tf_message(&b, Wire::Cdr).unwrap_err();
         assert_eq!(e, CdrError { offset: 16, kind: CdrErrorKind::BadString { what: "header.frame_id" } });
     }
 }

@@ -22,11 +22,6 @@ pub enum ReplayError {
         /// The file.
         file: PathBuf,
     },
-    /// A ROS 1 bag (`#ROSBAG V2.0`), which replay does not read.
-    Ros1Bag {
-        /// The file.
-        file: PathBuf,
-    },
     /// The gzip stream is truncated or corrupt.
     Gzip {
         /// The file.
@@ -57,8 +52,8 @@ pub enum ReplayError {
         /// Why.
         error: carmen::LineError,
     },
-    /// An MCAP record is truncated or damaged.
-    Mcap {
+    /// A record of an MCAP file or a ROS 1 bag is truncated or damaged.
+    Bag {
         /// The file.
         file: PathBuf,
         /// Byte offset of the record (or of where the file ends).
@@ -66,9 +61,9 @@ pub enum ReplayError {
         /// Why.
         reason: String,
     },
-    /// An MCAP chunk that does not decompress, or whose records do not parse, skipped (the
-    /// records after it are read).
-    McapChunk {
+    /// A chunk of an MCAP file or a ROS 1 bag that does not decompress, or whose records do not
+    /// parse, skipped (the records after it are read).
+    BagChunk {
         /// The file.
         file: PathBuf,
         /// Byte offset of the Chunk record.
@@ -157,7 +152,7 @@ impl ReplayError {
             ReplayError::CarmenLine { error, .. } => error.reason(),
             ReplayError::NotText { .. } => "not_text",
             ReplayError::Message { .. } => "undecodable_message",
-            ReplayError::McapChunk { .. } => "damaged_chunk",
+            ReplayError::BagChunk { .. } => "damaged_chunk",
             ReplayError::SqliteRow { .. } => "bad_row",
             _ => "damage",
         }
@@ -179,15 +174,12 @@ impl fmt::Display for ReplayError {
         match self {
             ReplayError::Io { file, source } => write!(f, "{}: {source}", file.display()),
             ReplayError::UnknownFormat { file } => {
-                write!(f, "{}: not a CARMEN log (plain or gzip), an MCAP file, a sqlite3 bag or a VLP-16 capture", file.display())
+                write!(
+                    f,
+                    "{}: not a CARMEN log (plain or gzip), a ROS 2 bag (MCAP or sqlite3), a ROS 1 bag or a VLP-16 capture",
+                    file.display()
+                )
             }
-            ReplayError::Ros1Bag { file } => write!(
-                f,
-                "{}: a ROS 1 bag, which replay does not read yet: convert it to a ROS 2 bag first (`pip install rosbags`, then \
-                 `rosbags-convert --src {} --dst OUT_DIR`) and replay OUT_DIR",
-                file.display(),
-                file.display()
-            ),
             ReplayError::Gzip { file, lines, offset, reason } => {
                 write!(f, "{}: gzip stream damaged at compressed byte {offset} (after line {lines}): {reason}", file.display())
             }
@@ -197,7 +189,7 @@ impl fmt::Display for ReplayError {
                 write!(f, "{}:{line}: not text: {name} at column {column}", file.display())
             }
             ReplayError::CarmenLine { file, line, error } => write!(f, "{}:{line}: {error}", file.display()),
-            ReplayError::Mcap { file, offset, reason } | ReplayError::McapChunk { file, offset, reason } => {
+            ReplayError::Bag { file, offset, reason } | ReplayError::BagChunk { file, offset, reason } => {
                 write!(f, "{}: byte {offset}: {reason}", file.display())
             }
             ReplayError::SqliteRow { file, row, reason } => {

@@ -113,6 +113,8 @@ pub enum LogFormat {
     Ros2Mcap,
     /// ROS 2 bag, sqlite3 storage.
     Ros2Sqlite3,
+    /// ROS 1 bag (format 2.0).
+    Ros1Bag,
     /// A Velodyne VLP-16 capture: pcap, or raw 1206-byte payloads back to back (docs/vlp16.md).
     Vlp16,
 }
@@ -124,6 +126,7 @@ impl fmt::Display for LogFormat {
             LogFormat::CarmenGzip => "carmen-gzip",
             LogFormat::Ros2Mcap => "ros2-mcap",
             LogFormat::Ros2Sqlite3 => "ros2-sqlite3",
+            LogFormat::Ros1Bag => "ros1-bag",
             LogFormat::Vlp16 => "vlp16",
         })
     }

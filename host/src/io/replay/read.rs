@@ -189,11 +189,12 @@ pub(super) fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> Log
 pub(super) fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -> LogData {
     let contents = match (format, bytes) {
         (LogFormat::Ros2Mcap, Some(b)) => rosbag::read_mcap(file, &b),
+        (LogFormat::Ros1Bag, Some(b)) => rosbag::read_bag1(file, &b),
         _ => rosbag::read_db3(file),
     };
     let mut warnings = Vec::new();
     if !contents.skipped_encodings.is_empty() {
-        warnings.push(format!("skipped topics not encoded as CDR: {}", contents.skipped_encodings.join(", ")));
+        warnings.push(format!("skipped topics encoded neither as CDR nor as ROS 1: {}", contents.skipped_encodings.join(", ")));
     }
     let mut scans = rosbag::scans_from_messages(file, contents.messages);
     warnings.extend(scans.warnings);
@@ -238,15 +239,12 @@ pub(super) fn looks_like_text(head: &[u8]) -> bool {
     !head.is_empty() && other * 64 <= head.len() && nul * 2 < head.len()
 }
 
-/// How a ROS 1 bag (format 2.0) starts.
-pub const ROS1_BAG_MAGIC: &[u8] = b"#ROSBAG V2.0\n";
-
-/// The format of a file from its first bytes (a ROS 1 bag is none of them).
+/// The format of a file from its first bytes (any `#ROSBAG V` line is a ROS 1 bag; the reader
+/// names a version other than 2.0).
 pub fn detect(head: &[u8]) -> Option<LogFormat> {
-    if head.starts_with(ROS1_BAG_MAGIC) {
-        return None;
-    }
-    if head.starts_with(&[0x1f, 0x8b]) {
+    if head.starts_with(b"#ROSBAG V") {
+        Some(LogFormat::Ros1Bag)
+    } else if head.starts_with(&[0x1f, 0x8b]) {
         Some(LogFormat::CarmenGzip)
     } else if head.starts_with(rosbag::MCAP_MAGIC) {
         Some(LogFormat::Ros2Mcap)
@@ -263,13 +261,10 @@ pub fn detect(head: &[u8]) -> Option<LogFormat> {
 
 pub(super) fn read_one(file: &Path) -> Result<LogData, ReplayError> {
     let bytes = std::fs::read(file).map_err(io_err(file))?;
-    let format = detect(&bytes).ok_or_else(|| match bytes.starts_with(ROS1_BAG_MAGIC) {
-        true => ReplayError::Ros1Bag { file: file.to_path_buf() },
-        false => ReplayError::UnknownFormat { file: file.to_path_buf() },
-    })?;
+    let format = detect(&bytes).ok_or_else(|| ReplayError::UnknownFormat { file: file.to_path_buf() })?;
     Ok(match format {
         LogFormat::Carmen | LogFormat::CarmenGzip => read_carmen(file, format, bytes),
-        LogFormat::Ros2Mcap => read_bag(file, format, Some(bytes)),
+        LogFormat::Ros2Mcap | LogFormat::Ros1Bag => read_bag(file, format, Some(bytes)),
         LogFormat::Ros2Sqlite3 => {
             drop(bytes);
             read_bag(file, format, None)

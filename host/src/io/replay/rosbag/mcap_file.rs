@@ -104,69 +104,22 @@ pub(super) fn walk_records<'a>(records: &'a [u8], mut take: impl FnMut(mcap::rec
     Ok(())
 }
 
-/// The most a chunk may claim to hold uncompressed, whatever the file's size: 1 GiB.
-pub const MAX_CHUNK_UNCOMPRESSED: u64 = 1 << 30;
-/// The most a chunk may claim to hold uncompressed per byte of the file it is in: 1024 (zstd
-/// reaches a few hundred on runs of zeros; rosbag2's chunks of scans reach 3 to 10).
-pub const MAX_CHUNK_RATIO: u64 = 1024;
-
 /// The uncompressed records of a chunk whose data (`data`, at byte `data_at` of a file of
-/// `file_len` bytes) is compressed as `header` says, decompressed here with a bound on the
-/// output: the claimed `uncompressed_size` must be within [`MAX_CHUNK_UNCOMPRESSED`] and
-/// [`MAX_CHUNK_RATIO`] × the file's size, the decoder may not write more than it, must write
-/// all of it, and the result must match the chunk's CRC (when it has one). Nothing is allocated
-/// beyond the claimed size, so damaged compressed bytes cannot make the reader allocate what
-/// they like (the `mcap` crate's own chunk reader sized its buffer from the damaged stream).
+/// `file_len` bytes) is compressed as `header` says, decompressed with a bound on the output
+/// ([`decompress_bounded`]), checked against the chunk's CRC (when it has one).
 pub(super) fn chunk_records<'a>(
     header: &mcap::records::ChunkHeader,
     data: &'a [u8],
     data_at: usize,
     file_len: usize,
 ) -> Result<std::borrow::Cow<'a, [u8]>, String> {
-    let claimed = header.uncompressed_size;
-    let limit = MAX_CHUNK_UNCOMPRESSED.min((file_len as u64).saturating_mul(MAX_CHUNK_RATIO));
-    if header.compression.is_empty() {
-        if claimed != data.len() as u64 {
-            return Err(format!("its uncompressed size field says {claimed} bytes, its records take {} (byte {data_at})", data.len()));
-        }
-    } else if claimed > limit {
-        return Err(format!(
-            "it claims {claimed} bytes uncompressed from {} compressed, more than this reader allows for a file of {file_len} bytes ({limit}: {MAX_CHUNK_RATIO} × the file's size, at most {MAX_CHUNK_UNCOMPRESSED})",
-            data.len()
-        ));
-    }
-    let records: std::borrow::Cow<'a, [u8]> = match header.compression.as_str() {
-        "" => std::borrow::Cow::Borrowed(data),
-        #[cfg(feature = "zstd")]
-        "zstd" => {
-            let out = zstd::bulk::decompress(data, claimed as usize).map_err(|e| {
-                format!("its zstd data (byte {data_at}, {} bytes) does not decompress to the {claimed} bytes it claims: {e}", data.len())
-            })?;
-            std::borrow::Cow::Owned(out)
-        }
-        #[cfg(feature = "lz4")]
-        "lz4" => {
-            use std::io::Read;
-            let mut out = Vec::new();
-            let decoder = lz4::Decoder::new(data).map_err(|e| format!("its lz4 data (byte {data_at}) does not start a frame: {e}"))?;
-            decoder
-                .take(claimed + 1)
-                .read_to_end(&mut out)
-                .map_err(|e| format!("its lz4 data (byte {data_at}, {} bytes) does not decompress: {e}", data.len()))?;
-            std::borrow::Cow::Owned(out)
-        }
-        other => {
-            return Err(match missing_codec(other) {
-                Some(feature) => format!(
-                "chunk compressed with {other}, which this `lives` was built without (rebuild with `--features {feature}`, or `ros-bags`)"
-            ),
-                None => format!("unknown chunk compression {other:?} (MCAP knows zstd and lz4)"),
-            })
-        }
+    let codec = match header.compression.as_str() {
+        "" => Codec::None,
+        "zstd" => Codec::Zstd,
+        "lz4" => Codec::Lz4,
+        other => return Err(format!("unknown chunk compression {other:?} (MCAP knows zstd and lz4)")),
     };
-    if records.len() as u64 != claimed {
-        return Err(format!("its {} data decompresses to {} bytes, not the {claimed} it claims", header.compression, records.len()));
-    }
+    let records = decompress_bounded(codec, header.uncompressed_size, data, data_at, file_len)?;
     if header.uncompressed_crc != 0 {
         let crc = crc32fast::hash(&records);
         if crc != header.uncompressed_crc {
@@ -187,8 +140,8 @@ pub(super) type Channels = HashMap<u16, (String, String, String)>;
 /// the byte), lets the `mcap` crate parse each record and decompress chunks (zstd, lz4).
 pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
     let mut out = BagContents::default();
-    let damage = |offset: usize, reason: String| ReplayError::Mcap { file: file.to_path_buf(), offset: offset as u64, reason };
-    let chunk_damage = |offset: usize, reason: String| ReplayError::McapChunk { file: file.to_path_buf(), offset: offset as u64, reason };
+    let damage = |offset: usize, reason: String| ReplayError::Bag { file: file.to_path_buf(), offset: offset as u64, reason };
+    let chunk_damage = |offset: usize, reason: String| ReplayError::BagChunk { file: file.to_path_buf(), offset: offset as u64, reason };
     if buf.len() < MCAP_MAGIC.len() || &buf[..8] != MCAP_MAGIC {
         out.error = Some(damage(0, "no MCAP magic at the start".into()));
         return out;
@@ -293,15 +246,6 @@ pub fn read_mcap(file: &Path, buf: &[u8]) -> BagContents {
     }
 }
 
-/// The cargo feature a chunk compression needs, if this build lacks it.
-pub(super) fn missing_codec(compression: &str) -> Option<&'static str> {
-    match compression {
-        "zstd" if !cfg!(feature = "zstd") => Some("zstd"),
-        "lz4" if !cfg!(feature = "lz4") => Some("lz4"),
-        _ => None,
-    }
-}
-
 pub(super) fn take_record(
     rec: mcap::records::Record<'_>,
     schemas: &mut HashMap<u16, String>,
@@ -317,7 +261,7 @@ pub(super) fn take_record(
         Record::Channel(c) => {
             let type_name = schemas.get(&c.schema_id).cloned().unwrap_or_default();
             if MsgType::of(&type_name, &c.topic).is_some() {
-                if c.message_encoding != "cdr" {
+                if Wire::of_encoding(&c.message_encoding).is_none() {
                     out.skipped_encodings.push(format!("{} ({})", c.topic, c.message_encoding));
                 } else if !out.topics.iter().any(|(t, _)| *t == c.topic) {
                     out.topics.push((c.topic.clone(), type_name.clone()));
@@ -328,8 +272,9 @@ pub(super) fn take_record(
         Record::Message { header, data } => {
             out.saw(header.log_time);
             if let Some((topic, type_name, enc)) = channels.get(&header.channel_id) {
-                if let (Some(kind), "cdr") = (MsgType::of(type_name, topic), enc.as_str()) {
-                    out.messages.push(BagMessage { t_ns: header.log_time, topic: topic.clone(), kind, data: data.into_owned(), at });
+                if let (Some(kind), Some(wire)) = (MsgType::of(type_name, topic), Wire::of_encoding(enc)) {
+                    let t_ns = header.log_time;
+                    out.messages.push(BagMessage { t_ns, topic: topic.clone(), kind, wire, data: data.into_owned(), at });
                 }
             }
         }

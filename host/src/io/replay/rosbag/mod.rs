@@ -1,17 +1,19 @@
 //! ROS 2 bags: MCAP (rosbag2's default storage since Iron) and sqlite3 (`.db3`, the default
 //! before), with `sensor_msgs/msg/LaserScan`, `nav_msgs/msg/Odometry` and `tf2_msgs/msg/TFMessage`
-//! on `/tf` and `/tf_static`, CDR-encoded.
+//! on `/tf` and `/tf_static`, CDR-encoded (MCAP channels encoded `ros1` are read too); and ROS 1
+//! bags (format 2.0, [`read_bag1`]) with the same three types (`tf/tfMessage` too) in ROS 1's
+//! serialisation.
 //!
 //! Reading happens in two steps:
 //!
-//! 1. [`read_mcap`] / [`read_db3`] pull the messages of those three types out of the container
-//!    in file order, with where each came from ([`Location`]): the byte offset of its MCAP record
+//! 1. [`read_mcap`] / [`read_db3`] / [`read_bag1`] pull the messages of those three types out of the container
+//!    in file order, with where each came from ([`Location`]): the byte offset of its record
 //!    (for a message inside a chunk, the chunk's offset) or its `messages` row id. A damaged
 //!    chunk (its own length intact) or a row of the wrong column type is skipped and counted
 //!    ([`BagContents::bad`]); they stop at the first damage that loses the framing (a top-level
 //!    record cut off or unparsable, an unreadable sqlite page) and hand back what came before,
 //!    plus the error.
-//! 2. [`scans_from_messages`] decodes them (CDR, [`super::cdr`]; a message that does not decode
+//! 2. [`scans_from_messages`] decodes them (CDR or ROS 1, [`super::cdr`]; a message that does not decode
 //!    is skipped and counted, the messages around it are used), sorts them by the bag's receive
 //!    time, and builds the frame tree: `tf_static` transforms apply to the whole bag, `tf`
 //!    transforms and odometry (`header.frame_id` → `child_frame_id`) are samples of their edge at
@@ -29,12 +31,17 @@
 //!
 //! What this module must not do: know about the controller or pictures.
 
+use super::cdr::Wire;
 use super::{BadRecords, Location, ReplayError};
 
+mod bag1;
+mod codec;
 mod db3;
 mod frames;
 mod mcap_file;
 mod scans;
+pub use bag1::*;
+pub use codec::*;
 pub use db3::*;
 pub use frames::*;
 pub use mcap_file::*;
@@ -54,13 +61,14 @@ pub enum MsgType {
 }
 
 impl MsgType {
-    /// The type of a topic from its type name and topic name; `None` for types replay ignores.
+    /// The type of a topic from its type name (ROS 2's `pkg/msg/Type` or ROS 1's `pkg/Type`) and
+    /// topic name; `None` for types replay ignores.
     pub fn of(type_name: &str, topic: &str) -> Option<MsgType> {
         match type_name {
-            "sensor_msgs/msg/LaserScan" => Some(MsgType::LaserScan),
-            "nav_msgs/msg/Odometry" => Some(MsgType::Odometry),
-            "tf2_msgs/msg/TFMessage" if topic.ends_with("tf_static") => Some(MsgType::TfStatic),
-            "tf2_msgs/msg/TFMessage" => Some(MsgType::Tf),
+            "sensor_msgs/msg/LaserScan" | "sensor_msgs/LaserScan" => Some(MsgType::LaserScan),
+            "nav_msgs/msg/Odometry" | "nav_msgs/Odometry" => Some(MsgType::Odometry),
+            "tf2_msgs/msg/TFMessage" | "tf2_msgs/TFMessage" | "tf/tfMessage" if topic.ends_with("tf_static") => Some(MsgType::TfStatic),
+            "tf2_msgs/msg/TFMessage" | "tf2_msgs/TFMessage" | "tf/tfMessage" => Some(MsgType::Tf),
             _ => None,
         }
     }
@@ -75,7 +83,9 @@ pub struct BagMessage {
     pub topic: String,
     /// Type.
     pub kind: MsgType,
-    /// CDR bytes.
+    /// How `data` is serialised.
+    pub wire: Wire,
+    /// The serialised message.
     pub data: Vec<u8>,
     /// Where it came from.
     pub at: Location,
@@ -91,7 +101,7 @@ pub struct BagContents {
     pub span_ns: Option<(u64, u64)>,
     /// Topics that carry a type replay uses, with the type.
     pub topics: Vec<(String, String)>,
-    /// Channels skipped because their encoding is not CDR.
+    /// Channels skipped because their encoding is neither CDR nor ROS 1.
     pub skipped_encodings: Vec<String>,
     /// The first damage, after which nothing was read.
     pub error: Option<ReplayError>,

@@ -59,9 +59,9 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
     let mut decoded = Vec::with_capacity(messages.len());
     for m in &messages {
         let d: Result<Decoded, CdrError> = match m.kind {
-            MsgType::LaserScan => cdr::decode_laser_scan(&m.data).map(Decoded::Scan),
-            MsgType::Odometry => cdr::decode_odometry(&m.data).map(Decoded::Odom),
-            MsgType::Tf | MsgType::TfStatic => cdr::decode_tf_message(&m.data).map(Decoded::Tf),
+            MsgType::LaserScan => cdr::decode_laser_scan(&m.data, m.wire).map(Decoded::Scan),
+            MsgType::Odometry => cdr::decode_odometry(&m.data, m.wire).map(Decoded::Odom),
+            MsgType::Tf | MsgType::TfStatic => cdr::decode_tf_message(&m.data, m.wire).map(Decoded::Tf),
         };
         match d {
             Ok(d) => decoded.push((m, d)),

@@ -87,7 +87,7 @@ fn moving_edges_interpolate_to_the_stamp_and_refuse_jumps_and_backward_stamps() 
 #[test]
 fn mcap_without_magic_is_an_error_at_byte_zero() {
     let c = read_mcap(Path::new("x.mcap"), b"not an mcap file");
-    assert!(matches!(c.error, Some(ReplayError::Mcap { offset: 0, .. })), "{:?}", c.error);
+    assert!(matches!(c.error, Some(ReplayError::Bag { offset: 0, .. })), "{:?}", c.error);
 }
 
 /// A build without a codec (the default features) names the feature a compressed chunk
@@ -111,8 +111,8 @@ fn a_compressed_chunk_names_the_feature_it_needs() {
         file.extend_from_slice(&body);
         let c = read_mcap(Path::new("c.mcap"), &file);
         // The chunk is skipped (its length is intact); the file then ends without a footer.
-        let [ReplayError::McapChunk { offset: 8, reason, .. }] = &c.bad.first[..] else { panic!("{codec}: {:?}", c.bad) };
-        assert!(matches!(&c.error, Some(ReplayError::Mcap { reason, .. }) if reason.contains("truncated")), "{:?}", c.error);
+        let [ReplayError::BagChunk { offset: 8, reason, .. }] = &c.bad.first[..] else { panic!("{codec}: {:?}", c.bad) };
+        assert!(matches!(&c.error, Some(ReplayError::Bag { reason, .. }) if reason.contains("truncated")), "{:?}", c.error);
         // Constant in any one build (both `true` with the default features), not in general.
         #[allow(clippy::needless_bool)]
         let built_with = if codec == "zstd" { cfg!(feature = "zstd") } else { cfg!(feature = "lz4") };

@@ -1,0 +1,272 @@
+//! ROS 1 bags, format 2.0 (`rosbag record`; <http://wiki.ros.org/Bags/Format/2.0>): the record
+//! walk, chunk decompression (bz2, lz4, none) and the messages of the topics replay reads.
+//!
+//! A bag is the line `#ROSBAG V2.0`, then records: a `uint32` header length, the header (fields,
+//! each a `uint32` length and `name=value`; `op` names the record), a `uint32` data length, the
+//! data. Messages (`op` 0x02: `conn`, `time`) and the connections they refer to (0x07: `conn`,
+//! `topic`; the data holds `type`, `md5sum`, `message_definition`) sit inside chunks (0x05:
+//! `compression`, `size`); the bag header (0x03), index data (0x04) and chunk infos (0x06) are
+//! an index replay does not need: it reads the file front to back, so an unindexed bag (a
+//! recording that was cut short, `.bag.active`) reads as well.
+//!
+//! Damage, as for MCAP: a top-level record cut off by the end of the file or with a header that
+//! does not parse stops the walk (its length cannot be trusted); what came before is kept and
+//! the error names the byte. A chunk whose data does not decompress, or whose records do not
+//! parse, is skipped and counted ([`BagContents::bad`]), and the chunks after it are read.
+//!
+//! We read the format ourselves rather than with the `rosbag` crate (0.6.3): it indexes the
+//! file through its header's `index_pos` (a bag cut short has none, and a damaged one slices
+//! out of bounds and panics), parses field names with `str::from_utf8_unchecked`, and
+//! memory-maps the file.
+
+use super::*;
+use crate::io::replay::{Location, ReplayError};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// How a ROS 1 bag (format 2.0) starts.
+pub const ROS1_BAG_MAGIC: &[u8] = b"#ROSBAG V2.0\n";
+
+const OP_MSG_DATA: u8 = 0x02;
+const OP_CHUNK: u8 = 0x05;
+const OP_CONNECTION: u8 = 0x07;
+
+fn op_name(op: u8) -> &'static str {
+    match op {
+        0x02 => "message data",
+        0x03 => "bag header",
+        0x04 => "index data",
+        0x05 => "chunk",
+        0x06 => "chunk info",
+        0x07 => "connection",
+        _ => "unknown",
+    }
+}
+
+/// One record: its header fields and its data.
+struct Record<'a> {
+    fields: Vec<(&'a [u8], &'a [u8])>,
+    data: &'a [u8],
+}
+
+impl<'a> Record<'a> {
+    fn field(&self, name: &str) -> Option<&'a [u8]> {
+        self.fields.iter().find(|(n, _)| *n == name.as_bytes()).map(|(_, v)| *v)
+    }
+
+    fn op(&self) -> Option<u8> {
+        match self.field("op") {
+            Some([op]) => Some(*op),
+            _ => None,
+        }
+    }
+
+    fn u32_field(&self, name: &str) -> Result<u32, String> {
+        match self.field(name) {
+            Some(v) if v.len() == 4 => Ok(u32::from_le_bytes([v[0], v[1], v[2], v[3]])),
+            Some(v) => Err(format!("its `{name}` field has {} bytes, not 4", v.len())),
+            None => Err(format!("it has no `{name}` field")),
+        }
+    }
+
+    fn text_field(&self, name: &str) -> Result<String, String> {
+        self.field(name).map(|v| String::from_utf8_lossy(v).into_owned()).ok_or_else(|| format!("it has no `{name}` field"))
+    }
+}
+
+/// The `name=value` fields of a record header or of a connection's data.
+fn parse_fields(mut b: &[u8]) -> Result<Vec<(&[u8], &[u8])>, String> {
+    let mut out = Vec::new();
+    let total = b.len();
+    while !b.is_empty() {
+        let at = total - b.len();
+        if b.len() < 4 {
+            return Err(format!("a field length cut off at byte {at} of the header ({} of 4 bytes)", b.len()));
+        }
+        let n = u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize;
+        b = &b[4..];
+        if n > b.len() {
+            return Err(format!("a field of {n} bytes at byte {at} runs past the header's end ({} bytes left)", b.len()));
+        }
+        let (field, rest) = b.split_at(n);
+        b = rest;
+        let Some(eq) = field.iter().position(|&c| c == b'=') else {
+            return Err(format!("the field at byte {at} has no `=`"));
+        };
+        out.push((&field[..eq], &field[eq + 1..]));
+    }
+    Ok(out)
+}
+
+/// The record at `pos` of `buf` and where the next one starts; `Err` with why when the record is
+/// cut off or its header does not parse.
+fn record_at(buf: &[u8], pos: usize) -> Result<(Record<'_>, usize), String> {
+    let len_at = |at: usize, what: &str| -> Result<usize, String> {
+        match buf.get(at..at + 4) {
+            Some(b) => Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize),
+            None => Err(format!("record {what} length cut off: {} of 4 bytes before the end of the file (truncated)", buf.len() - at)),
+        }
+    };
+    let header_len = len_at(pos, "header")?;
+    let header_start = pos + 4;
+    let left = buf.len() - header_start;
+    if header_len > left {
+        return Err(format!("record header of {header_len} bytes runs past the end of the file, {left} bytes left (truncated)"));
+    }
+    let fields = parse_fields(&buf[header_start..header_start + header_len]).map_err(|e| format!("record header damaged: {e}"))?;
+    let data_len_at = header_start + header_len;
+    let data_len = len_at(data_len_at, "data")?;
+    let data_start = data_len_at + 4;
+    let left = buf.len() - data_start;
+    if data_len > left {
+        return Err(format!("record data of {data_len} bytes runs past the end of the file, {left} bytes left (truncated)"));
+    }
+    let rec = Record { fields, data: &buf[data_start..data_start + data_len] };
+    if rec.op().is_none() {
+        return Err("record header has no one-byte `op` field".into());
+    }
+    Ok((rec, data_start + data_len))
+}
+
+/// Connection id → (topic, type name).
+type Connections = HashMap<u32, (String, String)>;
+
+/// What the walk has learnt so far: the connections, and the messages whose connection record
+/// has not come yet (it was in a damaged chunk; the index section at the end repeats it).
+#[derive(Default)]
+struct Walk {
+    conns: Connections,
+    orphans: Vec<(u32, u64, Vec<u8>, Location)>,
+}
+
+impl Walk {
+    fn push(&self, id: u32, t_ns: u64, data: Vec<u8>, at: Location, out: &mut BagContents) {
+        if let Some((topic, type_name)) = self.conns.get(&id) {
+            if let Some(kind) = MsgType::of(type_name, topic) {
+                out.messages.push(BagMessage { t_ns, topic: topic.clone(), kind, wire: Wire::Ros1, data, at });
+            }
+        }
+    }
+}
+
+/// Takes a connection or message record (inside a chunk or not); `at` is where a message is
+/// reported to come from.
+fn take(rec: &Record<'_>, walk: &mut Walk, out: &mut BagContents, at: Location) -> Result<(), String> {
+    match rec.op() {
+        Some(OP_CONNECTION) => {
+            let id = rec.u32_field("conn")?;
+            let topic = rec.text_field("topic")?;
+            let data = parse_fields(rec.data).map_err(|e| format!("connection {id} ({topic}): its data: {e}"))?;
+            let type_name = data.iter().find(|(n, _)| *n == b"type").map(|(_, v)| String::from_utf8_lossy(v).into_owned());
+            let type_name = type_name.ok_or_else(|| format!("connection {id} ({topic}) has no `type`"))?;
+            if MsgType::of(&type_name, &topic).is_some() && !out.topics.iter().any(|(t, _)| *t == topic) {
+                out.topics.push((topic.clone(), type_name.clone()));
+            }
+            walk.conns.insert(id, (topic, type_name));
+        }
+        Some(OP_MSG_DATA) => {
+            let id = rec.u32_field("conn")?;
+            let t_ns = match rec.field("time") {
+                Some(v) if v.len() == 8 => {
+                    let sec = u32::from_le_bytes([v[0], v[1], v[2], v[3]]) as u64;
+                    let nsec = u32::from_le_bytes([v[4], v[5], v[6], v[7]]) as u64;
+                    sec * 1_000_000_000 + nsec
+                }
+                Some(v) => return Err(format!("message data of connection {id}: its `time` field has {} bytes, not 8", v.len())),
+                None => return Err(format!("message data of connection {id} has no `time` field")),
+            };
+            out.saw(t_ns);
+            match walk.conns.contains_key(&id) {
+                true => walk.push(id, t_ns, rec.data.to_vec(), at, out),
+                false => walk.orphans.push((id, t_ns, rec.data.to_vec(), at)),
+            }
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// The records of a chunk's uncompressed data, each handed to [`take`]; on the first that does
+/// not parse, its offset in `records` and why (the records after it are lost with their framing).
+fn walk_chunk(records: &[u8], walk: &mut Walk, out: &mut BagContents, at: Location) -> Result<(), (usize, String)> {
+    let mut pos = 0;
+    while pos < records.len() {
+        let (rec, next) = record_at(records, pos).map_err(|e| (pos, e.replace("of the file", "of the chunk")))?;
+        take(&rec, walk, out, at).map_err(|e| (pos, e))?;
+        pos = next;
+    }
+    Ok(())
+}
+
+/// Reads a ROS 1 bag (format 2.0) held in `buf`.
+pub fn read_bag1(file: &Path, buf: &[u8]) -> BagContents {
+    let mut out = BagContents::default();
+    let mut walk = Walk::default();
+    read_records(file, buf, &mut walk, &mut out);
+    // Messages whose connection came later (the index section repeats every connection).
+    for (id, t_ns, data, at) in std::mem::take(&mut walk.orphans) {
+        walk.push(id, t_ns, data, at, &mut out);
+    }
+    out
+}
+
+fn read_records(file: &Path, buf: &[u8], walk: &mut Walk, out: &mut BagContents) {
+    let damage = |offset: usize, reason: String| ReplayError::Bag { file: file.to_path_buf(), offset: offset as u64, reason };
+    let chunk_damage = |offset: usize, reason: String| ReplayError::BagChunk { file: file.to_path_buf(), offset: offset as u64, reason };
+    if !buf.starts_with(ROS1_BAG_MAGIC) {
+        let version = buf.strip_prefix(b"#ROSBAG V").map(|v| {
+            let line = v.split(|&c| c == b'\n').next().unwrap_or_default();
+            String::from_utf8_lossy(&line[..line.len().min(8)]).into_owned()
+        });
+        let reason = match version {
+            Some(v) => format!("ROS bag format {v}; replay reads format 2.0 (convert an older bag with `rosbag fix`)"),
+            None => "no `#ROSBAG V2.0` line at the start".into(),
+        };
+        out.error = Some(damage(0, reason));
+        return;
+    }
+    let mut pos = ROS1_BAG_MAGIC.len();
+    while pos < buf.len() {
+        let (rec, next) = match record_at(buf, pos) {
+            Ok(r) => r,
+            Err(reason) => {
+                out.error = Some(damage(pos, reason));
+                return;
+            }
+        };
+        if rec.op() == Some(OP_CHUNK) {
+            let chunk = rec
+                .text_field("compression")
+                .and_then(|c| {
+                    let codec = match c.as_str() {
+                        "none" => Codec::None,
+                        "bz2" => Codec::Bz2,
+                        "lz4" => Codec::Lz4,
+                        other => return Err(format!("unknown chunk compression {other:?} (ROS 1 bags know none, bz2 and lz4)")),
+                    };
+                    Ok((codec, rec.u32_field("size")?))
+                })
+                .and_then(|(codec, size)| {
+                    let data_at = next - rec.data.len();
+                    decompress_bounded(codec, size as u64, rec.data, data_at, buf.len())
+                });
+            match chunk {
+                Ok(records) => {
+                    if let Err((k, why)) = walk_chunk(&records, walk, out, Location::Offset(pos as u64)) {
+                        let reason = format!(
+                            "damaged chunk, the rest of it skipped: its record at byte {k} of its {} uncompressed bytes: {why}",
+                            records.len()
+                        );
+                        out.bad.add(chunk_damage(pos, reason));
+                    }
+                }
+                // The chunk's own lengths are intact: skip it, read on after it.
+                Err(reason) => out.bad.add(chunk_damage(pos, format!("damaged chunk, skipped: {reason}"))),
+            }
+        } else if let Err(reason) = take(&rec, walk, out, Location::Offset(pos as u64)) {
+            // Its lengths are intact: skip it, read on after it.
+            out.bad.add(damage(pos, format!("{} record skipped: {reason}", op_name(rec.op().unwrap_or(0)))));
+        }
+        pos = next;
+    }
+}
