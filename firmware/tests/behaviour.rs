@@ -11,21 +11,24 @@ fn geom() -> GridGeometry {
     GridGeometry { origin_x: Config::mm(0), origin_y: Config::mm(0) }
 }
 
-fn one_beam_scan(angle_deg: i32, range_mm: u16) -> BeamScan {
+/// A scan resampled from `ranges_mm`, the first beam at `angle_min`, the others `angle_increment`
+/// apart (no labels, the core's range limits).
+fn resampled(angle_min: BinaryAngle, angle_increment: BinaryAngle, ranges_mm: &[u16]) -> BeamScan {
     let mut s = BeamScan::new();
-    let ranges = [range_mm];
-    s.resample(&scan_input(&ranges, None)).unwrap();
-    // scan_input starts at −π; rebuild with the wanted angle instead.
-    let input = firmware::ScanInput {
-        angle_min: BinaryAngle::from_degrees(angle_deg),
-        angle_increment: BinaryAngle::from_degrees(1),
-        ranges_mm: &ranges,
+    s.resample(&firmware::ScanInput {
+        angle_min,
+        angle_increment,
+        ranges_mm,
         labels: None,
         range_min_mm: 0,
         range_max_mm: firmware::scan::RANGE_LIMIT_MM,
-    };
-    s.resample(&input).unwrap();
+    })
+    .unwrap();
     s
+}
+
+fn one_beam_scan(angle_deg: i32, range_mm: u16) -> BeamScan {
+    resampled(BinaryAngle::from_degrees(angle_deg), BinaryAngle::from_degrees(1), &[range_mm])
 }
 
 #[test]
@@ -55,17 +58,7 @@ fn a_beam_clears_the_cells_it_crosses_and_marks_its_hit() {
     assert_eq!(g.grid.count(Cell::Occupied), 1);
 
     // A hit seen again later by a grazing beam of the same scan stays occupied.
-    let mut s2 = BeamScan::new();
-    let ranges = [3000u16, 2950];
-    s2.resample(&firmware::ScanInput {
-        angle_min: BinaryAngle::ZERO,
-        angle_increment: BinaryAngle::from_fraction(1, 897),
-        ranges_mm: &ranges,
-        labels: None,
-        range_min_mm: 0,
-        range_max_mm: firmware::scan::RANGE_LIMIT_MM,
-    })
-    .unwrap();
+    let s2 = resampled(BinaryAngle::ZERO, BinaryAngle::from_fraction(1, 897), &[3000, 2950]);
     g.integrate(&p, &s2, Config::DEFAULT.lidar_max_range_m);
     assert_eq!(g.get(130, 100), Cell::Occupied);
 }
@@ -76,16 +69,7 @@ fn a_beam_that_grazes_its_surface_frees_unknown_cells_but_erases_no_occupied_one
     // occupied by an earlier scan lies on all three, 1.5 m out.
     let p = pose(10.05, 10.05, 0.0);
     let run = |ranges: [u16; 3]| {
-        let mut s = BeamScan::new();
-        s.resample(&firmware::ScanInput {
-            angle_min: BinaryAngle::from_fraction(-1, 897),
-            angle_increment: BinaryAngle::from_fraction(1, 897),
-            ranges_mm: &ranges,
-            labels: None,
-            range_min_mm: 0,
-            range_max_mm: firmware::scan::RANGE_LIMIT_MM,
-        })
-        .unwrap();
+        let s = resampled(BinaryAngle::from_fraction(-1, 897), BinaryAngle::from_fraction(1, 897), &ranges);
         let mut g = Box::new(LidarGrid::new(geom()));
         g.grid.set(115, 100, Cell::Occupied);
         g.integrate(&p, &s, Config::DEFAULT.lidar_max_range_m);
@@ -551,15 +535,33 @@ fn seen_east_of(x0: i32) -> Box<VisualGrid> {
     vis
 }
 
+/// What the gaze tests look at: the room, all free to the LiDAR, which the camera has seen from
+/// column `x0` eastwards; no non-map points; a fresh `multisensor` planner; the robot at the
+/// room's centre, facing east.
+struct GazeScene {
+    lidar: Box<LidarGrid>,
+    vis: Box<VisualGrid>,
+    store: Box<NonMapStore>,
+    planner: Box<Planner>,
+    robot: firmware::Pose2,
+    cfg: Config,
+}
+
+fn gaze_scene(x0: i32) -> GazeScene {
+    GazeScene {
+        lidar: room_grid(false),
+        vis: seen_east_of(x0),
+        store: Box::new(NonMapStore::new()),
+        planner: Box::new(Planner::new()),
+        robot: pose(7.55, 7.55, 0.0),
+        cfg: Config { planner: PlannerKind::Multisensor, ..Config::DEFAULT },
+    }
+}
+
 #[test]
 fn the_gaze_turns_to_what_is_unseen_and_to_non_map_points() {
-    // The room, all free to the LiDAR; the camera has seen everything but the west half.
-    let lidar = room_grid(false);
-    let vis = seen_east_of(75);
-    let store = Box::new(NonMapStore::new());
-    let mut planner = Box::new(Planner::new());
-    let robot = pose(7.55, 7.55, 0.0); // the room's centre, facing east
-    let cfg = Config { planner: PlannerKind::Multisensor, ..Config::DEFAULT };
+    // The camera has seen everything but the west half.
+    let GazeScene { lidar, vis, store, mut planner, robot, cfg } = gaze_scene(75);
     let (gaze, work) = planner.gaze(&cfg, &lidar, &vis, &store, &robot, None);
     let (h, _) = gaze.expect("half the room unseen is worth a look");
     assert!(
@@ -589,13 +591,8 @@ fn the_gaze_turns_to_what_is_unseen_and_to_non_map_points() {
 
 #[test]
 fn the_gaze_keeps_its_heading_until_another_is_clearly_better_or_it_has_little_left() {
-    // The room, all free to the LiDAR; the camera has seen all but a strip along the west wall.
-    let lidar = room_grid(false);
-    let vis = seen_east_of(64);
-    let store = Box::new(NonMapStore::new());
-    let mut planner = Box::new(Planner::new());
-    let robot = pose(7.55, 7.55, 0.0);
-    let cfg = Config { planner: PlannerKind::Multisensor, ..Config::DEFAULT };
+    // The camera has seen all but a strip along the west wall.
+    let GazeScene { lidar, vis, store, mut planner, robot, cfg } = gaze_scene(64);
     let step = firmware::BinaryAngle::from_fraction(1, firmware::planner::GAZE_HEADINGS as i64);
     let gain = |planner: &mut Planner, h: firmware::BinaryAngle| {
         // A heading's own gain: what the gaze reports when it keeps that heading.

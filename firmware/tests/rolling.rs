@@ -141,6 +141,36 @@ fn the_window_moves_deterministically() {
     assert_eq!(sa, sb);
 }
 
+/// The maps `rolling::shift` moves, on their own (not in a controller).
+struct OwnedMaps {
+    lidar: Box<LidarGrid>,
+    visual: Box<VisualGrid>,
+    nonmap: Box<NonMapStore>,
+    frontiers: Box<FrontierSet>,
+    planner: Box<Planner>,
+    goal: Option<Goal>,
+}
+
+impl OwnedMaps {
+    /// Empty maps, no goal, the window at `geom`.
+    fn new(geom: GridGeometry) -> Self {
+        OwnedMaps {
+            lidar: Box::new(LidarGrid::new(geom)),
+            visual: Box::new(VisualGrid::new()),
+            nonmap: Box::new(NonMapStore::new()),
+            frontiers: Box::new(FrontierSet::new()),
+            planner: Box::new(Planner::new()),
+            goal: None,
+        }
+    }
+
+    /// `rolling::shift` of all of them by (`sx`, `sy`) cells.
+    fn shift(&mut self, sx: i32, sy: i32, pool_radius: Meters) -> Option<u32> {
+        let OwnedMaps { lidar, visual, nonmap, frontiers, planner, goal } = self;
+        rolling::shift(Maps { lidar, visual, nonmap, frontiers, planner, goal }, sx, sy, pool_radius)
+    }
+}
+
 /// A deterministic pattern of evidence and camera cells over the whole grid, a wall mask,
 /// blacklist entries, frontiers, `rrt` nodes and a goal; then one shift. Every cell is the old
 /// one `(x + sx, y + sy)` or unknown, every stored coordinate moved by exactly the shift (or was
@@ -148,37 +178,33 @@ fn the_window_moves_deterministically() {
 #[test]
 fn a_shift_moves_every_cell_and_every_stored_coordinate_exactly() {
     let geom = GridGeometry { origin_x: m(-3.2), origin_y: m(7.5) };
-    let mut lidar = Box::new(LidarGrid::new(geom));
-    let mut visual = Box::new(VisualGrid::new());
-    let mut nonmap = Box::new(NonMapStore::new());
-    let mut frontiers = Box::new(FrontierSet::new());
-    let mut planner = Box::new(Planner::new());
+    let mut w = OwnedMaps::new(geom);
     let mut rng = 0x1234_5678u32;
     for y in 0..N {
         for x in 0..N {
             let r = firmware::rrt::xorshift32(&mut rng);
             for _ in 0..(r & 7) {
-                lidar.evidence.add(x, y, if r & 8 != 0 { 2 } else { -1 });
+                w.lidar.evidence.add(x, y, if r & 8 != 0 { 2 } else { -1 });
             }
             if r & 7 != 0 {
-                lidar.grid.set(x, y, firmware::grid::cell_of_evidence(lidar.evidence.get(x, y)));
+                w.lidar.grid.set(x, y, firmware::grid::cell_of_evidence(w.lidar.evidence.get(x, y)));
             }
-            visual.grid.set(x, y, [Cell::Unknown, Cell::Free, Cell::Occupied, Cell::Free][(r >> 4) as usize & 3]);
-            nonmap.walls.put(x, y, r & 0x100 != 0);
+            w.visual.grid.set(x, y, [Cell::Unknown, Cell::Free, Cell::Occupied, Cell::Free][(r >> 4) as usize & 3]);
+            w.nonmap.walls.put(x, y, r & 0x100 != 0);
         }
     }
-    let before_lidar = lidar.clone();
-    let before_visual = visual.clone();
-    let before_walls: Vec<bool> = (0..N * N).map(|i| nonmap.walls.get(i % N, i / N)).collect();
+    let before_lidar = w.lidar.clone();
+    let before_visual = w.visual.clone();
+    let before_walls: Vec<bool> = (0..N * N).map(|i| w.nonmap.walls.get(i % N, i / N)).collect();
     let blacklist = [(400, 30), (100, 300), (170, 500), (10, 10)];
     for &c in &blacklist {
-        planner.blacklist(c);
+        w.planner.blacklist(c);
     }
     // A frontier step on the pattern, and the `rrt` trees grown on it.
-    frontiers.compute(&lidar, &visual, 1);
-    let fr_before: Vec<_> = frontiers.frontiers().to_vec();
-    planner.rrt.grow(&lidar, &visual, (300, 100));
-    let rrt_before: Vec<_> = planner.rrt.points().copied().collect();
+    w.frontiers.compute(&w.lidar, &w.visual, 1);
+    let fr_before: Vec<_> = w.frontiers.frontiers().to_vec();
+    w.planner.rrt.grow(&w.lidar, &w.visual, (300, 100));
+    let rrt_before: Vec<_> = w.planner.rrt.points().copied().collect();
     let vp = Viewpoint {
         cell: (350, 90),
         heading: BinaryAngle::ZERO,
@@ -191,45 +217,37 @@ fn a_shift_moves_every_cell_and_every_stored_coordinate_exactly() {
         nonmap: 0,
     };
     let (gx, gy) = geom.center_of(350, 90);
-    let mut goal =
+    w.goal =
         Some(Goal { pose: Pose2::new(gx, gy, BinaryAngle::ZERO), viewpoint: vp, path: heapless::Vec::new(), path_length_m: Meters::ZERO });
 
     let (sx, sy) = (160, -320);
-    let maps = Maps {
-        lidar: &mut lidar,
-        visual: &mut visual,
-        nonmap: &mut nonmap,
-        frontiers: &mut frontiers,
-        planner: &mut planner,
-        goal: &mut goal,
-    };
-    let work = rolling::shift(maps, sx, sy, Config::DEFAULT.nonmap_pool_radius_m).expect("a valid shift");
+    let work = w.shift(sx, sy, Config::DEFAULT.nonmap_pool_radius_m).expect("a valid shift");
     assert!(work >= 6 * (N * N) as u32);
-    assert_eq!(lidar.window.last_work, work);
+    assert_eq!(w.lidar.window.last_work, work);
 
     for y in 0..N {
         for x in 0..N {
             let (ox, oy) = (x + sx, y + sy);
             let inside = (0..N).contains(&ox) && (0..N).contains(&oy);
             let want = |c: Cell| if inside { c } else { Cell::Unknown };
-            assert_eq!(lidar.get(x, y), want(before_lidar.get(ox, oy)), "lidar ({x}, {y})");
-            assert_eq!(lidar.evidence.get(x, y), if inside { before_lidar.evidence.get(ox, oy) } else { None });
-            assert_eq!(visual.get(x, y), want(before_visual.get(ox, oy)), "visual ({x}, {y})");
-            assert_eq!(nonmap.walls.get(x, y), inside && before_walls[(oy * N + ox) as usize], "walls ({x}, {y})");
-            assert!(planner.distance(x, y) == firmware::planner::UNREACHABLE || inside);
+            assert_eq!(w.lidar.get(x, y), want(before_lidar.get(ox, oy)), "lidar ({x}, {y})");
+            assert_eq!(w.lidar.evidence.get(x, y), if inside { before_lidar.evidence.get(ox, oy) } else { None });
+            assert_eq!(w.visual.get(x, y), want(before_visual.get(ox, oy)), "visual ({x}, {y})");
+            assert_eq!(w.nonmap.walls.get(x, y), inside && before_walls[(oy * N + ox) as usize], "walls ({x}, {y})");
+            assert!(w.planner.distance(x, y) == firmware::planner::UNREACHABLE || inside);
         }
     }
     // The geometry: exactly 16 m east and 32 m south; every world point keeps its cell, less the shift.
-    assert_eq!(lidar.geom.origin_x, m(12.8));
-    assert_eq!(lidar.geom.origin_y, m(-24.5));
+    assert_eq!(w.lidar.geom.origin_x, m(12.8));
+    assert_eq!(w.lidar.geom.origin_y, m(-24.5));
     let mut rng = 99u32;
     for _ in 0..10_000 {
         let wx = Meters::from_bits((firmware::rrt::xorshift32(&mut rng) % (80 << 16)) as i32 - (20 << 16));
         let wy = Meters::from_bits((firmware::rrt::xorshift32(&mut rng) % (80 << 16)) as i32 - (30 << 16));
-        let (a, b) = (geom.cell_of(wx, wy), lidar.geom.cell_of(wx, wy));
+        let (a, b) = (geom.cell_of(wx, wy), w.lidar.geom.cell_of(wx, wy));
         assert_eq!((a.0 - sx, a.1 - sy), b);
         if firmware::grid::PackedGrid::in_bounds(a.0, a.1) && firmware::grid::PackedGrid::in_bounds(b.0, b.1) {
-            assert_eq!(lidar.geom.center_of(b.0, b.1), geom.center_of(a.0, a.1));
+            assert_eq!(w.lidar.geom.center_of(b.0, b.1), geom.center_of(a.0, a.1));
         }
     }
     // Stored coordinates: moved, or dropped if they left.
@@ -237,13 +255,13 @@ fn a_shift_moves_every_cell_and_every_stored_coordinate_exactly() {
         let n = (c.0 - sx, c.1 - sy);
         ((0..N).contains(&n.0) && (0..N).contains(&n.1)).then_some(n)
     };
-    let bl: Vec<_> = planner.blacklisted().copied().collect();
+    let bl: Vec<_> = w.planner.blacklisted().copied().collect();
     assert_eq!(bl, blacklist.iter().filter_map(|&c| moved(c)).collect::<Vec<_>>());
     assert_eq!(bl, vec![(240, 350)]);
-    assert_eq!(goal.as_ref().map(|g| g.viewpoint.cell), Some((190, 410)));
-    let g = goal.as_ref().unwrap();
-    assert_eq!(lidar.geom.cell_of(g.pose.x, g.pose.y), g.viewpoint.cell);
-    let fr_after: Vec<_> = frontiers.frontiers().to_vec();
+    assert_eq!(w.goal.as_ref().map(|g| g.viewpoint.cell), Some((190, 410)));
+    let g = w.goal.as_ref().unwrap();
+    assert_eq!(w.lidar.geom.cell_of(g.pose.x, g.pose.y), g.viewpoint.cell);
+    let fr_after: Vec<_> = w.frontiers.frontiers().to_vec();
     let fr_want: Vec<_> = fr_before
         .iter()
         .filter_map(|f| {
@@ -253,23 +271,15 @@ fn a_shift_moves_every_cell_and_every_stored_coordinate_exactly() {
         .collect();
     assert_eq!(fr_after, fr_want);
     assert!(!fr_before.is_empty() && fr_after.len() < fr_before.len(), "some frontiers left, some stayed");
-    let rrt_after: Vec<_> = planner.rrt.points().copied().collect();
+    let rrt_after: Vec<_> = w.planner.rrt.points().copied().collect();
     let rrt_want: Vec<_> =
         rrt_before.iter().filter_map(|p| Some(firmware::rrt::RrtPoint { cell: moved(p.cell)?, source: p.source })).collect();
     assert_eq!(rrt_after, rrt_want);
     assert!(rrt_after.iter().all(|p| matches!(p.source, FrontierSource::Lidar | FrontierSource::Visual)));
     // A goal that leaves the window is dropped.
-    let maps = Maps {
-        lidar: &mut lidar,
-        visual: &mut visual,
-        nonmap: &mut nonmap,
-        frontiers: &mut frontiers,
-        planner: &mut planner,
-        goal: &mut goal,
-    };
-    rolling::shift(maps, 0, -160, Config::DEFAULT.nonmap_pool_radius_m).unwrap();
-    assert!(goal.is_none(), "{goal:?}");
-    assert_eq!(lidar.window.shifts, 2);
+    w.shift(0, -160, Config::DEFAULT.nonmap_pool_radius_m).unwrap();
+    assert!(w.goal.is_none(), "{:?}", w.goal);
+    assert_eq!(w.lidar.window.shifts, 2);
 }
 
 /// Non-map points are world points: they stay where they are, those now outside the window are
@@ -279,29 +289,18 @@ fn a_shift_moves_every_cell_and_every_stored_coordinate_exactly() {
 fn non_map_points_survive_a_shift_and_still_pool() {
     let geom = GridGeometry { origin_x: m(0.0), origin_y: m(0.0) };
     let r = Config::DEFAULT.nonmap_pool_radius_m;
-    let mut nonmap = Box::new(NonMapStore::new());
-    nonmap.insert(&geom, m(20.05), m(10.0), r);
-    nonmap.insert(&geom, m(3.0), m(10.0), r);
-    nonmap.insert(&geom, m(40.0), m(40.0), r);
-    let mut lidar = Box::new(LidarGrid::new(geom));
-    let (mut visual, mut frontiers, mut planner) = (Box::new(VisualGrid::new()), Box::new(FrontierSet::new()), Box::new(Planner::new()));
-    let mut goal = None;
-    let maps = Maps {
-        lidar: &mut lidar,
-        visual: &mut visual,
-        nonmap: &mut nonmap,
-        frontiers: &mut frontiers,
-        planner: &mut planner,
-        goal: &mut goal,
-    };
-    rolling::shift(maps, 160, 0, r).unwrap();
-    let pts: Vec<_> = nonmap.points().iter().map(|p| (p.x, p.y)).collect();
+    let mut w = OwnedMaps::new(geom);
+    w.nonmap.insert(&geom, m(20.05), m(10.0), r);
+    w.nonmap.insert(&geom, m(3.0), m(10.0), r);
+    w.nonmap.insert(&geom, m(40.0), m(40.0), r);
+    w.shift(160, 0, r).unwrap();
+    let pts: Vec<_> = w.nonmap.points().iter().map(|p| (p.x, p.y)).collect();
     assert_eq!(pts.len(), 2, "the point at x = 3 m left the window [16, 67.2) m");
     assert!(pts.contains(&(m(20.05), m(10.0))) && pts.contains(&(m(40.0), m(40.0))));
-    assert_eq!(nonmap.stats.dropped_outside, 1);
-    nonmap.insert(&lidar.geom, m(20.0), m(10.02), r);
-    assert_eq!(nonmap.points().len(), 2, "pooled with its neighbour through the rebuilt index");
-    assert_eq!(nonmap.stats.pooled, 1);
+    assert_eq!(w.nonmap.stats.dropped_outside, 1);
+    w.nonmap.insert(&w.lidar.geom, m(20.0), m(10.02), r);
+    assert_eq!(w.nonmap.points().len(), 2, "pooled with its neighbour through the rebuilt index");
+    assert_eq!(w.nonmap.stats.pooled, 1);
 }
 
 /// A building that fits: a closed room whose east wall stands 1.1 m inside the window's east edge.

@@ -4,7 +4,7 @@
 
 use firmware::Cell;
 use host::io::replay::cdr::{self, Header, LaserScan, Odometry, Time, Transform, TransformStamped};
-use host::io::replay::{self, Location, LogFormat, ReplayError, ReplayOptions, ReplayRun};
+use host::io::replay::{self, Location, LogFormat, ReplayError, ReplayOptions, ReplayReport, ReplayRun};
 use std::collections::BTreeMap;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -81,23 +81,30 @@ fn the_first_intel_flaser_line_reads_as_checked_by_hand() {
     );
 }
 
-#[test]
-fn intel_replays_into_a_building_map() {
-    let run = replay::replay(&carmen("intel-corrected.log.gz"), &ReplayOptions::default()).unwrap();
-    let r = &run.report;
-    assert_eq!(r.format, LogFormat::CarmenGzip);
-    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (910, 910, 0), "{r:?}");
-    assert_eq!(r.odometry, 14_541);
-    assert!((r.duration_s - 2691.3).abs() < 0.01, "{}", r.duration_s);
+/// A whole real log replayed into a building's map: all `scans` read were used, over
+/// `duration_s` of log, with at least `min_occupied` (and fewer than 30 000) wall cells, free
+/// space, 20 goals or more and no error.
+fn assert_replays_into_a_building_map(r: &ReplayReport, scans: u32, duration_s: f64, min_occupied: u32) {
+    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (scans, scans, 0), "{r:?}");
+    assert!((r.duration_s - duration_s).abs() < 0.01, "{}", r.duration_s);
     // Speed is a measurement, not a test: `lives replay` prints the wall/log ratio.
     eprintln!("replay took {:.2} s for {:.0} s of log", r.wall_s, r.duration_s);
-    // The Intel lab is ≈ 26 × 26 m; walls are thousands of cells, free space > 10 000 m²·100.
-    assert!((2_000..30_000).contains(&r.grid.occupied), "{:?}", r.grid);
+    assert!((min_occupied..30_000).contains(&r.grid.occupied), "{:?}", r.grid);
     // 42 524 free cells since the evidence grid: "no return" no longer clears through walls (the
     // free-space leak fell from 70 % to 26 %, docs/experiments/real-lidar-maps.md).
     assert!(r.grid.free > 35_000, "{:?}", r.grid);
     assert!(r.goals.len() >= 20, "{} goals", r.goals.len());
     assert!(!r.exceeds_grid && r.error.is_none());
+}
+
+#[test]
+fn intel_replays_into_a_building_map() {
+    let run = replay::replay(&carmen("intel-corrected.log.gz"), &ReplayOptions::default()).unwrap();
+    let r = &run.report;
+    assert_eq!(r.format, LogFormat::CarmenGzip);
+    assert_eq!(r.odometry, 14_541);
+    // The Intel lab is ≈ 26 × 26 m; walls are thousands of cells, free space > 10 000 m²·100.
+    assert_replays_into_a_building_map(r, 910, 2691.3, 2_000);
     assert_eq!(r.labels, "int8-classifier");
     // The robot's own cells are free: it drove there.
     let p = run.trajectory[run.trajectory.len() / 2];
@@ -109,17 +116,7 @@ fn intel_replays_into_a_building_map() {
 #[test]
 fn freiburg_079_replays_into_a_building_map() {
     let run = replay::replay(&carmen("freiburg-079-corrected.log.gz"), &ReplayOptions::default()).unwrap();
-    let r = &run.report;
-    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (4791, 4791, 0), "{r:?}");
-    assert!((r.duration_s - 1062.46).abs() < 0.01, "{}", r.duration_s);
-    // Speed is a measurement, not a test: `lives replay` prints the wall/log ratio.
-    eprintln!("replay took {:.2} s for {:.0} s of log", r.wall_s, r.duration_s);
-    assert!((1_000..30_000).contains(&r.grid.occupied), "{:?}", r.grid);
-    // 42 524 free cells since the evidence grid: "no return" no longer clears through walls (the
-    // free-space leak fell from 70 % to 26 %, docs/experiments/real-lidar-maps.md).
-    assert!(r.grid.free > 35_000, "{:?}", r.grid);
-    assert!(r.goals.len() >= 20, "{} goals", r.goals.len());
-    assert!(!r.exceeds_grid && r.error.is_none());
+    assert_replays_into_a_building_map(&run.report, 4791, 1062.46, 1_000);
 }
 
 #[test]
@@ -680,17 +677,25 @@ fn a_truncated_mcap_bag_names_the_offset_and_keeps_the_scans_before() {
     for b in &mut bad[mid..mid + 16] {
         *b ^= 0x5a;
     }
-    let bad_path = tmp("corrupt.mcap");
-    std::fs::write(&bad_path, &bad).unwrap();
-    let run = replay::replay(&bad_path, &no_classifier()).unwrap();
-    assert!(run.error.is_none(), "{:?}", run.error);
-    let [ReplayError::BagChunk { offset, reason, .. }] = &run.bad_records.first[..] else { panic!("{:?}", run.bad_records) };
-    assert_eq!(*offset, chunk_at as u64);
+    let (run, reason) = replay_skipping_one_chunk("corrupt.mcap", &bad, chunk_at);
     assert!(reason.starts_with("damaged Chunk record, skipped: its zstd data"), "{reason}");
     assert_eq!(run.report.skipped_records.by_reason, BTreeMap::from([("damaged_chunk", 1)]));
     let in_chunk = scans_in_chunk(&path, &bytes, chunk_at);
     assert!(in_chunk > 0);
     assert_eq!(run.report.scans_read, SCANS - in_chunk, "every scan outside the damaged chunk is read");
+}
+
+/// Replays the MCAP file `bytes`, written as `name`: it reads to its end with one damage, the
+/// chunk at byte `chunk_at` named and skipped. The run, and why the chunk was skipped.
+fn replay_skipping_one_chunk(name: &str, bytes: &[u8], chunk_at: usize) -> (ReplayRun, String) {
+    let path = tmp(name);
+    std::fs::write(&path, bytes).unwrap();
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    assert!(run.error.is_none(), "{:?}", run.error);
+    let [ReplayError::BagChunk { offset, reason, .. }] = &run.bad_records.first[..] else { panic!("{:?}", run.bad_records) };
+    assert_eq!(*offset, chunk_at as u64);
+    let reason = reason.clone();
+    (run, reason)
 }
 
 /// How many `/scan` messages of the MCAP file `bytes` (at `path`) are in the chunk at byte `at`.
@@ -837,12 +842,7 @@ fn a_wrong_mcap_record_length_names_the_record_and_what_it_needed() {
     let mut bad = with_record_length(&bytes, inner, 10);
     bad[chunk_at + 9 + 24..chunk_at + 9 + 28].fill(0);
     // The chunk's own length is intact: the rest of it is skipped, the chunks after it read.
-    let p = tmp("short-chunked-message.mcap");
-    std::fs::write(&p, &bad).unwrap();
-    let run = replay::replay(&p, &no_classifier()).unwrap();
-    assert!(run.error.is_none(), "{:?}", run.error);
-    let [ReplayError::BagChunk { offset, reason, .. }] = &run.bad_records.first[..] else { panic!("{:?}", run.bad_records) };
-    assert_eq!(*offset, chunk_at as u64);
+    let (run, reason) = replay_skipping_one_chunk("short-chunked-message.mcap", &bad, chunk_at);
     assert!(
         reason.starts_with(&format!(
             "damaged Chunk record, the rest of it skipped: its record at byte {inner}: Message record of 10 bytes is shorter than the 22"

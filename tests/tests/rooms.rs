@@ -77,30 +77,31 @@ fn at(r: &Rooms, x: f64, y: f64) -> u8 {
     r.room_at((x * 10.0) as i32, (y * 10.0) as i32).unwrap_or_else(|| panic!("no room at ({x}, {y})"))
 }
 
-fn distinct(ids: &[u8]) {
-    let mut v = ids.to_vec();
+/// The rooms at `points` (x, y in metres), which must all be distinct.
+fn distinct_rooms_at(r: &Rooms, points: &[(f64, f64)]) -> Vec<u8> {
+    let ids: Vec<u8> = points.iter().map(|&(x, y)| at(r, x, y)).collect();
+    let mut v = ids.clone();
     v.sort();
     v.dedup();
     assert_eq!(v.len(), ids.len(), "{ids:?}");
+    ids
+}
+
+/// Segments the built-in world `name`, which must have `n` ± 1 rooms and `n` ± 1 doors, each
+/// door of a plausible width.
+fn segment_expecting(name: &str, n: usize) -> Box<Rooms> {
+    let r = segment(name);
+    assert!((n - 1..=n + 1).contains(&r.rooms().len()), "expected {n} ± 1 rooms");
+    assert!((n - 1..=n + 1).contains(&r.doors().len()), "expected {n} ± 1 doors");
+    door_widths_plausible(&r);
+    r
 }
 
 #[test]
 fn the_apartment_has_its_six_side_rooms_and_the_hallway_with_the_living_room() {
-    let r = segment("apartment");
-    assert!((6..=8).contains(&r.rooms().len()), "expected 7 ± 1 rooms");
-    assert!((6..=8).contains(&r.doors().len()), "expected 7 ± 1 doors");
-    door_widths_plausible(&r);
+    let r = segment_expecting("apartment", 7);
     // Bedroom 1, bathroom, bedroom 2, main bedroom, study, dining, living room.
-    let ids = [
-        at(&r, 5.0, 4.5),
-        at(&r, 5.0, 11.0),
-        at(&r, 5.0, 17.5),
-        at(&r, 16.0, 5.0),
-        at(&r, 16.0, 12.0),
-        at(&r, 16.0, 18.0),
-        at(&r, 10.0, 26.0),
-    ];
-    distinct(&ids);
+    let ids = distinct_rooms_at(&r, &[(5.0, 4.5), (5.0, 11.0), (5.0, 17.5), (16.0, 5.0), (16.0, 12.0), (16.0, 18.0), (10.0, 26.0)]);
     let hall = at(&r, 10.0, 8.0);
     assert!(!ids[..6].contains(&hall), "the hallway is in no side room");
     for id in &ids[..5] {
@@ -110,29 +111,28 @@ fn the_apartment_has_its_six_side_rooms_and_the_hallway_with_the_living_room() {
 
 #[test]
 fn the_office_has_eleven_rooms_and_its_corridor_is_a_corridor() {
-    let r = segment("office");
-    assert!((10..=12).contains(&r.rooms().len()), "expected 11 ± 1 rooms");
-    assert!((10..=12).contains(&r.doors().len()), "expected 11 ± 1 doors");
-    door_widths_plausible(&r);
+    let r = segment_expecting("office", 11);
     let corridor = at(&r, 12.25, 20.0);
     assert_eq!(r.room(corridor).unwrap().kind, RoomKind::Corridor);
     assert_eq!(at(&r, 12.25, 3.0), corridor);
     assert_eq!(at(&r, 12.25, 44.0), corridor);
-    // W1..W6, conference, break room, open plan, copy room, corridor.
-    let ids = [
-        at(&r, 6.0, 4.5),
-        at(&r, 6.0, 12.0),
-        at(&r, 6.0, 20.0),
-        at(&r, 6.0, 27.0),
-        at(&r, 6.0, 35.0),
-        at(&r, 6.0, 42.0),
-        at(&r, 20.0, 7.0),
-        at(&r, 20.0, 18.0),
-        at(&r, 18.0, 35.0),
-        at(&r, 24.0, 25.5),
-        corridor,
-    ];
-    distinct(&ids);
+    // W1..W6, conference, break room, open plan, copy room, corridor (the point `corridor` was found at).
+    let ids = distinct_rooms_at(
+        &r,
+        &[
+            (6.0, 4.5),
+            (6.0, 12.0),
+            (6.0, 20.0),
+            (6.0, 27.0),
+            (6.0, 35.0),
+            (6.0, 42.0),
+            (20.0, 7.0),
+            (20.0, 18.0),
+            (18.0, 35.0),
+            (24.0, 25.5),
+            (12.25, 20.0),
+        ],
+    );
     for id in &ids[..10] {
         assert_eq!(r.room(*id).unwrap().kind, RoomKind::Room, "room {id}");
         assert!(r.neighbours(*id).any(|n| n == corridor) || *id == ids[9], "room {id} opens on the corridor");

@@ -477,6 +477,57 @@ fn whole_scans_do_not_survive_one_percent_byte_corruption_and_every_damaged_fram
     assert_eq!(r.result.path_m, 0.0, "the base never moved");
 }
 
+/// Bridge options in `mode` that give up after `max_wall` and count the bridge's ticks in the
+/// returned counter (for a watcher that acts mid-search).
+fn bridge_opts_with_progress(mode: TimeMode, max_wall: Duration) -> (BridgeOptions, Arc<AtomicU32>) {
+    let progress = Arc::new(AtomicU32::new(0));
+    let bopts = BridgeOptions { max_wall: Some(max_wall), progress: Some(progress.clone()), ..BridgeOptions::new(mode) };
+    (bopts, progress)
+}
+
+/// Waits until the bridge has made `ticks` ticks, or gives up once `over` is set (the run ended
+/// first: the test's assertions then fail instead of the test hanging).
+fn wait_for_ticks(progress: &AtomicU32, ticks: u32, over: &AtomicBool) {
+    while progress.load(Ordering::Relaxed) < ticks && !over.load(Ordering::Relaxed) {
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
+
+/// Node and bridge in `mode` (the bridge giving up after `max_wall`) on the two ends of a
+/// pseudo-terminal pair, through fault injectors that damage nothing but share one `cable` that
+/// can go quiet or be pulled; meanwhile `watcher` runs in a thread with the bridge's tick count,
+/// the cable and a flag set once the run is over. The bridge's outcome, the node's report and
+/// what the watcher returned.
+fn run_pair_on_a_cable<W: Send + 'static>(
+    sp: &SearchSpec,
+    mode: TimeMode,
+    max_wall: Duration,
+    watcher: impl FnOnce(&AtomicU32, &FaultHandle, &AtomicBool) -> W + Send + 'static,
+) -> (BridgeResult, NodeReport, W) {
+    let (master, slave) = SerialLink::pty_pair().expect("a pseudo-terminal pair");
+    let cable = FaultHandle::new();
+    let node_end = FaultyLink::new(slave, FaultConfig::default(), 1).with_handle(cable.clone());
+    let bridge_end = FaultyLink::new(master, FaultConfig::default(), 2).with_handle(cable.clone());
+    let (bopts, progress) = bridge_opts_with_progress(mode, max_wall);
+    let over = Arc::new(AtomicBool::new(false));
+    let watch = std::thread::spawn({
+        let over = over.clone();
+        move || watcher(&progress, &cable, &over)
+    });
+    let (r, n) = run_pair(Box::new(node_end), Box::new(bridge_end), sp, &bopts, node_opts(mode));
+    over.store(true, Ordering::Relaxed);
+    (r, n, watch.join().unwrap())
+}
+
+/// The line goes quiet for `d` (frames lost, ports still open): when it went quiet.
+fn go_quiet(cable: &FaultHandle, d: Duration) -> Instant {
+    let quiet_at = Instant::now();
+    cable.blackhole(true);
+    std::thread::sleep(d);
+    cable.blackhole(false);
+    quiet_at
+}
+
 /// Closes the node's end of the pty mid-search (the plug pulled), reopens it 2.5 s later.
 #[test]
 fn closing_the_nodes_end_stops_the_base_at_once_and_reopening_resumes_the_search() {
@@ -485,12 +536,7 @@ fn closing_the_nodes_end_stops_the_base_at_once_and_reopening_resumes_the_search
     let inproc = search::run(&sp, |_| {});
     let (mut master, slave) = SerialLink::pty_pair().expect("a pseudo-terminal pair");
     let path = slave.path().expect("slave path").to_path_buf();
-    let progress = Arc::new(AtomicU32::new(0));
-    let bopts = BridgeOptions {
-        max_wall: Some(Duration::from_secs(240)),
-        progress: Some(progress.clone()),
-        ..BridgeOptions::new(TimeMode::Lockstep)
-    };
+    let (bopts, progress) = bridge_opts_with_progress(TimeMode::Lockstep, Duration::from_secs(240));
     let (pause, done) = (AtomicBool::new(false), AtomicBool::new(false));
     let stop_bridge = AtomicBool::new(false);
     let _hung = common::hang_guard("closing_the_nodes_end", Duration::from_secs(600));
@@ -515,9 +561,7 @@ fn closing_the_nodes_end_stops_the_base_at_once_and_reopening_resumes_the_search
         s.spawn(|| {
             // (Mid-search: the clean run takes 351 ticks. If the run ends first, give up: the
             // assertions below then fail instead of the test hanging.)
-            while progress.load(Ordering::Relaxed) < 40 && !done.load(Ordering::Relaxed) {
-                std::thread::sleep(Duration::from_millis(1));
-            }
+            wait_for_ticks(&progress, 40, &done);
             pause.store(true, Ordering::Relaxed);
         });
         let r = run_bridge(&mut master, Source::Sim(sp.clone()), &bopts, &stop_bridge).expect("a session");
@@ -553,47 +597,22 @@ fn closing_the_nodes_end_stops_the_base_at_once_and_reopening_resumes_the_search
 fn a_silent_link_stops_the_base_within_one_watchdog_period_and_the_search_resumes() {
     let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
     let sp = long_spec();
-    let (master, slave) = SerialLink::pty_pair().expect("a pseudo-terminal pair");
-    let cable = FaultHandle::new();
-    let node_end = FaultyLink::new(slave, FaultConfig::default(), 1).with_handle(cable.clone());
-    let bridge_end = FaultyLink::new(master, FaultConfig::default(), 2).with_handle(cable.clone());
-    let progress = Arc::new(AtomicU32::new(0));
-    let bopts = BridgeOptions {
-        max_wall: Some(Duration::from_secs(240)),
-        progress: Some(progress.clone()),
-        ..BridgeOptions::new(TimeMode::Lockstep)
-    };
     // (Mid-search: the clean run takes 351 ticks. If the run ends first, the watcher gives up and
     // the assertions below fail instead of the test hanging.)
-    let over = Arc::new(AtomicBool::new(false));
-    let watch = std::thread::spawn({
-        let cable = cable.clone();
-        let progress = progress.clone();
-        let over = over.clone();
-        move || {
-            while progress.load(Ordering::Relaxed) < 30 && !over.load(Ordering::Relaxed) {
-                std::thread::sleep(Duration::from_millis(1));
-            }
+    let (r, n, (quiet_at, back_at, pulled_at)) =
+        run_pair_on_a_cable(&sp, TimeMode::Lockstep, Duration::from_secs(240), |progress, cable, over| {
+            wait_for_ticks(progress, 30, over);
             // The far end goes quiet (frames lost, ports still open) ...
-            let quiet_at = Instant::now();
-            cable.blackhole(true);
-            std::thread::sleep(Duration::from_millis(2000));
-            cable.blackhole(false);
+            let quiet_at = go_quiet(cable, Duration::from_millis(2000));
             let back_at = Instant::now();
-            while progress.load(Ordering::Relaxed) < 60 && !over.load(Ordering::Relaxed) {
-                std::thread::sleep(Duration::from_millis(1));
-            }
+            wait_for_ticks(progress, 60, over);
             // ... then the cable is pulled out: the ports fail.
             let pulled_at = Instant::now();
             cable.disconnect();
             std::thread::sleep(Duration::from_millis(1500));
             cable.reconnect();
             (quiet_at, back_at, pulled_at)
-        }
-    });
-    let (r, n) = run_pair(Box::new(node_end), Box::new(bridge_end), &sp, &bopts, node_opts(TimeMode::Lockstep));
-    over.store(true, Ordering::Relaxed);
-    let (quiet_at, back_at, pulled_at) = watch.join().unwrap();
+        });
     figures("silent+pulled", &r, &n);
     let lost: Vec<_> = r.events.iter().filter(|e| matches!(e.kind, BridgeEventKind::LinkLost { .. })).collect();
     assert_eq!(lost.len(), 2, "{:?}", r.events);
@@ -623,36 +642,12 @@ fn a_silent_link_stops_the_base_within_one_watchdog_period_and_the_search_resume
 fn real_time_node_and_bridge_drive_the_base_and_stop_it_when_the_link_is_lost() {
     let _g = PTY.lock().unwrap_or_else(|e| e.into_inner());
     let sp = short_spec(PlannerChoice::LivesGt, 1);
-    let (master, slave) = SerialLink::pty_pair().expect("a pseudo-terminal pair");
-    let cable = FaultHandle::new();
-    let node_end = FaultyLink::new(slave, FaultConfig::default(), 1).with_handle(cable.clone());
-    let bridge_end = FaultyLink::new(master, FaultConfig::default(), 2).with_handle(cable.clone());
-    let progress = Arc::new(AtomicU32::new(0));
-    let bopts = BridgeOptions {
-        max_wall: Some(Duration::from_millis(10_000)),
-        progress: Some(progress.clone()),
-        ..BridgeOptions::new(TimeMode::RealTime)
-    };
     // (If the run ends before 20 ticks, the watcher gives up and the assertions below fail
     // instead of the test hanging.)
-    let over = Arc::new(AtomicBool::new(false));
-    let watch = std::thread::spawn({
-        let cable = cable.clone();
-        let over = over.clone();
-        move || {
-            while progress.load(Ordering::Relaxed) < 20 && !over.load(Ordering::Relaxed) {
-                std::thread::sleep(Duration::from_millis(1));
-            }
-            let quiet_at = Instant::now();
-            cable.blackhole(true);
-            std::thread::sleep(Duration::from_millis(2500));
-            cable.blackhole(false);
-            quiet_at
-        }
+    let (r, n, quiet_at) = run_pair_on_a_cable(&sp, TimeMode::RealTime, Duration::from_millis(10_000), |progress, cable, over| {
+        wait_for_ticks(progress, 20, over);
+        go_quiet(cable, Duration::from_millis(2500))
     });
-    let (r, n) = run_pair(Box::new(node_end), Box::new(bridge_end), &sp, &bopts, node_opts(TimeMode::RealTime));
-    over.store(true, Ordering::Relaxed);
-    let quiet_at = watch.join().unwrap();
     figures("real time", &r, &n);
     let lost = r.events.iter().find(|e| matches!(e.kind, BridgeEventKind::LinkLost { .. })).expect("the loss was noticed");
     let stop_after = lost.at.saturating_duration_since(quiet_at);

@@ -61,6 +61,11 @@ fn batch(t_us: u64, extra: &[HostToCore]) -> Vec<u8> {
     b
 }
 
+/// [`batch`] at `t_us` with a Start command.
+fn start_batch(t_us: u64) -> Vec<u8> {
+    batch(t_us, &[HostToCore::Command(WireCommand::Start)])
+}
+
 struct Rig {
     node: Node,
     ctl: Box<Controller>,
@@ -69,6 +74,13 @@ struct Rig {
 impl Rig {
     fn new(mode: TimeMode) -> Self {
         Rig { node: Node::new(NodeConfig::new(mode)), ctl: Box::new(Controller::new(Config::DEFAULT)) }
+    }
+
+    /// A node in `mode` after a simulator's accepted Hello (asking for labels or not).
+    fn connected(mode: TimeMode, want_labels: bool) -> Self {
+        let mut r = Rig::new(mode);
+        r.hello(want_labels);
+        r
     }
 
     fn rx(&mut self, bytes: &[u8]) -> (u32, Vec<CoreToHost>) {
@@ -107,7 +119,7 @@ fn the_node_is_small() {
 #[test]
 fn nothing_but_hello_is_acted_on_before_the_handshake() {
     let mut r = Rig::new(TimeMode::Lockstep);
-    let (ticks, out) = r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)]));
+    let (ticks, out) = r.rx(&start_batch(0));
     assert_eq!(ticks, 0);
     // One error per heartbeat period, not one per message.
     assert_eq!(out, [CoreToHost::Error(ErrorMsg { code: ErrorCode::HandshakeRequired })]);
@@ -124,12 +136,11 @@ fn nothing_but_hello_is_acted_on_before_the_handshake() {
 
 #[test]
 fn reset_starts_a_new_search_at_once_and_lockstep_time_again() {
-    let mut r = Rig::new(TimeMode::Lockstep);
-    r.hello(false);
-    assert_eq!(r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)])).0, 1);
+    let mut r = Rig::connected(TimeMode::Lockstep, false);
+    assert_eq!(r.rx(&start_batch(0)).0, 1);
     assert_eq!(r.rx(&batch(T, &[])).0, 1);
     // An earlier time is ignored (stale) ...
-    assert_eq!(r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)])).0, 0);
+    assert_eq!(r.rx(&start_batch(0)).0, 0);
     assert_eq!(r.node.counters().lockstep_stale, 1);
     // ... until a Reset: applied on arrival (the controller idle and empty, a configuration
     // accepted again), and time starts over.
@@ -140,7 +151,7 @@ fn reset_starts_a_new_search_at_once_and_lockstep_time_again() {
     let (_, out) = r.rx(&frame(&HostToCore::Config(ConfigMsg::from_config(&Config::DEFAULT))));
     assert!(out.is_empty(), "{out:?}");
     assert_eq!(r.node.counters().configs_applied, 1);
-    let (ticks, out) = r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)]));
+    let (ticks, out) = r.rx(&start_batch(0));
     assert_eq!(ticks, 1);
     let s = statuses(&out);
     assert_eq!((s[0].t_us, s[0].ticks, s[0].mode), (0, 1, WireMode::Exploring), "a new search: its first tick");
@@ -151,9 +162,8 @@ fn reset_starts_a_new_search_at_once_and_lockstep_time_again() {
 
 #[test]
 fn lockstep_ticks_on_the_heartbeat_closing_a_complete_batch() {
-    let mut r = Rig::new(TimeMode::Lockstep);
-    r.hello(false);
-    let (ticks, out) = r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)]));
+    let mut r = Rig::connected(TimeMode::Lockstep, false);
+    let (ticks, out) = r.rx(&start_batch(0));
     assert_eq!(ticks, 1);
     assert_eq!(r.ctl.mode(), Mode::Exploring);
     // A planning step spans two ticks: the first finds the path distances, no goal yet.
@@ -289,10 +299,9 @@ fn a_partial_scan_waits_for_retries_then_ticks_with_what_arrived() {
 
 #[test]
 fn real_time_ticks_on_the_callers_clock_with_heartbeats_and_goal_refresh() {
-    let mut r = Rig::new(TimeMode::RealTime);
-    r.hello(true);
+    let mut r = Rig::connected(TimeMode::RealTime, true);
     // Messages never tick in real time; the heartbeat is echoed at once.
-    let (ticks, out) = r.rx(&batch(123, &[HostToCore::Command(WireCommand::Start)]));
+    let (ticks, out) = r.rx(&start_batch(123));
     assert_eq!(ticks, 0);
     assert_eq!(out, [CoreToHost::Heartbeat(Heartbeat { t_us: 123, seq: 123 })]);
 
@@ -326,8 +335,7 @@ fn real_time_ticks_on_the_callers_clock_with_heartbeats_and_goal_refresh() {
 
 #[test]
 fn a_configuration_is_applied_only_when_idle() {
-    let mut r = Rig::new(TimeMode::Lockstep);
-    r.hello(false);
+    let mut r = Rig::connected(TimeMode::Lockstep, false);
     let mut cfg = Config::DEFAULT;
     cfg.origin_x_m = Config::mm(1_000);
     cfg.watchdog_us = 2_000_000;
@@ -335,7 +343,7 @@ fn a_configuration_is_applied_only_when_idle() {
     assert!(out.is_empty());
     assert_eq!(r.ctl.config().watchdog_us, 2_000_000);
     assert_eq!(r.ctl.lidar.geom.origin_x, Config::mm(1_000), "the maps moved with the origin");
-    r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)]));
+    r.rx(&start_batch(0));
     assert_eq!(r.ctl.mode(), Mode::Exploring);
 
     let (_, out) = r.rx(&frame(&HostToCore::Config(ConfigMsg::from_config(&Config::DEFAULT))));
@@ -346,8 +354,7 @@ fn a_configuration_is_applied_only_when_idle() {
 
 #[test]
 fn a_configuration_out_of_range_is_refused_naming_the_field_and_the_controller_keeps_its_own() {
-    let mut r = Rig::new(TimeMode::Lockstep);
-    r.hello(false);
+    let mut r = Rig::connected(TimeMode::Lockstep, false);
     let mut cfg = Config::DEFAULT;
     cfg.watchdog_us = 2_000_000;
     r.rx(&frame(&HostToCore::Config(ConfigMsg::from_config(&cfg))));
@@ -363,7 +370,7 @@ fn a_configuration_out_of_range_is_refused_naming_the_field_and_the_controller_k
     let c = r.node.counters();
     assert_eq!((c.configs_applied, c.configs_invalid, c.configs_refused), (1, 1, 0));
     // And the node searches on with it (its first goal on the second tick).
-    let (ticks, _) = r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start)]));
+    let (ticks, _) = r.rx(&start_batch(0));
     assert_eq!(ticks, 1);
     assert_eq!(r.ctl.mode(), Mode::Exploring);
     let (_, out) = r.rx(&batch(T, &[]));
@@ -375,7 +382,7 @@ fn set_config_keeps_the_maps_unless_the_origin_moves() {
     let mut ctl = Box::new(Controller::new(Config::DEFAULT));
     let mut node = Node::new(NodeConfig::new(TimeMode::Lockstep));
     node.receive(&frame(&HostToCore::Hello(Hello::new(Role::Simulator, false))), &mut ctl, |_| {});
-    node.receive(&batch(0, &[HostToCore::Command(WireCommand::Start)]), &mut ctl, |_| {});
+    node.receive(&start_batch(0), &mut ctl, |_| {});
     node.receive(&frame(&HostToCore::Command(WireCommand::Stop)), &mut ctl, |_| {});
     node.receive(&batch(T, &[]), &mut ctl, |_| {});
     assert_eq!(ctl.mode(), Mode::Idle);
@@ -394,8 +401,7 @@ fn set_config_keeps_the_maps_unless_the_origin_moves() {
 
 #[test]
 fn base_status_and_commands_flow_through() {
-    let mut r = Rig::new(TimeMode::Lockstep);
-    r.hello(false);
+    let mut r = Rig::connected(TimeMode::Lockstep, false);
     r.rx(&batch(0, &[HostToCore::Command(WireCommand::Start), HostToCore::BaseStatus(BaseStatus { blocked: true })]));
     assert!(r.node.inbox().inputs().base_blocked);
     let (_, out) = r.rx(&batch(T, &[HostToCore::Command(WireCommand::Stop)]));
@@ -405,8 +411,7 @@ fn base_status_and_commands_flow_through() {
 
 #[test]
 fn garbage_is_counted_and_never_reaches_the_controller() {
-    let mut r = Rig::new(TimeMode::Lockstep);
-    r.hello(false);
+    let mut r = Rig::connected(TimeMode::Lockstep, false);
     let mut seed = 0x9E37_79B9_7F4A_7C15u64;
     let mut junk = Vec::new();
     for _ in 0..200_000 {
@@ -415,7 +420,7 @@ fn garbage_is_counted_and_never_reaches_the_controller() {
         seed ^= seed << 17;
         junk.push((seed >> 24) as u8);
     }
-    let good = batch(0, &[HostToCore::Command(WireCommand::Start)]);
+    let good = start_batch(0);
     // Damage each byte of the Start frame in turn (the delimiter kept): every copy is dropped.
     let first = good.iter().position(|&x| x == 0).unwrap();
     for i in 0..first {

@@ -693,17 +693,26 @@ mod tests {
     use super::*;
     use crate::sim::{Sim, SimConfig};
 
-    /// A 10 × 6 m room, a 0.6 m box in it and optionally a fast person walking back and forth.
-    fn scene(person_speed: Option<f64>) -> World {
-        let mut text = String::from(
-            r#"name = "labeller test"
+    /// A closed 10 × 6 m room named `name` (read from `file`), the robot starting at `start`,
+    /// and `things` in it (TOML tables).
+    fn room(name: &str, file: &str, [x, y]: [f64; 2], things: &str) -> World {
+        let text = format!(
+            r#"name = "{name}"
 time_limit_s = 60
 [start]
-position = [2.0, 3.0]
+position = [{x:?}, {y:?}]
 [[walls]]
 points = [[0, 0], [10, 0], [10, 6], [0, 6]]
 closed = true
-[[obstacles]]
+{things}"#
+        );
+        World::from_toml_str(&text, file).unwrap()
+    }
+
+    /// A 10 × 6 m room, a 0.6 m box in it and optionally a fast person walking back and forth.
+    fn scene(person_speed: Option<f64>) -> World {
+        let mut things = String::from(
+            r#"[[obstacles]]
 kind = "clutter"
 rect = { center = [5.0, 3.0], size = [0.6, 0.6] }
 [[targets]]
@@ -711,9 +720,9 @@ rect = { center = [9.0, 5.0], size = [0.5, 0.35] }
 "#,
         );
         if let Some(s) = person_speed {
-            text.push_str(&format!("[[people]]\npath = [[3.0, 1.0], [8.0, 1.0]]\nspeed_mps = {s}\nradius_m = 0.25\n"));
+            things.push_str(&format!("[[people]]\npath = [[3.0, 1.0], [8.0, 1.0]]\nspeed_mps = {s}\nradius_m = 0.25\n"));
         }
-        World::from_toml_str(&text, "labeller.toml").unwrap()
+        room("labeller test", "labeller.toml", [2.0, 3.0], &things)
     }
 
     #[test]
@@ -799,20 +808,13 @@ rect = { center = [9.0, 5.0], size = [0.5, 0.35] }
     fn normal_test_rejects_a_side_face_near_a_wall() {
         // A shelf standing 5 cm off the top wall, its side faces perpendicular to it: with the
         // normal test the side-face beams are not LTF; without it the distance gate takes them.
-        let text = r#"name = "shelf"
-time_limit_s = 60
-[start]
-position = [5.0, 2.0]
-[[walls]]
-points = [[0, 0], [10, 0], [10, 6], [0, 6]]
-closed = true
-[[obstacles]]
+        let things = r#"[[obstacles]]
 kind = "furniture"
 rect = { center = [7.5, 5.55], size = [1.0, 0.8] }
 [[targets]]
 rect = { center = [1.0, 1.0], size = [0.5, 0.35] }
 "#;
-        let world = World::from_toml_str(text, "shelf.toml").unwrap();
+        let world = room("shelf", "shelf.toml", [5.0, 2.0], things);
         let cfg = SimConfig { dropout_prob: 0.0, ..SimConfig::default() };
         let mut sim = Sim::new(world.clone(), cfg, 2);
         let p = sim.pose();

@@ -5,19 +5,39 @@ use crate::geometry::{dist, wrap_angle};
 use crate::Scenario;
 use crate::{HitKind, Material, Shape, World};
 
-/// A closed 10 × 4 m room, the robot starting at (2, 2), plus `extra` (TOML tables).
-fn room_world(name: &str, extra: &str) -> World {
+/// A closed `width` × `height` m room (corner at the origin) named `name`, the robot starting at
+/// `start`, plus `extra` (TOML tables).
+fn closed_room(name: &str, [width, height]: [u32; 2], [x, y]: [f64; 2], extra: &str) -> World {
     let text = format!(
         r#"name = "{name}"
 time_limit_s = 60
 [start]
-position = [2.0, 2.0]
+position = [{x:?}, {y:?}]
 [[walls]]
-points = [[0, 0], [10, 0], [10, 4], [0, 4]]
+points = [[0, 0], [{width}, 0], [{width}, {height}], [0, {height}]]
 closed = true
 {extra}"#
     );
     World::from_toml_str(&text, &format!("{name}.toml")).unwrap()
+}
+
+/// A closed 10 × 4 m room, the robot starting at (2, 2), plus `extra` (TOML tables).
+fn room_world(name: &str, extra: &str) -> World {
+    closed_room(name, [10, 4], [2.0, 2.0], extra)
+}
+
+/// Steps `sim` 0.1 s at a time, calling `each` with it and the status after every step, until
+/// the base arrives or `max_steps` have passed: the last status.
+fn drive_until_arrived(sim: &mut Sim, max_steps: usize, mut each: impl FnMut(&Sim, BaseStatus)) -> BaseStatus {
+    let mut status = BaseStatus::Moving;
+    for _ in 0..max_steps {
+        status = sim.step(0.1);
+        each(sim, status);
+        if status == BaseStatus::Arrived {
+            break;
+        }
+    }
+    status
 }
 
 /// The room split by a wall at x = 5 (no door), a suitcase behind the wall.
@@ -98,14 +118,7 @@ fn base_follows_path_and_turns_to_final_yaw() {
     let mut sim = Sim::new(walled_world(8.0), SimConfig::default(), 3);
     let p0 = sim.pose();
     sim.set_path(&[[3.0, 1.0], [4.0, 3.0]], Some(PI));
-    let mut status = BaseStatus::Moving;
-    for _ in 0..300 {
-        status = sim.step(0.1);
-        if status == BaseStatus::Arrived {
-            break;
-        }
-    }
-    assert_eq!(status, BaseStatus::Arrived);
+    assert_eq!(drive_until_arrived(&mut sim, 300, |_, _| {}), BaseStatus::Arrived);
     let p = sim.pose();
     assert!(dist([p[0], p[1]], [4.0, 3.0]) < GOAL_TOLERANCE_M);
     assert!((wrap_angle(p[2] - PI)).abs() < 1e-9);
@@ -163,24 +176,20 @@ fn scan_shape_and_ground_truth() {
     let mut sim = Sim::new(walled_world(8.0), cfg, 5);
     let p = sim.pose();
     let s = sim.scan();
+    // Along one axis, from `at` heading `dir`: the distance to the side (at 0 or `far`) ahead.
+    let to_side = |at: f64, dir: f64, far: f64| {
+        if dir > 0.0 {
+            (far - at) / dir
+        } else if dir < 0.0 {
+            -at / dir
+        } else {
+            f64::INFINITY
+        }
+    };
     for (i, r) in s.ranges_m.iter().enumerate() {
         let a = p[2] + s.angle_min + i as f64 * s.angle_increment;
-        let (c, sn) = (a.cos(), a.sin());
         // Expected distance to the box [0,5]×[0,4].
-        let tx = if c > 0.0 {
-            (5.0 - p[0]) / c
-        } else if c < 0.0 {
-            -p[0] / c
-        } else {
-            f64::INFINITY
-        };
-        let ty = if sn > 0.0 {
-            (4.0 - p[1]) / sn
-        } else if sn < 0.0 {
-            -p[1] / sn
-        } else {
-            f64::INFINITY
-        };
+        let (tx, ty) = (to_side(p[0], a.cos(), 5.0), to_side(p[1], a.sin(), 4.0));
         assert!((*r as f64 - tx.min(ty)).abs() < 1e-4, "beam {i}");
         assert_eq!(s.hits[i], HitKind::Wall);
     }
@@ -212,15 +221,10 @@ fn base_never_touches_anything_among_people() {
     for seed in 0..4 {
         let mut sim = Sim::new(w.clone(), SimConfig::default(), seed);
         sim.set_path(&path, Some(0.0));
-        let mut status = BaseStatus::Moving;
-        for _ in 0..3000 {
-            status = sim.step(0.1);
+        let status = drive_until_arrived(&mut sim, 3000, |sim, _| {
             let p = sim.pose();
             assert!(!sim.collides([p[0], p[1]]), "seed {seed}: collides at {p:?}");
-            if status == BaseStatus::Arrived {
-                break;
-            }
-        }
+        });
         assert_eq!(status, BaseStatus::Arrived, "seed {seed}: {:?} at t = {}", sim.pose(), sim.time_s());
     }
 }
@@ -259,16 +263,11 @@ fn base_slides_along_what_it_grazes_and_never_touches_it() {
     // turns its sub-steps away (as Spot's obstacle avoidance does) and arrives.
     let mut sim = box_above_start();
     sim.set_path(&[[3.0, 2.1]], None);
-    let mut status = BaseStatus::Moving;
-    for _ in 0..100 {
-        status = sim.step(0.1);
+    let status = drive_until_arrived(&mut sim, 100, |sim, status| {
         let p = sim.pose();
         assert!(!sim.collides([p[0], p[1]]), "touches at {p:?}");
         assert_ne!(status, BaseStatus::Blocked, "at {p:?}");
-        if status == BaseStatus::Arrived {
-            break;
-        }
-    }
+    });
     assert_eq!(status, BaseStatus::Arrived);
     // Into the box itself it is still blocked: no turn of up to 60° gets anywhere.
     let mut sim = box_above_start();
@@ -329,19 +328,7 @@ fn the_ideal_sensor_gives_the_scans_of_before_bit_for_bit() {
 
 /// A 40 × 40 m empty square room, the robot at its centre facing +x, plus `extra`.
 fn big_room(extra: &str) -> World {
-    let text = format!(
-        r#"name = "big"
-time_limit_s = 60
-[start]
-position = [20.0, 20.0]
-[[walls]]
-points = [[0, 0], [40, 0], [40, 40], [0, 40]]
-closed = true
-[[targets]]
-rect = {{ center = [2.0, 2.0], size = [0.5, 0.35] }}
-{extra}"#
-    );
-    World::from_toml_str(&text, "big.toml").unwrap()
+    closed_room("big", [40, 40], [20.0, 20.0], &format!("[[targets]]\nrect = {{ center = [2.0, 2.0], size = [0.5, 0.35] }}\n{extra}"))
 }
 
 #[test]
@@ -532,14 +519,7 @@ fn a_goal_in_the_controllers_frame_brings_the_laser_there() {
     let mut sim = Sim::new(big_room(""), cfg, 4);
     let goal = [25.0, 23.0];
     sim.set_goal_path(&[[22.0, 21.0], goal], Some(1.0));
-    let mut status = BaseStatus::Moving;
-    for _ in 0..600 {
-        status = sim.step(0.1);
-        if status == BaseStatus::Arrived {
-            break;
-        }
-    }
-    assert_eq!(status, BaseStatus::Arrived);
+    assert_eq!(drive_until_arrived(&mut sim, 600, |_, _| {}), BaseStatus::Arrived);
     let q = sim.controller_pose();
     assert!(dist([q[0], q[1]], goal) < 0.25, "{q:?}");
     assert!(wrap_angle(q[2] - 1.0).abs() < 0.01, "{q:?}");
@@ -553,11 +533,7 @@ fn a_goal_in_the_controllers_frame_brings_the_laser_there() {
 fn drift_after(cfg: SimConfig, metres: f64, turn: f64) -> (f64, f64) {
     let mut sim = Sim::new(big_room(""), cfg, 9);
     sim.set_path(&[[20.0 + metres, 20.0]], Some(turn));
-    for _ in 0..1000 {
-        if sim.step(0.1) == BaseStatus::Arrived {
-            break;
-        }
-    }
+    drive_until_arrived(&mut sim, 1000, |_, _| {});
     let (p, o) = (sim.pose(), sim.odom_pose());
     (dist([p[0], p[1]], [o[0], o[1]]), wrap_angle(p[2] - o[2]).abs())
 }

@@ -2,40 +2,8 @@ use super::load::line_of;
 use super::*;
 use std::path::Path;
 
-const TINY: &str = r#"# a tiny world
-name = "tiny"
-time_limit_s = 60
-
-[start]
-position = [1.0, 1.0]
-yaw_deg = 90
-
-[[walls]]
-points = [[0, 0], [6, 0], [6, 4], [0, 4]]
-closed = true
-
-[[obstacles]]
-kind = "furniture"
-label = "table"
-rect = { center = [4.0, 2.0], size = [1.2, 0.8], yaw_deg = 10 }
-
-[[obstacles]]
-kind = "clutter"
-circle = { center = [2.0, 3.0], radius = 0.2 }
-
-[[obstacles]]
-kind = "clutter"
-polygon = [[5.0, 0.5], [5.5, 0.5], [5.2, 1.0]]
-
-[[targets]]
-name = "suitcase"
-rect = { center = [2.5, 1.0], size = [0.5, 0.35] }
-candidates = [[1.0, 3.0]]
-
-[[people]]
-path = [[1.0, 2.2], [5.0, 3.5]]
-speed_mps = 0.5
-"#;
+/// A small world using every kind of table and shape; the errors below are made by editing it.
+const TINY: &str = include_str!("tiny.toml");
 
 fn err(text: &str) -> WorldError {
     World::from_toml_str(text, "bad.toml").expect_err("should fail")

@@ -187,20 +187,20 @@ fn truncated_and_corrupt_files_give_clear_errors() {
 #[test]
 fn bad_specs_are_refused() {
     let dir = tmp_dir("bad");
-    let mut s = small_spec(&dir);
-    s.worlds = 0;
-    assert!(matches!(generate(&s), Err(DatasetError::InvalidSpec(_))));
-    let mut s = small_spec(&dir);
-    s.episode_min_s = 10.0;
-    s.episode_max_s = 5.0;
-    assert!(matches!(generate(&s), Err(DatasetError::InvalidSpec(_))));
-    let mut s = small_spec(&dir);
-    s.first_world_seed = u64::MAX;
-    assert!(matches!(generate(&s), Err(DatasetError::InvalidSpec(_))));
-    for bad in [[0.5, 0.2], [-0.1, 1.0], [0.0, 1.5]] {
+    // `small_spec` changed by `edit` is refused as invalid.
+    let refused = |edit: &dyn Fn(&mut DatasetSpec)| {
         let mut s = small_spec(&dir);
-        s.density = bad;
-        assert!(matches!(generate(&s), Err(DatasetError::InvalidSpec(_))), "{bad:?}");
+        edit(&mut s);
+        matches!(generate(&s), Err(DatasetError::InvalidSpec(_)))
+    };
+    assert!(refused(&|s| s.worlds = 0));
+    assert!(refused(&|s| {
+        s.episode_min_s = 10.0;
+        s.episode_max_s = 5.0;
+    }));
+    assert!(refused(&|s| s.first_world_seed = u64::MAX));
+    for bad in [[0.5, 0.2], [-0.1, 1.0], [0.0, 1.5]] {
+        assert!(refused(&|s| s.density = bad), "{bad:?}");
     }
     let _ = fs::remove_dir_all(&dir);
 }
