@@ -204,8 +204,9 @@ impl World {
     }
 
     /// The walls, the obstacles and the placed `targets` in a scene of 0.5 m cells, all of the
-    /// default material (obstacle `i` owned by `i`, target `i` by [`TARGET_OWNER_BASE`]` + i`):
-    /// the still world, as the reachability check, the oracle and `lives mapcheck` see it.
+    /// default material (obstacle `i` owned by `i`, target `i` by `TARGET_OWNER_BASE + i`): the
+    /// world without its people, as the reachability check, the oracle and `lives mapcheck` see
+    /// it.
     pub fn static_scene(&self, targets: &[Shape]) -> Scene {
         let mut b = SceneBuilder::new();
         for w in &self.walls {
