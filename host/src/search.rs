@@ -9,7 +9,9 @@
 //! `--trace` lines.
 
 pub use crate::robot_model::{controller_model, default_sim, ideal_sim, Robot, CALIBRATED_CAMERA_RANGE_M, SHORT_CAMERA_RANGE_M};
-use crate::run::{controller_config, count_labels, drive, AfterAct, Answer, End, Ended, Frame, InProcess, LabelScore, Motion, SimSource};
+use crate::run::{
+    controller_config, count_labels, drive, round3, AfterAct, Answer, End, Ended, Frame, InProcess, LabelScore, Motion, SimSource,
+};
 use crate::sim::{Scenario, Sim, SimConfig, World};
 use firmware::planner::Viewpoint;
 use firmware::scan::BeamScan;
@@ -229,8 +231,9 @@ impl SimSettings {
     }
 }
 
-/// The machine-readable result (`--json`).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+/// The machine-readable result (`--json`). The default is empty: what a run off the simulator
+/// (the real robot) leaves out.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct SearchResult {
     /// World name.
     pub world: String,
@@ -512,10 +515,6 @@ impl SearchResult {
             oracle_s: None,
         }
     }
-}
-
-fn round3(v: f64) -> f64 {
-    (v * 1000.0).round() / 1000.0
 }
 
 #[cfg(test)]

@@ -10,6 +10,7 @@ use host::io::sensors::pcap::CaptureError;
 use host::io::sensors::vlp16::{
     self, PacketError, PcapScans, PlanarScan, RejectReason, Skipped, Vlp16Config, Vlp16Error, Vlp16Packet, Vlp16Udp, DATA_PORT, PACKET_LEN,
 };
+use host::measure::fuzz::Mutator;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -374,35 +375,20 @@ fn live_udp_on_loopback_gives_the_same_scans_as_the_file() {
     }
 }
 
-/// xorshift64*: a seeded generator, so a failure reproduces.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
-
 #[test]
 fn mutated_captures_never_panic_and_every_packet_is_accounted_for() {
     let pcap_bytes = std::fs::read(pcap()).unwrap();
     let raw_bytes = std::fs::read(einride()).unwrap();
     let cfg = Vlp16Config::default();
-    let mut rng = Rng(0x5EED_1234_ABCD_0001);
+    // The fuzz campaign's xorshift64*: seeded, so a failure reproduces.
+    let mut rng = Mutator::new(0x5EED_1234_ABCD_0001);
     let mut damaged = 0;
     for _ in 0..300 {
         // Raw payloads: flip up to 16 bytes; the length stays, so every packet is decoded or rejected.
         let mut raw = raw_bytes.clone();
         for _ in 0..1 + rng.below(16) {
             let i = rng.below(raw.len());
-            raw[i] = rng.next() as u8;
+            raw[i] = rng.next_u64() as u8;
         }
         // Every byte is decoded, rejected with its packet, or skipped.
         let r = vlp16::decode_raw_bytes(Path::new("m.bin"), &raw, &cfg).unwrap();
@@ -415,7 +401,7 @@ fn mutated_captures_never_panic_and_every_packet_is_accounted_for() {
         for _ in 0..edits {
             let i = rng.below(raw.len());
             if rng.below(2) == 0 {
-                raw.insert(i, rng.next() as u8);
+                raw.insert(i, rng.next_u64() as u8);
             } else {
                 raw.remove(i);
             }
@@ -432,7 +418,7 @@ fn mutated_captures_never_panic_and_every_packet_is_accounted_for() {
         let mut p = pcap_bytes.clone();
         for _ in 0..1 + rng.below(16) {
             let i = 24 + rng.below(p.len() - 24);
-            p[i] = rng.next() as u8;
+            p[i] = rng.next_u64() as u8;
         }
         if rng.below(2) == 0 {
             p.truncate(24 + rng.below(p.len() - 24));

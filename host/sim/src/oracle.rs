@@ -31,9 +31,9 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use crate::geometry::{wrap_angle, SceneBuilder};
+use crate::geometry::wrap_angle;
 use crate::simulator::DETECT_SAMPLES;
-use crate::{HitKind, Sim, SimConfig, World, P2};
+use crate::{Sim, SimConfig, World, P2};
 
 /// Grid resolution of the oracle's paths.
 pub const ORACLE_RESOLUTION_M: f64 = 0.1;
@@ -118,22 +118,9 @@ struct Grid {
 
 impl Grid {
     fn new(world: &World, targets: &[crate::Shape], radius: f64) -> Grid {
-        let res = ORACLE_RESOLUTION_M;
-        let mut b = SceneBuilder::new();
-        for w in &world.walls {
-            b.wall(w[0], w[1]);
-        }
-        for (i, o) in world.obstacles.iter().enumerate() {
-            b.shape(&o.shape, o.kind, i as u32);
-        }
-        for (i, s) in targets.iter().enumerate() {
-            b.shape(s, HitKind::Target, crate::geometry::TARGET_OWNER_BASE + i as u32);
-        }
-        let origin = [world.bounds[0][0] - 0.5, world.bounds[0][1] - 0.5];
-        let nx = (((world.bounds[1][0] - origin[0] + 0.5) / res).ceil() as usize).clamp(1, 2000);
-        let ny = (((world.bounds[1][1] - origin[1] + 0.5) / res).ceil() as usize).clamp(1, 2000);
+        let (origin, nx, ny) = world.grid_over_bounds(ORACLE_RESOLUTION_M);
         let radius = if radius.is_finite() { radius.max(0.0) } else { 0.0 };
-        Grid { scene: b.build(0.5), origin, nx, ny, radius }
+        Grid { scene: world.static_scene(targets), origin, nx, ny, radius }
     }
 
     fn center(&self, i: usize) -> P2 {

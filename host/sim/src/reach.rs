@@ -7,7 +7,7 @@
 
 use std::collections::VecDeque;
 
-use super::geometry::{dist, SceneBuilder};
+use super::geometry::dist;
 use super::{World, P2};
 
 /// Grid resolution of the reachability check.
@@ -33,17 +33,8 @@ impl ReachMap {
     /// Flood the free cells of `world` from `from` for a robot of radius `robot_radius_m`.
     pub fn new(world: &World, from: P2, robot_radius_m: f64) -> ReachMap {
         let res = REACH_RESOLUTION_M;
-        let mut b = SceneBuilder::new();
-        for w in &world.walls {
-            b.wall(w[0], w[1]);
-        }
-        for (i, o) in world.obstacles.iter().enumerate() {
-            b.shape(&o.shape, o.kind, i as u32);
-        }
-        let scene = b.build(0.5);
-        let origin = [world.bounds[0][0] - 0.5, world.bounds[0][1] - 0.5];
-        let nx = (((world.bounds[1][0] - origin[0] + 0.5) / res).ceil() as usize).clamp(1, 2000);
-        let ny = (((world.bounds[1][1] - origin[1] + 0.5) / res).ceil() as usize).clamp(1, 2000);
+        let scene = world.static_scene(&[]);
+        let (origin, nx, ny) = world.grid_over_bounds(res);
         let center = |x: usize, y: usize| [origin[0] + (x as f64 + 0.5) * res, origin[1] + (y as f64 + 0.5) * res];
         let mut map = ReachMap { origin, nx, ny, steps: vec![UNREACHED; nx * ny] };
         let Some(s) = map.index(from) else {

@@ -589,11 +589,7 @@ impl Agreement {
 
     /// Merge another tally in.
     pub fn merge(&mut self, other: &Agreement) {
-        for l in 0..4 {
-            for h in 0..6 {
-                self.counts[l][h] += other.counts[l][h];
-            }
-        }
+        super::add_counts(&mut self.counts, &other.counts);
     }
 
     /// All beams.

@@ -10,3 +10,12 @@ pub mod model;
 pub mod train;
 #[cfg(feature = "train")]
 pub mod train_geo;
+
+/// Adds the tally `other` into `counts`, cell by cell.
+pub(crate) fn add_counts<const R: usize, const C: usize>(counts: &mut [[u64; C]; R], other: &[[u64; C]; R]) {
+    for (row, o) in counts.iter_mut().zip(other) {
+        for (c, o) in row.iter_mut().zip(o) {
+            *c += o;
+        }
+    }
+}

@@ -29,6 +29,7 @@ use super::SerialLink;
 use super::{Link, Summary, TimeMode};
 use crate::io::range::{EncodedScan, RangeLimits};
 use crate::io::sensors::vlp16::{PlanarScan, Vlp16Config, Vlp16Udp};
+use crate::run::round3;
 use crate::search::{PlannerChoice, SearchResult};
 use firmware::protocol::{
     BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, GoalMsg, HostToCore, PoseMsg, ScanMsg, StatusMsg, WireCommand, WireMode,
@@ -567,28 +568,22 @@ pub fn run_robot(link: &mut dyn Link, spec: RobotSpec, opts: &BridgeOptions, sto
         world: "robot".to_string(),
         scenario: "real".to_string(),
         planner: spec.planner.to_string(),
-        seed: 0,
         found,
-        time_s: (session_s * 1000.0).round() / 1000.0,
-        path_m: (driven_m * 1000.0).round() / 1000.0,
+        time_s: round3(session_s),
+        path_m: round3(driven_m),
         ticks,
         time_limit_s: opts.max_wall.map_or(0.0, |d| d.as_secs_f64()),
         outcome: outcome.to_string(),
         goals: status.map_or(0, |s| s.goals),
         blacklisted: status.map_or(0, |s| s.blacklisted),
         blocked: blocked_ticks,
-        collisions: 0,
         // The robot sends no labels: the node's classifier labelled the scans if its status ever
         // reported classify work (a node started with `--no-model` reports none).
         labels: if status.is_some_and(|s| s.cost.classify > 0) { "int8-classifier" } else { "none" }.to_string(),
-        targets: Vec::new(),
-        motion: None,
-        lidar_saw_target_s: None,
-        target_in_camera_reach_s: None,
-        // The core's labels stay in the node: the link carries no per-beam labels back.
-        classifier: None,
-        sim: None,
-        oracle_s: None,
+        // What only a simulation knows stays empty: seed 0, no collisions, targets, time
+        // breakdown, sightings, simulated robot or oracle. The core's labels stay in the node
+        // (the link carries no per-beam labels back), so there is no classifier score either.
+        ..SearchResult::default()
     };
     // Every goal the client was given a path for, once per `seq` (as the simulator's decisions).
     let origin = origin_used.map_or([0.0; 2], |o| o);

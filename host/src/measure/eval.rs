@@ -256,10 +256,7 @@ pub fn heldout_specs(
         let scenario = if k % 2 == 0 { Scenario::Easy } else { Scenario::Hard };
         let world = World::random_scenario(seed, scenario);
         for &p in planners {
-            let mut spec = SearchSpec::new(HELDOUT_WORLD, world.clone(), scenario, p, seed);
-            if p.uses_classifier() {
-                spec.model = Some(model);
-            }
+            let mut spec = planner_spec(HELDOUT_WORLD, &world, scenario, p, seed, model);
             configure(&mut spec)?;
             specs.push(spec);
         }
@@ -492,10 +489,7 @@ pub fn eval_specs(
                 .ok_or_else(|| format!("unknown built-in world `{w}` (expected {})", World::builtin_names().join(", ")))?;
             for &p in planners {
                 for seed in 1..=trials {
-                    let mut spec = SearchSpec::new(w, world.clone(), s, p, seed);
-                    if p.uses_classifier() {
-                        spec.model = Some(model);
-                    }
+                    let mut spec = planner_spec(w, &world, s, p, seed, model);
                     configure(&mut spec)?;
                     specs.push(spec);
                 }
@@ -503,6 +497,16 @@ pub fn eval_specs(
         }
     }
     Ok(specs)
+}
+
+/// Planner `p`'s search of `world` (named `name`, loaded in `scenario`) with `seed`, on the
+/// classifier `model` when `p` runs one.
+fn planner_spec(name: &str, world: &World, scenario: Scenario, p: PlannerChoice, seed: u64, model: &'static [u8]) -> SearchSpec {
+    let mut spec = SearchSpec::new(name, world.clone(), scenario, p, seed);
+    if p.uses_classifier() {
+        spec.model = Some(model);
+    }
+    spec
 }
 
 /// One parameter assignment's score in [`tune`].
@@ -572,10 +576,7 @@ pub fn tune(
             for &scenario in scenarios {
                 let world = World::random_scenario(seed, scenario);
                 for &p in planners {
-                    let mut spec = SearchSpec::new(&format!("random-{seed}"), world.clone(), scenario, p, seed);
-                    if p.uses_classifier() {
-                        spec.model = Some(model);
-                    }
+                    let mut spec = planner_spec(&format!("random-{seed}"), &world, scenario, p, seed, model);
                     for a in sets {
                         crate::overrides::apply(&mut spec.controller, a)?;
                     }

@@ -292,18 +292,21 @@ impl Mutator {
         Mutator(seed.max(1))
     }
 
-    fn next(&mut self) -> u64 {
+    /// The next number of the xorshift64* sequence (a test may draw from it directly, so that a
+    /// failure reproduces from the seed).
+    pub fn next_u64(&mut self) -> u64 {
         self.0 ^= self.0 >> 12;
         self.0 ^= self.0 << 25;
         self.0 ^= self.0 >> 27;
         self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
     }
 
-    fn below(&mut self, n: usize) -> usize {
+    /// A number in `0..n` (0 when `n` is 0).
+    pub fn below(&mut self, n: usize) -> usize {
         if n == 0 {
             0
         } else {
-            (self.next() % n as u64) as usize
+            (self.next_u64() % n as u64) as usize
         }
     }
 
@@ -319,7 +322,7 @@ impl Mutator {
                 }
                 2 if len > 0 => {
                     let i = self.below(len);
-                    b[i] = self.next() as u8;
+                    b[i] = self.next_u64() as u8;
                 }
                 3 if len > 0 => {
                     let i = self.below(len);
@@ -328,7 +331,7 @@ impl Mutator {
                 4 => {
                     let i = self.below(len + 1);
                     let n = 1 + self.below(16);
-                    let bytes: Vec<u8> = (0..n).map(|_| self.next() as u8).collect();
+                    let bytes: Vec<u8> = (0..n).map(|_| self.next_u64() as u8).collect();
                     b.splice(i..i, bytes);
                 }
                 5 if len > 0 => {
@@ -351,7 +354,7 @@ impl Mutator {
                 }
                 9 if len >= 8 => {
                     let i = self.below(len - 7);
-                    let v: u64 = [u64::MAX, 1 << 62, 0x7fff_ffff_ffff_ffff, 1 << 32, 0xffff_ffff, self.next()][self.below(6)];
+                    let v: u64 = [u64::MAX, 1 << 62, 0x7fff_ffff_ffff_ffff, 1 << 32, 0xffff_ffff, self.next_u64()][self.below(6)];
                     b[i..i + 8].copy_from_slice(&v.to_le_bytes());
                 }
                 _ => {

@@ -41,6 +41,6 @@ mod walk;
 
 pub use controller::{centred_origin, controller_config, Idle, InProcess};
 pub use cycle::{drive, Act, AfterAct, Answer, Brain, End, Ended, Frame, Observer, Source, TICK_US};
-pub use score::{count_labels, LabelScore, Motion, RunTally, LIDAR_SIGHTING_BEAMS, MOVING_M_PER_TICK, TURNING_RAD_PER_TICK};
+pub use score::{count_labels, round3, LabelScore, Motion, RunTally, LIDAR_SIGHTING_BEAMS, MOVING_M_PER_TICK, TURNING_RAD_PER_TICK};
 pub use sim::{encode_sim_scan, gt_label, sim_limits, step_base, BaseStep, Clock, SimSource};
 pub use walk::{line_clear, Walker};

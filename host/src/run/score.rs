@@ -149,7 +149,8 @@ pub const TURNING_RAD_PER_TICK: f64 = 0.01;
 /// Beams that must hit a target in one scan for [`SearchResult::lidar_saw_target_s`].
 pub const LIDAR_SIGHTING_BEAMS: usize = 3;
 
-fn round3(v: f64) -> f64 {
+/// `v` rounded to thousandths, as the reports write seconds and metres (to the ms and the mm).
+pub fn round3(v: f64) -> f64 {
     (v * 1000.0).round() / 1000.0
 }
 

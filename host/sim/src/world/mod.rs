@@ -9,7 +9,7 @@
 
 use std::fmt;
 
-use super::geometry::dist;
+use super::geometry::{dist, Scene, SceneBuilder, TARGET_OWNER_BASE};
 use super::{HitKind, Material, Scenario, Shape, P2};
 
 mod load;
@@ -128,29 +128,26 @@ pub enum WorldError {
 impl WorldError {
     /// The file name given to the loader.
     pub fn file(&self) -> &str {
-        match self {
-            WorldError::Io { file, .. }
-            | WorldError::Syntax { file, .. }
-            | WorldError::Schema { file, .. }
-            | WorldError::Invalid { file, .. } => file,
-        }
+        self.parts().0
     }
 
     /// The 1-based line, if the error has one.
     pub fn line(&self) -> Option<usize> {
-        match self {
-            WorldError::Io { .. } => None,
-            WorldError::Syntax { line, .. } | WorldError::Schema { line, .. } | WorldError::Invalid { line, .. } => Some(*line),
-        }
+        self.parts().1
     }
 
     /// The problem, without file and line.
     pub fn message(&self) -> &str {
+        self.parts().2
+    }
+
+    /// File, line and message, whatever the pass.
+    fn parts(&self) -> (&str, Option<usize>, &str) {
         match self {
-            WorldError::Io { message, .. }
-            | WorldError::Syntax { message, .. }
-            | WorldError::Schema { message, .. }
-            | WorldError::Invalid { message, .. } => message,
+            WorldError::Io { file, message } => (file, None, message),
+            WorldError::Syntax { file, line, message }
+            | WorldError::Schema { file, line, message }
+            | WorldError::Invalid { file, line, message } => (file, Some(*line), message),
         }
     }
 }
@@ -204,6 +201,33 @@ impl World {
         } else {
             [[0.0; 2]; 2]
         }
+    }
+
+    /// The walls, the obstacles and the placed `targets` in a scene of 0.5 m cells, all of the
+    /// default material (obstacle `i` owned by `i`, target `i` by `TARGET_OWNER_BASE + i`): the
+    /// world without its people, as the reachability check, the oracle and `lives mapcheck` see
+    /// it.
+    pub fn static_scene(&self, targets: &[Shape]) -> Scene {
+        let mut b = SceneBuilder::new();
+        for w in &self.walls {
+            b.wall(w[0], w[1]);
+        }
+        for (i, o) in self.obstacles.iter().enumerate() {
+            b.shape(&o.shape, o.kind, i as u32);
+        }
+        for (i, s) in targets.iter().enumerate() {
+            b.shape(s, HitKind::Target, TARGET_OWNER_BASE + i as u32);
+        }
+        b.build(0.5)
+    }
+
+    /// A grid of `res`-metre cells over [`World::bounds`] and 0.5 m around them (at most 2000
+    /// cells a side): its lower-left corner and its cells in x and in y.
+    pub fn grid_over_bounds(&self, res: f64) -> (P2, usize, usize) {
+        let origin = [self.bounds[0][0] - 0.5, self.bounds[0][1] - 0.5];
+        let nx = (((self.bounds[1][0] - origin[0] + 0.5) / res).ceil() as usize).clamp(1, 2000);
+        let ny = (((self.bounds[1][1] - origin[1] + 0.5) / res).ceil() as usize).clamp(1, 2000);
+        (origin, nx, ny)
     }
 
     /// If `shape` overlaps a wall or an obstacle, say which.

@@ -436,7 +436,7 @@ impl Recorder {
             return Ok(());
         }
         self.last_status = Some((s.t_us, s.ticks));
-        self.write(topics::STATUS, s.t_us, &Status::of(s))?;
+        self.write(topics::STATUS, s.t_us, &Status(s))?;
         if self.last_mode != Some(s.mode) {
             self.last_mode = Some(s.mode);
             self.log(s.t_us, LOG_INFO, format!("mode: {:?}", s.mode))?;

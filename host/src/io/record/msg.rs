@@ -1,9 +1,9 @@
 //! The recorded messages as serde types, field for field as Foxglove's JSON schemas
 //! (`schemas/*.json`) lay them out, plus `lives.Status`.
 
-use firmware::protocol::message::StageCostMsg;
-use firmware::protocol::{LinkCounters, StatusMsg};
+use firmware::protocol::StatusMsg;
 use firmware::{BinaryAngle, Pose2};
+use serde::ser::{SerializeStruct, Serializer};
 use serde::Serialize;
 
 /// `time`: seconds and nanoseconds.
@@ -129,30 +129,28 @@ const INT8: u8 = 2;
 const UINT16: u8 = 3;
 const FLOAT32: u8 = 7;
 
+/// Points of x, y, z (float32), one attribute `name` of `kind` and `size` bytes, then red,
+/// green, blue, alpha (uint8).
+const fn point_fields(name: &'static str, kind: u8, size: u32) -> [Field; 8] {
+    let rgba = 12 + size;
+    [
+        Field { name: "x", offset: 0, kind: FLOAT32 },
+        Field { name: "y", offset: 4, kind: FLOAT32 },
+        Field { name: "z", offset: 8, kind: FLOAT32 },
+        Field { name, offset: 12, kind },
+        Field { name: "red", offset: rgba, kind: UINT8 },
+        Field { name: "green", offset: rgba + 1, kind: UINT8 },
+        Field { name: "blue", offset: rgba + 2, kind: UINT8 },
+        Field { name: "alpha", offset: rgba + 3, kind: UINT8 },
+    ]
+}
+
 /// Scan points: x, y, z (float32), label (uint8: 0 unlabelled, 1 map, 2 non-map), red, green,
 /// blue, alpha (uint8); 17 bytes.
-pub const SCAN_FIELDS: [Field; 8] = [
-    Field { name: "x", offset: 0, kind: FLOAT32 },
-    Field { name: "y", offset: 4, kind: FLOAT32 },
-    Field { name: "z", offset: 8, kind: FLOAT32 },
-    Field { name: "label", offset: 12, kind: UINT8 },
-    Field { name: "red", offset: 13, kind: UINT8 },
-    Field { name: "green", offset: 14, kind: UINT8 },
-    Field { name: "blue", offset: 15, kind: UINT8 },
-    Field { name: "alpha", offset: 16, kind: UINT8 },
-];
+pub const SCAN_FIELDS: [Field; 8] = point_fields("label", UINT8, 1);
 
 /// Non-map points: x, y, z (float32), hits (uint16), red, green, blue, alpha; 18 bytes.
-pub const NONMAP_FIELDS: [Field; 8] = [
-    Field { name: "x", offset: 0, kind: FLOAT32 },
-    Field { name: "y", offset: 4, kind: FLOAT32 },
-    Field { name: "z", offset: 8, kind: FLOAT32 },
-    Field { name: "hits", offset: 12, kind: UINT16 },
-    Field { name: "red", offset: 14, kind: UINT8 },
-    Field { name: "green", offset: 15, kind: UINT8 },
-    Field { name: "blue", offset: 16, kind: UINT8 },
-    Field { name: "alpha", offset: 17, kind: UINT8 },
-];
+pub const NONMAP_FIELDS: [Field; 8] = point_fields("hits", UINT16, 2);
 
 /// Grid cells: one int8 ROS occupancy value (−1 unknown, 0 free, 100 occupied).
 pub const GRID_FIELDS: [Field; 1] = [Field { name: "occupancy", offset: 0, kind: INT8 }];
@@ -324,48 +322,32 @@ pub struct Log {
     pub line: u32,
 }
 
-/// `lives.Status` (`schemas/lives.Status.json`): the controller's counters.
-#[derive(Debug, Serialize)]
-pub struct Status {
-    pub timestamp: Time,
-    pub mode: String,
-    pub ticks: u32,
-    pub scans: u32,
-    pub scans_rejected: u32,
-    pub poses_rejected: u32,
-    pub last_scan_error: Option<String>,
-    pub plans: u32,
-    pub goals: u32,
-    pub blacklisted: u32,
-    pub retired: u32,
-    pub watchdog_trips: u32,
-    pub cost: StageCostMsg,
-    pub overruns: [u32; 5],
-    pub heap_overflows: u32,
-    pub link: LinkCounters,
-    pub gaze_rad: Option<f64>,
-}
+/// `lives.Status` (`schemas/lives.Status.json`): the core's [`StatusMsg`] as the schema lays it
+/// out (its time as `timestamp`, the mode and the scan error by name, the gaze in radians).
+#[derive(Debug)]
+pub struct Status<'a>(pub &'a StatusMsg);
 
-impl Status {
-    pub fn of(s: &StatusMsg) -> Self {
-        Status {
-            timestamp: Time::of(s.t_us),
-            mode: format!("{:?}", s.mode),
-            ticks: s.ticks,
-            scans: s.scans,
-            scans_rejected: s.scans_rejected,
-            poses_rejected: s.poses_rejected,
-            last_scan_error: s.last_scan_error.map(|e| format!("{e:?}")),
-            plans: s.plans,
-            goals: s.goals,
-            blacklisted: s.blacklisted,
-            retired: s.retired,
-            watchdog_trips: s.watchdog_trips,
-            cost: s.cost,
-            overruns: s.overruns,
-            heap_overflows: s.heap_overflows,
-            link: s.link,
-            gaze_rad: s.gaze.map(|h| BinaryAngle(h).to_radians()),
-        }
+impl Serialize for Status<'_> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let s = self.0;
+        let mut out = serializer.serialize_struct("Status", 17)?;
+        out.serialize_field("timestamp", &Time::of(s.t_us))?;
+        out.serialize_field("mode", &format!("{:?}", s.mode))?;
+        out.serialize_field("ticks", &s.ticks)?;
+        out.serialize_field("scans", &s.scans)?;
+        out.serialize_field("scans_rejected", &s.scans_rejected)?;
+        out.serialize_field("poses_rejected", &s.poses_rejected)?;
+        out.serialize_field("last_scan_error", &s.last_scan_error.map(|e| format!("{e:?}")))?;
+        out.serialize_field("plans", &s.plans)?;
+        out.serialize_field("goals", &s.goals)?;
+        out.serialize_field("blacklisted", &s.blacklisted)?;
+        out.serialize_field("retired", &s.retired)?;
+        out.serialize_field("watchdog_trips", &s.watchdog_trips)?;
+        out.serialize_field("cost", &s.cost)?;
+        out.serialize_field("overruns", &s.overruns)?;
+        out.serialize_field("heap_overflows", &s.heap_overflows)?;
+        out.serialize_field("link", &s.link)?;
+        out.serialize_field("gaze_rad", &s.gaze.map(|h| BinaryAngle(h).to_radians()))?;
+        out.end()
     }
 }

@@ -423,33 +423,16 @@ impl CdrWriter {
         }
     }
 
-    /// A `uint32`.
-    pub fn u32(&mut self, v: u32) {
-        self.align(4);
-        self.buf.extend_from_slice(&v.to_le_bytes());
-    }
-
-    /// An `int32`.
-    pub fn i32(&mut self, v: i32) {
-        self.align(4);
-        self.buf.extend_from_slice(&v.to_le_bytes());
-    }
-
-    /// A `float32`.
-    pub fn f32(&mut self, v: f32) {
-        self.align(4);
-        self.buf.extend_from_slice(&v.to_le_bytes());
-    }
-
-    /// A `float64`.
-    pub fn f64(&mut self, v: f64) {
-        self.align(8);
-        self.buf.extend_from_slice(&v.to_le_bytes());
+    /// A primitive (`uint32`, `int32`, `float32`, `float64`) given as its little-endian bytes
+    /// (`v.to_le_bytes()`), aligned to its size.
+    pub fn put<const N: usize>(&mut self, le_bytes: [u8; N]) {
+        self.align(N);
+        self.buf.extend_from_slice(&le_bytes);
     }
 
     /// A `string`.
     pub fn string(&mut self, s: &str) {
-        self.u32(s.len() as u32 + 1);
+        self.put((s.len() as u32 + 1).to_le_bytes());
         self.buf.extend_from_slice(s.as_bytes());
         self.buf.push(0);
     }
@@ -460,14 +443,14 @@ impl CdrWriter {
     }
 
     fn header(&mut self, h: &Header) {
-        self.i32(h.stamp.sec);
-        self.u32(h.stamp.nanosec);
+        self.put(h.stamp.sec.to_le_bytes());
+        self.put(h.stamp.nanosec.to_le_bytes());
         self.string(&h.frame_id);
     }
 
     fn transform(&mut self, t: &Transform) {
         for v in t.translation.iter().chain(t.rotation.iter()) {
-            self.f64(*v);
+            self.put(v.to_le_bytes());
         }
     }
 }
@@ -534,12 +517,12 @@ pub fn encode_laser_scan(m: &LaserScan) -> Vec<u8> {
     let mut w = CdrWriter::new();
     w.header(&m.header);
     for v in [m.angle_min, m.angle_max, m.angle_increment, m.time_increment, m.scan_time, m.range_min, m.range_max] {
-        w.f32(v);
+        w.put(v.to_le_bytes());
     }
     for seq in [&m.ranges, &m.intensities] {
-        w.u32(seq.len() as u32);
+        w.put((seq.len() as u32).to_le_bytes());
         for &v in seq.iter() {
-            w.f32(v);
+            w.put(v.to_le_bytes());
         }
     }
     w.finish()
@@ -552,7 +535,7 @@ pub fn encode_odometry(m: &Odometry) -> Vec<u8> {
     w.string(&m.child_frame_id);
     w.transform(&m.pose);
     for _ in 0..(36 + 6 + 36) {
-        w.f64(0.0);
+        w.put(0f64.to_le_bytes());
     }
     w.finish()
 }
@@ -560,7 +543,7 @@ pub fn encode_odometry(m: &Odometry) -> Vec<u8> {
 /// Serialises a `tf2_msgs/msg/TFMessage`.
 pub fn encode_tf_message(transforms: &[TransformStamped]) -> Vec<u8> {
     let mut w = CdrWriter::new();
-    w.u32(transforms.len() as u32);
+    w.put((transforms.len() as u32).to_le_bytes());
     for t in transforms {
         w.header(&t.header);
         w.string(&t.child_frame_id);

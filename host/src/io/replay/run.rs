@@ -3,7 +3,7 @@
 
 use super::source::LogSource;
 use super::*;
-use crate::run::{drive, Answer, Frame, InProcess};
+use crate::run::{drive, round3, Answer, Frame, InProcess};
 use firmware::{Config, Controller};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -340,10 +340,6 @@ pub fn grid_origin(bounds: [[f64; 2]; 2]) -> [f64; 2] {
     let c = [(bounds[0][0] + bounds[1][0]) / 2.0, (bounds[0][1] + bounds[1][1]) / 2.0];
     let (lo, hi) = (-MAX_COORD_M, ((MAX_COORD_M - grid_size_m()) * 10.0).floor() / 10.0);
     [(((c[0] - half) * 10.0).round() / 10.0).clamp(lo, hi), (((c[1] - half) * 10.0).round() / 10.0).clamp(lo, hi)]
-}
-
-pub(super) fn round3(v: f64) -> f64 {
-    (v * 1000.0).round() / 1000.0
 }
 
 /// Reads `path` and replays it. Fails when the log cannot be opened, is not a known format, or

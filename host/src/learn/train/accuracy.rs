@@ -22,11 +22,7 @@ impl Confusion {
 
     /// Adds another tally.
     pub fn merge(&mut self, o: &Confusion) {
-        for i in 0..2 {
-            for j in 0..2 {
-                self.counts[i][j] += o.counts[i][j];
-            }
-        }
+        crate::learn::add_counts(&mut self.counts, &o.counts);
     }
 
     /// Labelled beams counted.

@@ -185,7 +185,7 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
 
 /// Runs the search `spec` and scores its final LiDAR grid against the true world.
 pub fn check_search(spec: &SearchSpec, png: Option<&Path>) -> Result<MapcheckReport, String> {
-    use crate::sim::geometry::{SceneBuilder, NO_OWNER};
+    use crate::sim::geometry::NO_OWNER;
     let run = crate::search::try_run(spec, |_| {}).map_err(|e| format!("the classifier model does not validate: {e}"))?;
     let cfg = run.controller.config();
     let range = cfg.lidar_max_range_m.to_num::<f64>();
@@ -193,18 +193,7 @@ pub fn check_search(spec: &SearchSpec, png: Option<&Path>) -> Result<MapcheckRep
     let origin = [geom.origin_x.to_num::<f64>(), geom.origin_y.to_num::<f64>()];
     let grid = MapGrid::of(&run.controller.lidar);
     // The static true world: walls, furniture, clutter and the placed targets (people move).
-    let world = run.sim.world();
-    let mut b = SceneBuilder::new();
-    for w in &world.walls {
-        b.wall(w[0], w[1]);
-    }
-    for (i, o) in world.obstacles.iter().enumerate() {
-        b.shape(&o.shape, o.kind, i as u32);
-    }
-    for (i, s) in run.sim.target_shapes().iter().enumerate() {
-        b.shape(s, crate::sim::HitKind::Target, crate::sim::geometry::TARGET_OWNER_BASE + i as u32);
-    }
-    let scene = b.build(0.5);
+    let scene = run.sim.world().static_scene(run.sim.target_shapes());
     // One scan per tick, taken at trajectory[k] (the last entry is where the base stopped after
     // the last tick, not scanned).
     let scanned = &run.trajectory[..run.trajectory.len().min(run.result.ticks as usize)];
