@@ -19,7 +19,7 @@ use crate::frontier::FrontierSet;
 use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
 use crate::matcher::{ScanMatcher, MATCH_WARMUP_SCANS};
 use crate::nonmap::NonMapStore;
-use crate::planner::{Goal, Planner, Site};
+use crate::planner::{Goal, PlanInputs, Planner, Site};
 use crate::scan::{BeamScan, ScanError, ScanInput};
 use fixed_point::{hypot, BinaryAngle, Meters, Pose2};
 
@@ -678,8 +678,9 @@ impl Controller {
         self.plan_prepared = false;
         obs.begin(Stage::Plan);
         let current = self.goal.as_ref().map(|g| (g.viewpoint.cell, g.viewpoint.heading));
-        let (best, current_utility) =
-            self.planner.select(&self.cfg, &self.lidar, &self.visual, &self.frontiers, &self.nonmap, pose, current);
+        let inputs =
+            PlanInputs { cfg: &self.cfg, lidar: &self.lidar, visual: &self.visual, frontiers: &self.frontiers, nonmap: &self.nonmap, pose };
+        let (best, current_utility) = self.planner.select(inputs, current);
         obs.end(Stage::Plan);
         let work = self.planner.stats.work;
         self.status.plans += 1;

@@ -63,23 +63,32 @@ impl PackedGrid {
         (x as u32) < GRID_CELLS as u32 && (y as u32) < GRID_CELLS as u32
     }
 
+    /// The row-major index `y·W + x` of `(x, y)` in any grid of [`GRID_CELLS`]², `None` out of
+    /// bounds.
+    #[inline]
+    pub const fn index(x: i32, y: i32) -> Option<usize> {
+        if Self::in_bounds(x, y) {
+            Some(y as usize * GRID_CELLS + x as usize)
+        } else {
+            None
+        }
+    }
+
     /// The cell at `(x, y)`.
     #[inline]
     pub fn get(&self, x: i32, y: i32) -> Cell {
-        if !Self::in_bounds(x, y) {
+        let Some(i) = Self::index(x, y) else {
             return Cell::Unknown;
-        }
-        let i = y as usize * GRID_CELLS + x as usize;
+        };
         Cell::from_bits(self.bytes[i >> 2] >> ((i & 3) * 2))
     }
 
     /// Sets the cell at `(x, y)`; returns false when out of bounds.
     #[inline]
     pub fn set(&mut self, x: i32, y: i32, c: Cell) -> bool {
-        if !Self::in_bounds(x, y) {
+        let Some(i) = Self::index(x, y) else {
             return false;
-        }
-        let i = y as usize * GRID_CELLS + x as usize;
+        };
         let shift = (i & 3) * 2;
         let b = &mut self.bytes[i >> 2];
         *b = (*b & !(3 << shift)) | ((c as u8) << shift);
@@ -167,19 +176,17 @@ impl BitGrid {
     /// Bit at `(x, y)`; false out of bounds.
     #[inline]
     pub fn get(&self, x: i32, y: i32) -> bool {
-        if !PackedGrid::in_bounds(x, y) {
+        let Some(i) = PackedGrid::index(x, y) else {
             return false;
-        }
-        let i = y as usize * GRID_CELLS + x as usize;
+        };
         self.bits[i >> 5] & (1 << (i & 31)) != 0
     }
     /// Sets or clears the bit at `(x, y)` (ignored out of bounds).
     #[inline]
     pub fn put(&mut self, x: i32, y: i32, v: bool) {
-        if !PackedGrid::in_bounds(x, y) {
+        let Some(i) = PackedGrid::index(x, y) else {
             return;
-        }
-        let i = y as usize * GRID_CELLS + x as usize;
+        };
         if v {
             self.bits[i >> 5] |= 1 << (i & 31);
         } else {
@@ -392,10 +399,9 @@ impl EvidenceGrid {
     /// The evidence at `(x, y)`, `None` if never observed (or out of bounds).
     #[inline]
     pub fn get(&self, x: i32, y: i32) -> Option<Evidence> {
-        if !PackedGrid::in_bounds(x, y) {
+        let Some(i) = PackedGrid::index(x, y) else {
             return None;
-        }
-        let i = y as usize * GRID_CELLS + x as usize;
+        };
         let v = (self.nibbles[i >> 1] >> ((i & 1) * 4)) & 15;
         (v != 0).then_some(v as Evidence - 8)
     }
@@ -404,10 +410,9 @@ impl EvidenceGrid {
     /// returns the new evidence, or `None` out of bounds.
     #[inline]
     pub fn add(&mut self, x: i32, y: i32, delta: Evidence) -> Option<Evidence> {
-        if !PackedGrid::in_bounds(x, y) {
+        let Some(i) = PackedGrid::index(x, y) else {
             return None;
-        }
-        let i = y as usize * GRID_CELLS + x as usize;
+        };
         let shift = (i & 1) * 4;
         let b = &mut self.nibbles[i >> 1];
         let v = (*b >> shift) & 15;

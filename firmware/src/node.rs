@@ -295,9 +295,7 @@ impl Node {
             self.inbox.clear_inputs();
             self.last_tick_us = None;
             self.last_out = None;
-            self.pose_t_us = None;
-            self.scan_t_us = None;
-            self.partial_beats = None;
+            self.forget_batch();
             // The new search's goals count from 1 again: the first is news, whatever was sent.
             self.goal_sent = None;
             self.resend_goal = true;
@@ -391,6 +389,13 @@ impl Node {
         self.tick_observed(now_us, ctl, send, &mut ())
     }
 
+    /// Forgets the batch of pose and scan gathered since the last tick (lockstep completeness).
+    fn forget_batch(&mut self) {
+        self.pose_t_us = None;
+        self.scan_t_us = None;
+        self.partial_beats = None;
+    }
+
     /// [`Node::tick`], telling `obs` where each stage begins and ends.
     pub fn tick_observed(
         &mut self,
@@ -402,9 +407,7 @@ impl Node {
         let scans_before = self.last_out.as_ref().map_or(0, |o| o.status.scans);
         let out = ctl.tick_observed(now_us, &self.inbox.inputs(), obs);
         self.inbox.ticked();
-        self.pose_t_us = None;
-        self.scan_t_us = None;
-        self.partial_beats = None;
+        self.forget_batch();
         self.last_tick_us = Some(now_us);
         self.counters.ticks = self.counters.ticks.wrapping_add(1);
         if self.session.is_open() {

@@ -382,19 +382,30 @@ mod tests {
         (lidar, VisualGrid::new())
     }
 
+    /// The camera has seen the room's inside at columns `xs`.
+    fn seen(visual: &mut VisualGrid, xs: core::ops::Range<i32>) {
+        for y in 101..200 {
+            for x in xs.clone() {
+                visual.grid.set(x, y, Cell::Free);
+            }
+        }
+    }
+
+    /// A new explorer after `steps` growth steps with the robot at `robot`.
+    fn grown(lidar: &LidarGrid, visual: &VisualGrid, robot: (i32, i32), steps: u32) -> RrtExplorer {
+        let mut rrt = RrtExplorer::new();
+        for _ in 0..steps {
+            rrt.grow(lidar, visual, robot);
+        }
+        rrt
+    }
+
     #[test]
     fn the_trees_find_the_doorway_and_nothing_through_walls() {
         let (lidar, mut visual) = room();
         // The camera has seen the whole room: only the doorway is a frontier.
-        for y in 101..200 {
-            for x in 101..200 {
-                visual.grid.set(x, y, Cell::Free);
-            }
-        }
-        let mut rrt = RrtExplorer::new();
-        for _ in 0..10 {
-            rrt.grow(&lidar, &visual, (150, 150));
-        }
+        seen(&mut visual, 101..200);
+        let rrt = grown(&lidar, &visual, (150, 150), 10);
         let pts: heapless::Vec<RrtPoint, RRT_POINTS> = rrt.points().copied().collect();
         assert!(!pts.is_empty(), "the doorway is found");
         for p in &pts {
@@ -412,23 +423,12 @@ mod tests {
         for y in 140..160 {
             lidar.grid.set(200, y, Cell::Occupied);
         }
-        for y in 101..200 {
-            for x in 101..150 {
-                visual.grid.set(x, y, Cell::Free);
-            }
-        }
-        let mut rrt = RrtExplorer::new();
-        for _ in 0..5 {
-            rrt.grow(&lidar, &visual, (120, 150));
-        }
+        seen(&mut visual, 101..150);
+        let mut rrt = grown(&lidar, &visual, (120, 150), 5);
         assert!(rrt.points().any(|p| p.source == FrontierSource::Visual && (148..=152).contains(&p.cell.0)));
         assert!(rrt.points().all(|p| p.source == FrontierSource::Visual));
         // The camera looks at everything: every point loses its gain and is dropped.
-        for y in 101..200 {
-            for x in 101..200 {
-                visual.grid.set(x, y, Cell::Free);
-            }
-        }
+        seen(&mut visual, 101..200);
         rrt.grow(&lidar, &visual, (120, 150));
         assert_eq!(rrt.points().count(), 0);
         assert!(rrt.stats.filtered > 0);

@@ -10,15 +10,18 @@
 //!   matrix-vector product with SysTick (run with `-icount shift=0` for instruction counts).
 //!
 //! See tests/tests/mcu.rs.
-#![cfg_attr(target_os = "none", no_std)]
-#![cfg_attr(target_os = "none", no_main)]
+#![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
 mod common;
 
+firmware::mcu_main! {
+    selftest()
+}
+
+/// Runs the mode the command line names.
 #[cfg(target_os = "none")]
-#[cortex_m_rt::entry]
-fn main() -> ! {
+fn selftest() -> ! {
     use common::{fault, uart};
     use cortex_m_semihosting::hprintln;
     uart::init(uart::BAUD);
@@ -150,10 +153,4 @@ fn geo_check() {
         dots,
         dot_mismatches
     );
-}
-
-#[cfg(not(target_os = "none"))]
-fn main() {
-    eprintln!("mcu-selftest is a Cortex-M image: build it with --target thumbv7em-none-eabihf (docs/mcu.md)");
-    std::process::exit(2);
 }

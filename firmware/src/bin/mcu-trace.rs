@@ -3,8 +3,7 @@
 //! node and the controller exactly as the host does (`firmware::mcu::trace`), and prints per
 //! record the digest of the node's answer and the SysTick counts of each stage (1 count = 40
 //! guest instructions), then the stack high-water mark. Output format in docs/mcu.md.
-#![cfg_attr(target_os = "none", no_std)]
-#![cfg_attr(target_os = "none", no_main)]
+#![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
 mod common;
@@ -133,14 +132,6 @@ mod app {
     }
 }
 
-#[cfg(target_os = "none")]
-#[cortex_m_rt::entry]
-fn main() -> ! {
+firmware::mcu_main! {
     app::main()
-}
-
-#[cfg(not(target_os = "none"))]
-fn main() {
-    eprintln!("mcu-trace is a Cortex-M image: build it with --target thumbv7em-none-eabihf (docs/mcu.md)");
-    std::process::exit(2);
 }

@@ -64,6 +64,29 @@ impl<'a> DotInput<'a> {
     }
 }
 
+/// Eight multiply-accumulates of [`dot`]'s loop (two per pass): eight widened inputs into r2–r5
+/// (`LDM`), and twice a word of four weights (`LDR`) sign-extended in pairs (`SXTB16`: bytes 0
+/// and 2, then 1 and 3, matching [`DotInput`]'s interleave) and multiplied-accumulated two at a
+/// time (`SMLAD`).
+#[cfg(lives_dsp)]
+macro_rules! smlad8 {
+    () => {
+        concat!(
+            "ldm {x}!, {{r2, r3, r4, r5}}\n",
+            "ldr {a}, [{w}], #4\n",
+            "sxtb16 {t}, {a}\n",
+            "sxtb16 {a}, {a}, ror #8\n",
+            "smlad {acc}, {t}, r2, {acc}\n",
+            "smlad {acc}, {a}, r3, {acc}\n",
+            "ldr {a}, [{w}], #4\n",
+            "sxtb16 {t}, {a}\n",
+            "sxtb16 {a}, {a}, ror #8\n",
+            "smlad {acc}, {t}, r4, {acc}\n",
+            "smlad {acc}, {a}, r5, {acc}",
+        )
+    };
+}
+
 /// `Σ w[i] · x[i]` over the shorter of `w` and the input (weights as raw bytes), bit-exact with
 /// [`dot_reference`] (no accumulator can overflow, see the module documentation).
 ///
@@ -86,28 +109,8 @@ pub fn dot(w: &[u8], x: &DotInput<'_>) -> i32 {
             unsafe {
                 core::arch::asm!(
                     "2:",
-                    "ldm {x}!, {{r2, r3, r4, r5}}",
-                    "ldr {a}, [{w}], #4",
-                    "sxtb16 {t}, {a}",
-                    "sxtb16 {a}, {a}, ror #8",
-                    "smlad {acc}, {t}, r2, {acc}",
-                    "smlad {acc}, {a}, r3, {acc}",
-                    "ldr {a}, [{w}], #4",
-                    "sxtb16 {t}, {a}",
-                    "sxtb16 {a}, {a}, ror #8",
-                    "smlad {acc}, {t}, r4, {acc}",
-                    "smlad {acc}, {a}, r5, {acc}",
-                    "ldm {x}!, {{r2, r3, r4, r5}}",
-                    "ldr {a}, [{w}], #4",
-                    "sxtb16 {t}, {a}",
-                    "sxtb16 {a}, {a}, ror #8",
-                    "smlad {acc}, {t}, r2, {acc}",
-                    "smlad {acc}, {a}, r3, {acc}",
-                    "ldr {a}, [{w}], #4",
-                    "sxtb16 {t}, {a}",
-                    "sxtb16 {a}, {a}, ror #8",
-                    "smlad {acc}, {t}, r4, {acc}",
-                    "smlad {acc}, {a}, r5, {acc}",
+                    smlad8!(),
+                    smlad8!(),
                     "subs {n}, {n}, #1",
                     "bne 2b",
                     w = inout(reg) w.as_ptr() => _,

@@ -24,12 +24,12 @@ impl Planner {
     /// (`lives-greedy`),
     /// the robot's own cell, the current goal. Returns the work.
     pub(super) fn greedy_sites(&mut self, step: &Step, current: Option<((i32, i32), BinaryAngle)>, sites: &mut Sites) -> u32 {
-        let cfg = step.cfg;
+        let cfg = step.inputs.cfg;
         let snap = step.snap;
         let mut work = self.frontier_sites(step, sites, |_| true, |_| 0);
         if cfg.planner == PlannerKind::LivesGreedy && cfg.nonmap_viewpoints {
             let standoff = GridGeometry::cells(cfg.nonmap_standoff_m);
-            for (p, _) in self.nonmap_clusters(step.lidar, step.nonmap) {
+            for (p, _) in self.nonmap_clusters(step.inputs.lidar, step.inputs.nonmap) {
                 work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
                 match self.nonmap_viewpoint(p, standoff, snap) {
                     Some((c, h)) => {

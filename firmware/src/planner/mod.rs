@@ -209,14 +209,27 @@ pub struct Planner {
 /// frontier, every proposal, the room tasks.
 const TASK_POOL: usize = 2 * MAX_FRONTIERS_PER_GRID + MAX_PROPOSALS + schedule::MAX_ROOM_TASKS;
 
+/// What a planning step reads besides the planner's own state: the configuration, the maps, their
+/// frontiers, the non-map points and the robot's pose now.
+#[derive(Clone, Copy)]
+pub struct PlanInputs<'a> {
+    /// The configuration (the rule, its weights, the radii).
+    pub cfg: &'a Config,
+    /// The LiDAR map: where the robot can go.
+    pub lidar: &'a LidarGrid,
+    /// The visual map: what the camera has seen.
+    pub visual: &'a VisualGrid,
+    /// Both maps' frontiers, computed on them.
+    pub frontiers: &'a FrontierSet,
+    /// The non-map points.
+    pub nonmap: &'a NonMapStore,
+    /// The robot's pose now (its heading decides which views it already has).
+    pub pose: &'a Pose2,
+}
+
 /// What a selection rule reads in one planning step.
 pub(crate) struct Step<'a> {
-    pub cfg: &'a Config,
-    pub lidar: &'a LidarGrid,
-    pub visual: &'a VisualGrid,
-    pub frontiers: &'a FrontierSet,
-    pub nonmap: &'a NonMapStore,
-    pub pose: &'a Pose2,
+    pub inputs: PlanInputs<'a>,
     /// The robot's cell.
     pub robot: (i32, i32),
     /// `viewpoint_snap_radius_m` in cells.
@@ -381,7 +394,7 @@ impl Planner {
         current: Option<((i32, i32), BinaryAngle)>,
     ) -> (Option<Goal>, Option<i64>) {
         let work = self.prepare(cfg, lidar, pose);
-        let (goal, current_utility) = self.select(cfg, lidar, visual, frontiers, nonmap, pose, current);
+        let (goal, current_utility) = self.select(PlanInputs { cfg, lidar, visual, frontiers, nonmap, pose }, current);
         self.stats.work += work;
         (goal, current_utility)
     }
@@ -400,24 +413,14 @@ impl Planner {
     }
 
     /// The second half of a planning step, on the distance field of the last
-    /// [`Planner::prepare`]: the rule's choice and its goal. `pose` is the robot's pose now (its
-    /// heading decides which views it already has); paths start from the cell `prepare` saw.
-    /// Returns `(best, current_utility)`; its work is in [`PlanStats::work`].
-    #[allow(clippy::too_many_arguments)]
-    pub fn select(
-        &mut self,
-        cfg: &Config,
-        lidar: &LidarGrid,
-        visual: &VisualGrid,
-        frontiers: &FrontierSet,
-        nonmap: &NonMapStore,
-        pose: &Pose2,
-        current: Option<((i32, i32), BinaryAngle)>,
-    ) -> (Option<Goal>, Option<i64>) {
+    /// [`Planner::prepare`]: the rule's choice and its goal. Paths start from the cell `prepare`
+    /// saw. Returns `(best, current_utility)`; its work is in [`PlanStats::work`].
+    pub fn select(&mut self, inputs: PlanInputs<'_>, current: Option<((i32, i32), BinaryAngle)>) -> (Option<Goal>, Option<i64>) {
         self.candidates.clear();
         let robot = self.robot_cell;
         let mut work = 0;
-        let step = Step { cfg, lidar, visual, frontiers, nonmap, pose, robot, snap: GridGeometry::cells(cfg.viewpoint_snap_radius_m) };
+        let PlanInputs { cfg, lidar, .. } = inputs;
+        let step = Step { inputs, robot, snap: GridGeometry::cells(cfg.viewpoint_snap_radius_m) };
         let mut sites = Sites::new();
         let score = match cfg.planner {
             PlannerKind::Lives | PlannerKind::LivesNoNonMap => {
@@ -452,14 +455,14 @@ impl Planner {
     /// [`Site::Current`] entry) and the work. Blacklisted sites are dropped (except the current
     /// goal), and so are viewpoints the robot already stands at, facing that way.
     fn choose(&mut self, step: &Step, sites: &[SiteEntry], score: Score) -> (Option<Viewpoint>, Option<i64>, u32) {
-        let cfg = step.cfg;
+        let cfg = step.inputs.cfg;
         let bl = GridGeometry::cells(cfg.blacklist_radius_m);
         let range_cells = GridGeometry::cells(cfg.camera_range_m);
         let mut work = 0;
         let mut best: Option<Viewpoint> = None;
         let mut current_utility = None;
         let here = GridGeometry::cells(cfg.goal_tolerance_m) as i64 * STEP_STRAIGHT as i64;
-        let (robot, pose) = (step.robot, step.pose);
+        let (robot, pose) = (step.robot, step.inputs.pose);
         let already_there = |cell: (i32, i32), h: BinaryAngle, d: u16| {
             (cell == robot || (d as i64) <= here) && (h - pose.theta).unsigned_abs() <= cfg.goal_heading_tolerance.unsigned_abs()
         };
@@ -491,15 +494,16 @@ impl Planner {
                     continue;
                 }
             };
-            let (near, w) = self.frontier_near_path(step.frontiers, site.0, site.1, cfg.frontier_near_path_blocks as i32);
+            let (near, w) = self.frontier_near_path(step.inputs.frontiers, site.0, site.1, cfg.frontier_near_path_blocks as i32);
             work += w;
-            work += if w_nonmap != Weight::ZERO { self.visible_nonmap(step.lidar, step.nonmap, site, range_cells) } else { 0 };
+            work +=
+                if w_nonmap != Weight::ZERO { self.visible_nonmap(step.inputs.lidar, step.inputs.nonmap, site, range_cells) } else { 0 };
             let headings: &[BinaryAngle] = match &fixed_heading {
                 Some(h) => core::slice::from_ref(h),
                 None => &HEADINGS,
             };
             for &heading in headings {
-                let (view, w) = self.view(cfg, step.lidar, step.visual, site, heading, w_nonmap);
+                let (view, w) = self.view(cfg, step.inputs.lidar, step.inputs.visual, site, heading, w_nonmap);
                 work += w;
                 let utility = view.gain + cfg.w_frontier_per_cell.to_bits() as i64 * near as i64 - dist_term;
                 let vp = Viewpoint {
@@ -532,7 +536,7 @@ impl Planner {
     ) -> u32 {
         let mut work = 0;
         let mut unreachable = 0;
-        for f in step.frontiers.frontiers() {
+        for f in step.inputs.frontiers.frontiers() {
             if !keep(f) {
                 continue;
             }
@@ -546,7 +550,11 @@ impl Planner {
     /// True if some LiDAR frontier has a reachable cell near its anchor (the baselines turn to
     /// camera frontiers only when none has).
     fn lidar_frontiers_reachable(&self, step: &Step) -> bool {
-        step.frontiers.frontiers().iter().any(|f| f.source == FrontierSource::Lidar && self.reachable_near(f.anchor, step.snap).is_some())
+        step.inputs
+            .frontiers
+            .frontiers()
+            .iter()
+            .any(|f| f.source == FrontierSource::Lidar && self.reachable_near(f.anchor, step.snap).is_some())
     }
 
     /// The current goal as a [`Site::Current`] entry, if it is still reachable.

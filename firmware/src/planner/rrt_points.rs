@@ -17,7 +17,7 @@ impl Planner {
     /// [`super::Score::Own`]. Returns the work.
     pub(super) fn rrt_sites(&mut self, step: &Step, sites: &mut Sites) -> u32 {
         let snap = step.snap;
-        let mut work = self.rrt.grow(step.lidar, step.visual, step.robot);
+        let mut work = self.rrt.grow(step.inputs.lidar, step.inputs.visual, step.robot);
         let mut unreachable = 0;
         let lidar_points = self.rrt.points().any(|p| p.source == FrontierSource::Lidar && self.reachable_near(p.cell, snap).is_some());
         let before = sites.len();
@@ -26,7 +26,7 @@ impl Planner {
                 continue;
             }
             let Some(c) = self.snap_site(p.cell, snap, &mut work, &mut unreachable) else { continue };
-            let _ = sites.push((c, Site::frontier(p.source), None, rrt::revenue(step.lidar, step.visual, p, step.robot)));
+            let _ = sites.push((c, Site::frontier(p.source), None, rrt::revenue(step.inputs.lidar, step.inputs.visual, p, step.robot)));
         }
         self.stats.unreachable += unreachable;
         if sites.len() == before {
@@ -36,7 +36,7 @@ impl Planner {
                 step,
                 sites,
                 |f| !(lidar_first && f.source != FrontierSource::Lidar),
-                |f| rrt::revenue(step.lidar, step.visual, rrt::RrtPoint { cell: f.anchor, source: f.source }, step.robot),
+                |f| rrt::revenue(step.inputs.lidar, step.inputs.visual, rrt::RrtPoint { cell: f.anchor, source: f.source }, step.robot),
             );
         }
         work

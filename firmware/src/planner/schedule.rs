@@ -170,8 +170,8 @@ fn quarter_turns(a: BinaryAngle, b: BinaryAngle) -> u32 {
 impl Planner {
     /// The structured step: returns the goal's viewpoint and the work.
     pub(super) fn schedule(&mut self, step: &Step, current: Option<((i32, i32), BinaryAngle)>) -> (Option<Viewpoint>, u32) {
-        let cfg = step.cfg;
-        let mut work = self.rooms.update(step.lidar);
+        let cfg = step.inputs.cfg;
+        let mut work = self.rooms.update(step.inputs.lidar);
         let range_cells = GridGeometry::cells(cfg.camera_range_m);
         let w_nonmap = cfg.effective_w_nonmap();
         let lives = cfg.planner == PlannerKind::Lives;
@@ -179,7 +179,7 @@ impl Planner {
         self.sched = ScheduleStats { rooms: self.rooms.rooms().len() as u16, ..ScheduleStats::default() };
         let bl = GridGeometry::cells(cfg.blacklist_radius_m);
         let here = GridGeometry::cells(cfg.goal_tolerance_m) as i64 * STEP_STRAIGHT as i64;
-        let pose = step.pose;
+        let pose = step.inputs.pose;
         let robot = step.robot;
         let already_there = |cell: (i32, i32), h: BinaryAngle, d: u16| {
             (cell == robot || (d as i64) <= here) && (h - pose.theta).unsigned_abs() <= cfg.goal_heading_tolerance.unsigned_abs()
@@ -190,7 +190,7 @@ impl Planner {
         // Proposals.
         self.task_pool.clear();
         if lives {
-            work += self.find_proposals(step.lidar, step.nonmap, range_cells, step.snap);
+            work += self.find_proposals(step.inputs.lidar, step.inputs.nonmap, range_cells, step.snap);
         }
         let reach = (PROPOSAL_REACH_CAMERA_RANGES * range_cells as i64 * STEP_STRAIGHT as i64).min(UNREACHABLE as i64 - 1) as u16;
         for k in 0..self.proposals.proposals.len() {
@@ -200,9 +200,9 @@ impl Planner {
                 continue;
             }
             if w_nonmap != Weight::ZERO {
-                work += self.visible_nonmap(step.lidar, step.nonmap, p.viewpoint, range_cells);
+                work += self.visible_nonmap(step.inputs.lidar, step.inputs.nonmap, p.viewpoint, range_cells);
             }
-            let (view, w) = self.view(cfg, step.lidar, step.visual, p.viewpoint, p.heading, w_nonmap);
+            let (view, w) = self.view(cfg, step.inputs.lidar, step.inputs.visual, p.viewpoint, p.heading, w_nonmap);
             work += w;
             let class = if PROPOSAL_PRECEDENCE && d <= reach { 0 } else { u8::MAX };
             let t = Task {
@@ -222,7 +222,7 @@ impl Planner {
 
         // Frontier viewpoints: the best heading of each.
         let mut unreachable = 0;
-        for f in step.frontiers.frontiers() {
+        for f in step.inputs.frontiers.frontiers() {
             let Some(c) = self.snap_site(f.anchor, step.snap, &mut work, &mut unreachable) else { continue };
             if self.is_blacklisted(c, bl) {
                 self.stats.blacklisted += 1;
@@ -482,7 +482,7 @@ impl Planner {
         let d = self.distance(c.0, c.1);
         let mut work = 0;
         if w_nonmap != Weight::ZERO {
-            work += self.visible_nonmap(step.lidar, step.nonmap, c, GridGeometry::cells(step.cfg.camera_range_m));
+            work += self.visible_nonmap(step.inputs.lidar, step.inputs.nonmap, c, GridGeometry::cells(step.inputs.cfg.camera_range_m));
         }
         let (best, w) = self.best_heading(step, c, d, w_nonmap, already_there);
         (best, d, work + w)
@@ -504,7 +504,7 @@ impl Planner {
             if already_there(c, h, d) {
                 continue;
             }
-            let (view, w) = self.view(step.cfg, step.lidar, step.visual, c, h, w_nonmap);
+            let (view, w) = self.view(step.inputs.cfg, step.inputs.lidar, step.inputs.visual, c, h, w_nonmap);
             work += w;
             if best.is_none_or(|(b, _)| view.gain > b.gain) {
                 best = Some((view, h));
@@ -593,7 +593,7 @@ impl Planner {
             }
             let (seen, free, w) = camera_coverage(&self.rooms, r, step);
             work += w;
-            if free > 0 && 2 * seen <= free && step.lidar.get(r.view.0, r.view.1) == Cell::Free {
+            if free > 0 && 2 * seen <= free && step.inputs.lidar.get(r.view.0, r.view.1) == Cell::Free {
                 let _ = self.room_scratch.push(r.view);
             }
         }
@@ -628,11 +628,11 @@ fn camera_coverage(rooms: &Rooms, r: &Room, step: &Step) -> (u32, u32, u32) {
     for y in (y0..=y1).step_by(2) {
         for x in (x0..=x1).step_by(2) {
             work += 1;
-            if rooms.room_at(x, y) != Some(r.id) || step.lidar.get(x, y) != Cell::Free {
+            if rooms.room_at(x, y) != Some(r.id) || step.inputs.lidar.get(x, y) != Cell::Free {
                 continue;
             }
             free += 1;
-            seen += (step.visual.get(x, y) != Cell::Unknown) as u32;
+            seen += (step.inputs.visual.get(x, y) != Cell::Unknown) as u32;
         }
     }
     (seen, free, work)

@@ -50,8 +50,11 @@ fn pose() -> HostToCore {
     HostToCore::Pose(PoseMsg { t_us: 1_500_000, x: 98_304, y: -147_456, theta: 1 << 30 })
 }
 fn scan_labelled() -> HostToCore {
+    HostToCore::Scan(labelled_scan())
+}
+fn labelled_scan() -> ScanMsg {
     // Three beams from −180°, 1/256 turn apart: 1 m, invalid, no return; labelled.
-    HostToCore::Scan(ScanMsg {
+    ScanMsg {
         t_us: 2_000_000,
         angle_min: i32::MIN,
         angle_increment: 1 << 24,
@@ -59,10 +62,13 @@ fn scan_labelled() -> HostToCore {
         range_max_mm: 12_000,
         ranges_mm: heapless::Vec::from_slice(&[1000, 0, 65_535]).unwrap(),
         labels: Some(labels(&[BeamLabel::Map, BeamLabel::Unlabelled, BeamLabel::NonMap])),
-    })
+    }
 }
 fn scan_plain() -> HostToCore {
-    HostToCore::Scan(ScanMsg {
+    HostToCore::Scan(plain_scan())
+}
+fn plain_scan() -> ScanMsg {
+    ScanMsg {
         t_us: 2_000_000,
         angle_min: 0,
         angle_increment: -(1 << 24),
@@ -70,35 +76,21 @@ fn scan_plain() -> HostToCore {
         range_max_mm: 65_534,
         ranges_mm: heapless::Vec::from_slice(&[300, 16_384]).unwrap(),
         labels: None,
-    })
+    }
+}
+/// A segment with `scan`'s time, geometry, beams and labels, as beams `first_beam ..` of a scan
+/// of `total_beams`.
+fn segment(scan: ScanMsg, total_beams: u16, first_beam: u16) -> HostToCore {
+    let whole = scan.segments(MAX_SEGMENT_BEAMS).next().expect("a scan with beams");
+    HostToCore::ScanSegment(ScanSegmentMsg { total_beams, first_beam, ..whole })
 }
 fn scan_segment_labelled() -> HostToCore {
     // Beams 128–130 of a 256-beam scan from −180°, 1/256 turn apart: 1 m, invalid, no return.
-    HostToCore::ScanSegment(ScanSegmentMsg {
-        t_us: 2_000_000,
-        angle_min: i32::MIN,
-        angle_increment: 1 << 24,
-        range_min_mm: 100,
-        range_max_mm: 12_000,
-        total_beams: 256,
-        first_beam: 128,
-        ranges_mm: heapless::Vec::from_slice(&[1000, 0, 65_535]).unwrap(),
-        labels: Some(labels(&[BeamLabel::Map, BeamLabel::Unlabelled, BeamLabel::NonMap])),
-    })
+    segment(labelled_scan(), 256, 128)
 }
 fn scan_segment_plain() -> HostToCore {
     // The second and last beam of a clockwise 2-beam scan, unlabelled.
-    HostToCore::ScanSegment(ScanSegmentMsg {
-        t_us: 2_000_000,
-        angle_min: 0,
-        angle_increment: -(1 << 24),
-        range_min_mm: 0,
-        range_max_mm: 65_534,
-        total_beams: 2,
-        first_beam: 1,
-        ranges_mm: heapless::Vec::from_slice(&[16_384]).unwrap(),
-        labels: None,
-    })
+    segment(ScanMsg { ranges_mm: heapless::Vec::from_slice(&[16_384]).unwrap(), ..plain_scan() }, 2, 1)
 }
 fn detection_at() -> HostToCore {
     HostToCore::Detection(DetectionMsg { t_us: 2_100_000, position: Some((196_608, -65_536)) })
@@ -227,41 +219,6 @@ fn error_config_invalid() -> CoreToHost {
     CoreToHost::Error(ErrorMsg { code: ErrorCode::ConfigInvalid { field: 7 } })
 }
 
-fn host_cases() -> std::vec::Vec<(&'static str, HostToCore, &'static [u8])> {
-    std::vec![
-        ("HELLO", hello(), &HELLO),
-        ("HOST_HEARTBEAT", host_heartbeat(), &HOST_HEARTBEAT),
-        ("POSE", pose(), &POSE),
-        ("SCAN_LABELLED", scan_labelled(), &SCAN_LABELLED),
-        ("SCAN_PLAIN", scan_plain(), &SCAN_PLAIN),
-        ("DETECTION_AT", detection_at(), &DETECTION_AT),
-        ("DETECTION_BLIND", detection_blind(), &DETECTION_BLIND),
-        ("COMMAND_START", command(WireCommand::Start), &COMMAND_START),
-        ("COMMAND_STOP", command(WireCommand::Stop), &COMMAND_STOP),
-        ("COMMAND_RESET", command(WireCommand::Reset), &COMMAND_RESET),
-        ("CONFIG", config(), &CONFIG),
-        ("BASE_STATUS", base_status(), &BASE_STATUS),
-        ("SCAN_SEGMENT_LABELLED", scan_segment_labelled(), &SCAN_SEGMENT_LABELLED),
-        ("SCAN_SEGMENT_PLAIN", scan_segment_plain(), &SCAN_SEGMENT_PLAIN),
-    ]
-}
-
-fn core_cases() -> std::vec::Vec<(&'static str, CoreToHost, &'static [u8])> {
-    std::vec![
-        ("HELLO_ACK", hello_ack(), &HELLO_ACK),
-        ("HELLO_REFUSED", hello_refused(), &HELLO_REFUSED),
-        ("CORE_HEARTBEAT", core_heartbeat(), &CORE_HEARTBEAT),
-        ("GOAL", goal(), &GOAL),
-        ("STOP", stop(), &STOP),
-        ("STATUS", status(), &STATUS),
-        ("LABELS", labels_msg(), &LABELS),
-        ("ERROR_HANDSHAKE", error_handshake(), &ERROR_HANDSHAKE),
-        ("ERROR_VERSION", error_version(), &ERROR_VERSION),
-        ("ERROR_CONFIG", error_config(), &ERROR_CONFIG),
-        ("ERROR_CONFIG_INVALID", error_config_invalid(), &ERROR_CONFIG_INVALID),
-    ]
-}
-
 // ----- golden frames (host → core) --------------------------------------------------------------
 
 #[rustfmt::skip]
@@ -336,31 +293,51 @@ macro_rules! golden {
     };
 }
 
-golden!(hello, HTC, hello(), HELLO);
-golden!(host_heartbeat, HTC, host_heartbeat(), HOST_HEARTBEAT);
-golden!(pose, HTC, pose(), POSE);
-golden!(scan_labelled, HTC, scan_labelled(), SCAN_LABELLED);
-golden!(scan_plain, HTC, scan_plain(), SCAN_PLAIN);
-golden!(detection_at, HTC, detection_at(), DETECTION_AT);
-golden!(detection_blind, HTC, detection_blind(), DETECTION_BLIND);
-golden!(command_start, HTC, command(WireCommand::Start), COMMAND_START);
-golden!(command_stop, HTC, command(WireCommand::Stop), COMMAND_STOP);
-golden!(command_reset, HTC, command(WireCommand::Reset), COMMAND_RESET);
-golden!(config, HTC, config(), CONFIG);
-golden!(base_status, HTC, base_status(), BASE_STATUS);
-golden!(scan_segment_labelled, HTC, scan_segment_labelled(), SCAN_SEGMENT_LABELLED);
-golden!(scan_segment_plain, HTC, scan_segment_plain(), SCAN_SEGMENT_PLAIN);
-golden!(hello_ack, CTH, hello_ack(), HELLO_ACK);
-golden!(hello_refused, CTH, hello_refused(), HELLO_REFUSED);
-golden!(core_heartbeat, CTH, core_heartbeat(), CORE_HEARTBEAT);
-golden!(goal, CTH, goal(), GOAL);
-golden!(stop, CTH, stop(), STOP);
-golden!(status, CTH, status(), STATUS);
-golden!(labels, CTH, labels_msg(), LABELS);
-golden!(error_handshake, CTH, error_handshake(), ERROR_HANDSHAKE);
-golden!(error_version, CTH, error_version(), ERROR_VERSION);
-golden!(error_config, CTH, error_config(), ERROR_CONFIG);
-golden!(error_config_invalid, CTH, error_config_invalid(), ERROR_CONFIG_INVALID);
+/// The cases of one direction, each written once as `test: value => FRAME`: `$cases()` lists them
+/// all (for the checks over every case) and each gets its own `emit` and `parse` tests
+/// ([`golden!`]).
+macro_rules! goldens {
+    ($cases:ident: $msg:ty, $n:expr; $($test:ident: $value:expr => $bytes:ident,)*) => {
+        fn $cases() -> std::vec::Vec<(&'static str, $msg, &'static [u8])> {
+            std::vec![$((stringify!($bytes), $value, &$bytes)),*]
+        }
+
+        $(golden!($test, $n, $value, $bytes);)*
+    };
+}
+
+goldens! {
+    host_cases: HostToCore, HTC;
+    hello: hello() => HELLO,
+    host_heartbeat: host_heartbeat() => HOST_HEARTBEAT,
+    pose: pose() => POSE,
+    scan_labelled: scan_labelled() => SCAN_LABELLED,
+    scan_plain: scan_plain() => SCAN_PLAIN,
+    detection_at: detection_at() => DETECTION_AT,
+    detection_blind: detection_blind() => DETECTION_BLIND,
+    command_start: command(WireCommand::Start) => COMMAND_START,
+    command_stop: command(WireCommand::Stop) => COMMAND_STOP,
+    command_reset: command(WireCommand::Reset) => COMMAND_RESET,
+    config: config() => CONFIG,
+    base_status: base_status() => BASE_STATUS,
+    scan_segment_labelled: scan_segment_labelled() => SCAN_SEGMENT_LABELLED,
+    scan_segment_plain: scan_segment_plain() => SCAN_SEGMENT_PLAIN,
+}
+
+goldens! {
+    core_cases: CoreToHost, CTH;
+    hello_ack: hello_ack() => HELLO_ACK,
+    hello_refused: hello_refused() => HELLO_REFUSED,
+    core_heartbeat: core_heartbeat() => CORE_HEARTBEAT,
+    goal: goal() => GOAL,
+    stop: stop() => STOP,
+    status: status() => STATUS,
+    labels: labels_msg() => LABELS,
+    error_handshake: error_handshake() => ERROR_HANDSHAKE,
+    error_version: error_version() => ERROR_VERSION,
+    error_config: error_config() => ERROR_CONFIG,
+    error_config_invalid: error_config_invalid() => ERROR_CONFIG_INVALID,
+}
 
 /// Every variant of both enums has a golden frame (a new variant without one fails here), and
 /// every listed case matches its frame.

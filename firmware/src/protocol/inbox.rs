@@ -89,10 +89,7 @@ impl Inbox {
     /// Drops every input waiting for a tick (pose, scan, detection, commands, base state, last
     /// heartbeat); the counters stay. For a `Reset` from the host.
     pub fn clear_inputs(&mut self) {
-        self.pose = None;
-        self.scan = None;
-        self.assembly = None;
-        self.detection = None;
+        self.forget_readings();
         self.commands.clear();
         self.base_blocked = false;
         self.last_heartbeat = None;
@@ -211,11 +208,16 @@ impl Inbox {
     /// After a tick: forgets the pose, scan and detection it took and the command it ran; keeps
     /// the blocked flag and the other queued commands.
     pub fn ticked(&mut self) {
+        self.forget_readings();
+        self.commands.pop_front();
+    }
+
+    /// Forgets the pose, the scan (and its assembly) and the detection waiting for a tick.
+    fn forget_readings(&mut self) {
         self.pose = None;
         self.scan = None;
         self.assembly = None;
         self.detection = None;
-        self.commands.pop_front();
     }
 
     /// The host's last heartbeat.
