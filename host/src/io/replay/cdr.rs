@@ -587,33 +587,32 @@ mod tests {
     }
 
     /// The same `TFMessage` in ROS 1's serialisation: no header, no padding, strings without
-    /// NUL, and the header's `seq` first.
-    #[rustfmt::skip]
-    static TF_ROS1_BYTES: [u8; 88] = [
-        0x01, 0x00, 0x00, 0x00,             // 1 transform
-        0x2a, 0x00, 0x00, 0x00,             // header.seq = 42 (dropped)
-        0x07, 0x00, 0x00, 0x00,             // stamp.secs = 7
-        0x10, 0x27, 0x00, 0x00,             // stamp.nsecs = 10000
-        0x04, 0x00, 0x00, 0x00, b'o', b'd', b'o', b'm', // "odom"
-        0x04, 0x00, 0x00, 0x00, b'b', b'a', b's', b'e', // "base"
-        0, 0, 0, 0, 0, 0, 0xf8, 0x3f,       // x = 1.5
-        0, 0, 0, 0, 0, 0, 0x00, 0xc0,       // y = -2.0
-        0, 0, 0, 0, 0, 0, 0, 0,             // z = 0
-        0, 0, 0, 0, 0, 0, 0, 0,             // qx = 0
-        0, 0, 0, 0, 0, 0, 0, 0,             // qy = 0
-        0, 0, 0, 0, 0, 0, 0, 0,             // qz = 0
-        0, 0, 0, 0, 0, 0, 0xf0, 0x3f,       // qw = 1
-    ];
+    /// NUL, and the header's `seq` first; the transform's seven float64s are the CDR message's
+    /// last 56 bytes.
+    fn tf_ros1_bytes() -> Vec<u8> {
+        #[rustfmt::skip]
+        let head: [u8; 32] = [
+            0x01, 0x00, 0x00, 0x00,             // 1 transform
+            0x2a, 0x00, 0x00, 0x00,             // header.seq = 42 (dropped)
+            0x07, 0x00, 0x00, 0x00,             // stamp.secs = 7
+            0x10, 0x27, 0x00, 0x00,             // stamp.nsecs = 10000
+            0x04, 0x00, 0x00, 0x00, b'o', b'd', b'o', b'm', // "odom"
+            0x04, 0x00, 0x00, 0x00, b'b', b'a', b's', b'e', // "base"
+        ];
+        [&head[..], &TF_BYTES[TF_BYTES.len() - 56..]].concat()
+    }
 
     #[test]
     fn golden_ros1_tf_message_parses_and_every_truncation_is_an_error() {
-        assert_eq!(decode_tf_message(&TF_ROS1_BYTES, Wire::Ros1).unwrap(), tf_value());
-        for n in 0..TF_ROS1_BYTES.len() {
-            let e = decode_tf_message(&TF_ROS1_BYTES[..n], Wire::Ros1).unwrap_err();
+        let bytes = tf_ros1_bytes();
+        assert_eq!(bytes.len(), 88);
+        assert_eq!(decode_tf_message(&bytes, Wire::Ros1).unwrap(), tf_value());
+        for n in 0..bytes.len() {
+            let e = decode_tf_message(&bytes[..n], Wire::Ros1).unwrap_err();
             assert!(e.offset <= n, "{e}");
         }
         // A string longer than the message is refused, not allocated.
-        let mut b = TF_ROS1_BYTES;
+        let mut b = bytes;
         b[16..20].copy_from_slice(&u32::MAX.to_le_bytes());
         let e = decode_tf_message(&b, Wire::Ros1).unwrap_err();
         assert_eq!(e.offset, 20, "{e}");
