@@ -158,28 +158,34 @@ impl FrontierSet {
             }
         }
         let mut kept = 0usize;
-        for y in 0..GRID_CELLS as i32 {
-            for x in 0..GRID_CELLS as i32 {
-                if !self.mask.get(x, y) {
-                    continue;
-                }
-                let n = self.flood(x, y);
-                work += n as u32 * 9;
-                if n < min_cells as usize {
-                    self.stats.dropped_small += 1;
-                    continue;
-                }
-                // Split long groups into consecutive pieces; a short tail joins the last piece.
-                let pieces = (n / SPLIT_CELLS).max(1);
-                for p in 0..pieces {
-                    let lo = p * n / pieces;
-                    let hi = (p + 1) * n / pieces;
-                    let f = self.summarise(source, lo, hi);
-                    if kept < MAX_FRONTIERS_PER_GRID && self.frontiers.push(f).is_ok() {
-                        kept += 1;
-                    } else {
-                        self.stats.dropped_capacity += 1;
-                    }
+        // The frontier cells in row-major order, a mask word (32 cells) at a time: each flood
+        // clears its cells, so re-reading the word gives the next cell no flood has taken yet,
+        // exactly as a cell-by-cell scan would.
+        let mut w = 0;
+        while w < self.mask.words().len() {
+            let word = self.mask.words()[w];
+            if word == 0 {
+                w += 1;
+                continue;
+            }
+            let i = w * 32 + word.trailing_zeros() as usize;
+            let (x, y) = ((i % GRID_CELLS) as i32, (i / GRID_CELLS) as i32);
+            let n = self.flood(x, y);
+            work += n as u32 * 9;
+            if n < min_cells as usize {
+                self.stats.dropped_small += 1;
+                continue;
+            }
+            // Split long groups into consecutive pieces; a short tail joins the last piece.
+            let pieces = (n / SPLIT_CELLS).max(1);
+            for p in 0..pieces {
+                let lo = p * n / pieces;
+                let hi = (p + 1) * n / pieces;
+                let f = self.summarise(source, lo, hi);
+                if kept < MAX_FRONTIERS_PER_GRID && self.frontiers.push(f).is_ok() {
+                    kept += 1;
+                } else {
+                    self.stats.dropped_capacity += 1;
                 }
             }
         }
