@@ -201,6 +201,10 @@ impl BitGrid {
     pub fn words(&self) -> &[u32] {
         &self.bits
     }
+    /// The words, to write.
+    pub fn words_mut(&mut self) -> &mut [u32] {
+        &mut self.bits
+    }
 
     /// Moves the window by `(sx, sy)` cells (see [`PackedGrid::shift`]); new cells are `fill`.
     /// `sx` must be a multiple of 32 (a word).

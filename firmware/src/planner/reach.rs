@@ -21,6 +21,24 @@ pub(super) fn idx(x: i32, y: i32) -> usize {
     y as usize * GRID_CELLS + x as usize
 }
 
+/// Bit `k` of `NOT_FREE[b]` is set when cell `k` of packed byte `b` (bits `2k..2k+2`, see
+/// [`PackedGrid::as_bytes`]) is not [`Cell::Free`].
+const NOT_FREE: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut b = 0;
+    while b < 256 {
+        let mut k = 0;
+        while k < 4 {
+            if (b >> (2 * k)) & 3 != Cell::Free as usize {
+                t[b] |= 1 << k;
+            }
+            k += 1;
+        }
+        b += 1;
+    }
+    t
+};
+
 impl Planner {
     /// Path distance (units of 0.02 m) from the robot to `(x, y)` as of the last step.
     #[inline]
@@ -56,17 +74,22 @@ impl Planner {
                 }
             }
         }
-        let mut work = 0;
-        for y in 0..GRID_CELLS as i32 {
-            for x in 0..GRID_CELLS as i32 {
-                let c = lidar.get(x, y);
-                self.blocked.put(x, y, c != Cell::Free);
-                work += 1;
-            }
+        // Every cell not free is blocked: 32 cells (8 packed bytes) a word.
+        let bytes = lidar.grid.as_bytes();
+        for (w, word) in self.blocked.words_mut().iter_mut().enumerate() {
+            *word = (0..8).fold(0, |v, j| v | (NOT_FREE[bytes[w * 8 + j] as usize] as u32) << (4 * j));
         }
-        for y in 0..GRID_CELLS as i32 {
-            for x in 0..GRID_CELLS as i32 {
-                if lidar.get(x, y) == Cell::Occupied {
+        let mut work = GRID_AREA as u32;
+        // The disc around every occupied cell, in row-major order (bytes without one skipped).
+        for (k, &b) in bytes.iter().enumerate() {
+            let occupied = b & 0b1010_1010 & !(b << 1);
+            if occupied == 0 {
+                continue;
+            }
+            for slot in 0..4 {
+                if occupied & (0b10 << (2 * slot)) != 0 {
+                    let i = k * 4 + slot;
+                    let (x, y) = ((i % GRID_CELLS) as i32, (i / GRID_CELLS) as i32);
                     for &(dx, dy) in offsets.iter() {
                         self.blocked.put(x + dx as i32, y + dy as i32, true);
                     }
