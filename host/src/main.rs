@@ -42,7 +42,8 @@ enum Cmd {
     /// List the controller parameters `--set` accepts, with their defaults.
     Params(host::overrides::ParamsArgs),
     /// Replay a recorded log through the controller (no base to move): CARMEN logs (FLASER,
-    /// ROBOTLASER1, ODOM; plain or gzip) and ROS 2 bags (MCAP or sqlite3) (docs/replay.md).
+    /// ROBOTLASER1, ODOM; plain or gzip), ROS 2 bags (MCAP or sqlite3), ROS 1 bags and VLP-16
+    /// captures (docs/replay.md).
     Replay(host::io::replay::ReplayArgs),
     /// Score a LiDAR map against a reference: walls recovered, phantom walls, free-space leak
     /// (a replayed log against its own poses or another log; a simulated search against the true
