@@ -189,7 +189,7 @@ pub(super) fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> Log
 pub(super) fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -> LogData {
     let contents = match (format, bytes) {
         (LogFormat::Ros2Mcap, Some(b)) => rosbag::read_mcap(file, &b),
-        (LogFormat::Ros1Bag, Some(b)) => rosbag::read_bag1(file, &b),
+        (LogFormat::Ros1Bag, _) => rosbag::read_bag1_file(file),
         _ => rosbag::read_db3(file),
     };
     let mut warnings = Vec::new();
@@ -260,6 +260,13 @@ pub fn detect(head: &[u8]) -> Option<LogFormat> {
 }
 
 pub(super) fn read_one(file: &Path) -> Result<LogData, ReplayError> {
+    // A ROS 1 bag is streamed (camera bags are many gigabytes); the other formats are read whole.
+    let mut head = Vec::with_capacity(4096);
+    std::io::Read::read_to_end(&mut std::io::Read::take(std::fs::File::open(file).map_err(io_err(file))?, 4096), &mut head)
+        .map_err(io_err(file))?;
+    if detect(&head) == Some(LogFormat::Ros1Bag) {
+        return Ok(read_bag(file, LogFormat::Ros1Bag, None));
+    }
     let bytes = std::fs::read(file).map_err(io_err(file))?;
     let format = detect(&bytes).ok_or_else(|| ReplayError::UnknownFormat { file: file.to_path_buf() })?;
     Ok(match format {

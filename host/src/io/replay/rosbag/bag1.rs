@@ -22,6 +22,7 @@
 use super::*;
 use crate::io::replay::{Location, ReplayError};
 use std::collections::HashMap;
+use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
 /// How a ROS 1 bag (format 2.0) starts.
@@ -198,11 +199,30 @@ fn walk_chunk(records: &[u8], walk: &mut Walk, out: &mut BagContents, at: Locati
     Ok(())
 }
 
-/// Reads a ROS 1 bag (format 2.0) held in `buf`.
+/// Reads a ROS 1 bag (format 2.0) held in `buf` (the fuzz target's way in; `lives replay`
+/// streams the file, [`read_bag1_file`]).
 pub fn read_bag1(file: &Path, buf: &[u8]) -> BagContents {
+    read_bag1_from(file, std::io::Cursor::new(buf), buf.len() as u64)
+}
+
+/// Reads a ROS 1 bag file record by record: what is held at once is one chunk (and the messages
+/// replay keeps), not the file, so a bag of camera images many times the memory reads too.
+pub fn read_bag1_file(file: &Path) -> BagContents {
+    let opened = std::fs::File::open(file).and_then(|f| Ok((f.metadata()?.len(), f)));
+    match opened {
+        Ok((len, f)) => read_bag1_from(file, std::io::BufReader::with_capacity(1 << 16, f), len),
+        Err(e) => BagContents {
+            error: Some(ReplayError::Bag { file: file.to_path_buf(), offset: 0, reason: format!("cannot read it: {e}") }),
+            ..BagContents::default()
+        },
+    }
+}
+
+/// Reads a ROS 1 bag of `len` bytes from `r`.
+pub fn read_bag1_from(file: &Path, r: impl Read + Seek, len: u64) -> BagContents {
     let mut out = BagContents::default();
     let mut walk = Walk::default();
-    read_records(file, buf, &mut walk, &mut out);
+    read_records(file, &mut TopLevel { r, pos: 0, len }, &mut walk, &mut out);
     // Messages whose connection came later (the index section repeats every connection).
     for (id, t_ns, data, at) in std::mem::take(&mut walk.orphans) {
         walk.push(id, t_ns, data, at, &mut out);
@@ -210,11 +230,86 @@ pub fn read_bag1(file: &Path, buf: &[u8]) -> BagContents {
     out
 }
 
-fn read_records(file: &Path, buf: &[u8], walk: &mut Walk, out: &mut BagContents) {
-    let damage = |offset: usize, reason: String| ReplayError::Bag { file: file.to_path_buf(), offset: offset as u64, reason };
-    let chunk_damage = |offset: usize, reason: String| ReplayError::BagChunk { file: file.to_path_buf(), offset: offset as u64, reason };
-    if !buf.starts_with(ROS1_BAG_MAGIC) {
-        let version = buf.strip_prefix(b"#ROSBAG V").map(|v| {
+/// The file's top level, read a record at a time.
+struct TopLevel<R> {
+    r: R,
+    pos: u64,
+    len: u64,
+}
+
+/// A top-level record: its header, its data if replay reads it (chunks, connections, messages;
+/// the index is stepped over), and where its data starts.
+struct Owned {
+    header: Vec<u8>,
+    data: Vec<u8>,
+    data_at: u64,
+}
+
+impl<R: Read + Seek> TopLevel<R> {
+    fn bytes(&mut self, n: u64, what: &str) -> Result<Vec<u8>, String> {
+        let mut v = vec![0u8; n as usize];
+        self.r.read_exact(&mut v).map_err(|e| format!("cannot read {what} at byte {}: {e}", self.pos))?;
+        self.pos += n;
+        Ok(v)
+    }
+
+    fn length(&mut self, what: &str) -> Result<u64, String> {
+        if self.len - self.pos < 4 {
+            return Err(format!("record {what} length cut off: {} of 4 bytes before the end of the file (truncated)", self.len - self.pos));
+        }
+        let b = self.bytes(4, what)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as u64)
+    }
+
+    /// The next record (its header fields checked), or `None` at the end of the file.
+    fn next(&mut self) -> Result<Option<Owned>, String> {
+        if self.pos >= self.len {
+            return Ok(None);
+        }
+        let header_len = self.length("header")?;
+        if header_len > self.len - self.pos {
+            return Err(format!(
+                "record header of {header_len} bytes runs past the end of the file, {} bytes left (truncated)",
+                self.len - self.pos
+            ));
+        }
+        let header = self.bytes(header_len, "a record header")?;
+        let op = {
+            let fields = parse_fields(&header).map_err(|e| format!("record header damaged: {e}"))?;
+            Record { fields, data: &[] }.op()
+        };
+        let data_len = self.length("data")?;
+        if data_len > self.len - self.pos {
+            return Err(format!(
+                "record data of {data_len} bytes runs past the end of the file, {} bytes left (truncated)",
+                self.len - self.pos
+            ));
+        }
+        let data_at = self.pos;
+        let data = match op {
+            None => return Err("record header has no one-byte `op` field".into()),
+            Some(OP_CHUNK | OP_CONNECTION | OP_MSG_DATA) if data_len > MAX_CHUNK_UNCOMPRESSED => {
+                return Err(format!("record data of {data_len} bytes is more than this reader holds at once ({MAX_CHUNK_UNCOMPRESSED})"));
+            }
+            Some(OP_CHUNK | OP_CONNECTION | OP_MSG_DATA) => self.bytes(data_len, "a record's data")?,
+            Some(_) => {
+                self.r.seek(SeekFrom::Current(data_len as i64)).map_err(|e| format!("cannot skip a record's data: {e}"))?;
+                self.pos += data_len;
+                Vec::new()
+            }
+        };
+        Ok(Some(Owned { header, data, data_at }))
+    }
+}
+
+fn read_records(file: &Path, top: &mut TopLevel<impl Read + Seek>, walk: &mut Walk, out: &mut BagContents) {
+    let damage = |offset: u64, reason: String| ReplayError::Bag { file: file.to_path_buf(), offset, reason };
+    let chunk_damage = |offset: u64, reason: String| ReplayError::BagChunk { file: file.to_path_buf(), offset, reason };
+    let magic = top.bytes(ROS1_BAG_MAGIC.len().min(top.len as usize) as u64, "the first line").unwrap_or_default();
+    if magic != ROS1_BAG_MAGIC {
+        let mut head = magic;
+        head.extend(top.bytes(8.min(top.len - top.pos), "the first line").unwrap_or_default());
+        let version = head.strip_prefix(b"#ROSBAG V").map(|v| {
             let line = v.split(|&c| c == b'\n').next().unwrap_or_default();
             String::from_utf8_lossy(&line[..line.len().min(8)]).into_owned()
         });
@@ -225,12 +320,21 @@ fn read_records(file: &Path, buf: &[u8], walk: &mut Walk, out: &mut BagContents)
         out.error = Some(damage(0, reason));
         return;
     }
-    let mut pos = ROS1_BAG_MAGIC.len();
-    while pos < buf.len() {
-        let (rec, next) = match record_at(buf, pos) {
-            Ok(r) => r,
+    loop {
+        let pos = top.pos;
+        let owned = match top.next() {
+            Ok(Some(r)) => r,
+            Ok(None) => return,
             Err(reason) => {
                 out.error = Some(damage(pos, reason));
+                return;
+            }
+        };
+        let rec = match parse_fields(&owned.header) {
+            Ok(fields) => Record { fields, data: &owned.data },
+            Err(e) => {
+                // `TopLevel::next` parsed these fields already; kept as an error, not a panic.
+                out.error = Some(damage(pos, format!("record header damaged: {e}")));
                 return;
             }
         };
@@ -246,13 +350,10 @@ fn read_records(file: &Path, buf: &[u8], walk: &mut Walk, out: &mut BagContents)
                     };
                     Ok((codec, rec.u32_field("size")?))
                 })
-                .and_then(|(codec, size)| {
-                    let data_at = next - rec.data.len();
-                    decompress_bounded(codec, size as u64, rec.data, data_at, buf.len())
-                });
+                .and_then(|(codec, size)| decompress_bounded(codec, size as u64, rec.data, owned.data_at as usize, top.len as usize));
             match chunk {
                 Ok(records) => {
-                    if let Err((k, why)) = walk_chunk(&records, walk, out, Location::Offset(pos as u64)) {
+                    if let Err((k, why)) = walk_chunk(&records, walk, out, Location::Offset(pos)) {
                         let reason = format!(
                             "damaged chunk, the rest of it skipped: its record at byte {k} of its {} uncompressed bytes: {why}",
                             records.len()
@@ -263,10 +364,9 @@ fn read_records(file: &Path, buf: &[u8], walk: &mut Walk, out: &mut BagContents)
                 // The chunk's own lengths are intact: skip it, read on after it.
                 Err(reason) => out.bad.add(chunk_damage(pos, format!("damaged chunk, skipped: {reason}"))),
             }
-        } else if let Err(reason) = take(&rec, walk, out, Location::Offset(pos as u64)) {
+        } else if let Err(reason) = take(&rec, walk, out, Location::Offset(pos)) {
             // Its lengths are intact: skip it, read on after it.
             out.bad.add(damage(pos, format!("{} record skipped: {reason}", op_name(rec.op().unwrap_or(0)))));
         }
-        pos = next;
     }
 }
