@@ -40,6 +40,8 @@ fn a_ros1_bag_of_another_version_or_with_a_damaged_record_is_named() {
     assert!(zeros.contains("byte 13: record header has no one-byte `op` field"), "{zeros}");
     let cut = read(&[&b"#ROSBAG V2.0\n"[..], &200u32.to_le_bytes()[..], b"\x04\0\0\0op=\x03"].concat());
     assert!(cut.contains("byte 13: record header of 200 bytes runs past the end of the file, 8 bytes left (truncated)"), "{cut}");
+    let huge = read(&[&b"#ROSBAG V2.0\n"[..], &(64u32 << 20).to_le_bytes()[..], b"\x04\0\0\0op=\x03"].concat());
+    assert!(huge.contains("byte 13: record header of 67108864 bytes is more than a record header holds"), "{huge}");
     let _ = std::fs::remove_file(&file);
 }
 

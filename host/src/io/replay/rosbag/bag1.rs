@@ -28,6 +28,10 @@ use std::path::Path;
 /// How a ROS 1 bag (format 2.0) starts.
 pub const ROS1_BAG_MAGIC: &[u8] = b"#ROSBAG V2.0\n";
 
+/// The longest record header read (its fields are a few short values: `op`, `conn`, `topic`,
+/// `time`, `compression`, `size`, counts and offsets).
+pub const MAX_HEADER: u64 = 1 << 20;
+
 const OP_MSG_DATA: u8 = 0x02;
 const OP_CHUNK: u8 = 0x05;
 const OP_CONNECTION: u8 = 0x07;
@@ -267,6 +271,11 @@ impl<R: Read + Seek> TopLevel<R> {
             return Ok(None);
         }
         let header_len = self.length("header")?;
+        if header_len > MAX_HEADER {
+            return Err(format!(
+                "record header of {header_len} bytes is more than a record header holds ({MAX_HEADER}): the length is damaged"
+            ));
+        }
         if header_len > self.len - self.pos {
             return Err(format!(
                 "record header of {header_len} bytes runs past the end of the file, {} bytes left (truncated)",
