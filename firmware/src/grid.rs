@@ -9,7 +9,10 @@
 //! This module owns the cell states and their update rules; it does not decide where to go.
 
 use crate::capacity::{BEAMS, CELLS_PER_METER, GRID_AREA, GRID_CELLS, MAX_CAMERA_RAYS};
+
+mod bits;
 use crate::scan::{BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
+pub use bits::BitGrid;
 use fixed_point::{cos, sin, BinaryAngle, Meters, Pose2};
 
 /// The state of one cell. In the ROS convention: −1 unknown, 0 free, 100 occupied.
@@ -157,64 +160,6 @@ pub(crate) fn shift_2d<T: Copy>(a: &mut [T], row_len: usize, di: i64, dr: i64, f
 }
 
 impl Default for PackedGrid {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-/// A bit per cell.
-#[derive(Clone)]
-pub struct BitGrid {
-    bits: [u32; GRID_AREA / 32],
-}
-
-impl BitGrid {
-    /// All clear.
-    pub const fn new() -> Self {
-        Self { bits: [0; GRID_AREA / 32] }
-    }
-    /// Bit at `(x, y)`; false out of bounds.
-    #[inline]
-    pub fn get(&self, x: i32, y: i32) -> bool {
-        let Some(i) = PackedGrid::index(x, y) else {
-            return false;
-        };
-        self.bits[i >> 5] & (1 << (i & 31)) != 0
-    }
-    /// Sets or clears the bit at `(x, y)` (ignored out of bounds).
-    #[inline]
-    pub fn put(&mut self, x: i32, y: i32, v: bool) {
-        let Some(i) = PackedGrid::index(x, y) else {
-            return;
-        };
-        if v {
-            self.bits[i >> 5] |= 1 << (i & 31);
-        } else {
-            self.bits[i >> 5] &= !(1 << (i & 31));
-        }
-    }
-    /// Clears every bit.
-    pub fn clear(&mut self) {
-        self.bits.fill(0);
-    }
-    /// The words, 32 cells each, row-major.
-    pub fn words(&self) -> &[u32] {
-        &self.bits
-    }
-    /// The words, to write.
-    pub fn words_mut(&mut self) -> &mut [u32] {
-        &mut self.bits
-    }
-
-    /// Moves the window by `(sx, sy)` cells (see [`PackedGrid::shift`]); new cells are `fill`.
-    /// `sx` must be a multiple of 32 (a word).
-    pub(crate) fn shift(&mut self, sx: i32, sy: i32, fill: bool) {
-        debug_assert!(sx % 32 == 0);
-        shift_2d(&mut self.bits, GRID_CELLS / 32, sx as i64 / 32, sy as i64, if fill { u32::MAX } else { 0 });
-    }
-}
-
-impl Default for BitGrid {
     fn default() -> Self {
         Self::new()
     }
