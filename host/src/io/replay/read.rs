@@ -262,8 +262,7 @@ pub fn detect(head: &[u8]) -> Option<LogFormat> {
 pub(super) fn read_one(file: &Path) -> Result<LogData, ReplayError> {
     // A ROS 1 bag is streamed (camera bags are many gigabytes); the other formats are read whole.
     let mut head = Vec::with_capacity(4096);
-    std::io::Read::read_to_end(&mut std::io::Read::take(std::fs::File::open(file).map_err(io_err(file))?, 4096), &mut head)
-        .map_err(io_err(file))?;
+    std::fs::File::open(file).and_then(|f| f.take(4096).read_to_end(&mut head)).map_err(io_err(file))?;
     if detect(&head) == Some(LogFormat::Ros1Bag) {
         return Ok(read_bag(file, LogFormat::Ros1Bag, None));
     }

@@ -48,15 +48,12 @@ fn op_name(op: u8) -> &'static str {
     }
 }
 
-/// One record: its header fields and its data.
-struct Record<'a> {
-    fields: Vec<(&'a [u8], &'a [u8])>,
-    data: &'a [u8],
-}
+/// A record header's fields (`name=value`).
+struct Header<'a>(Vec<(&'a [u8], &'a [u8])>);
 
-impl<'a> Record<'a> {
+impl<'a> Header<'a> {
     fn field(&self, name: &str) -> Option<&'a [u8]> {
-        self.fields.iter().find(|(n, _)| *n == name.as_bytes()).map(|(_, v)| *v)
+        self.0.iter().find(|(n, _)| *n == name.as_bytes()).map(|(_, v)| *v)
     }
 
     fn op(&self) -> Option<u8> {
@@ -103,36 +100,6 @@ fn parse_fields(mut b: &[u8]) -> Result<Vec<(&[u8], &[u8])>, String> {
     Ok(out)
 }
 
-/// The record at `pos` of `buf` and where the next one starts; `Err` with why when the record is
-/// cut off or its header does not parse.
-fn record_at(buf: &[u8], pos: usize) -> Result<(Record<'_>, usize), String> {
-    let len_at = |at: usize, what: &str| -> Result<usize, String> {
-        match buf.get(at..at + 4) {
-            Some(b) => Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize),
-            None => Err(format!("record {what} length cut off: {} of 4 bytes before the end of the file (truncated)", buf.len() - at)),
-        }
-    };
-    let header_len = len_at(pos, "header")?;
-    let header_start = pos + 4;
-    let left = buf.len() - header_start;
-    if header_len > left {
-        return Err(format!("record header of {header_len} bytes runs past the end of the file, {left} bytes left (truncated)"));
-    }
-    let fields = parse_fields(&buf[header_start..header_start + header_len]).map_err(|e| format!("record header damaged: {e}"))?;
-    let data_len_at = header_start + header_len;
-    let data_len = len_at(data_len_at, "data")?;
-    let data_start = data_len_at + 4;
-    let left = buf.len() - data_start;
-    if data_len > left {
-        return Err(format!("record data of {data_len} bytes runs past the end of the file, {left} bytes left (truncated)"));
-    }
-    let rec = Record { fields, data: &buf[data_start..data_start + data_len] };
-    if rec.op().is_none() {
-        return Err("record header has no one-byte `op` field".into());
-    }
-    Ok((rec, data_start + data_len))
-}
-
 /// Connection id → (topic, type name).
 type Connections = HashMap<u32, (String, String)>;
 
@@ -156,12 +123,13 @@ impl Walk {
 
 /// Takes a connection or message record (inside a chunk or not); `at` is where a message is
 /// reported to come from.
-fn take(rec: &Record<'_>, walk: &mut Walk, out: &mut BagContents, at: Location) -> Result<(), String> {
-    match rec.op() {
-        Some(OP_CONNECTION) => {
+fn take(record: Owned, walk: &mut Walk, out: &mut BagContents, at: Location) -> Result<(), String> {
+    let rec = record.header();
+    match record.op {
+        OP_CONNECTION => {
             let id = rec.u32_field("conn")?;
             let topic = rec.text_field("topic")?;
-            let data = parse_fields(rec.data).map_err(|e| format!("connection {id} ({topic}): its data: {e}"))?;
+            let data = parse_fields(&record.data).map_err(|e| format!("connection {id} ({topic}): its data: {e}"))?;
             let type_name = data.iter().find(|(n, _)| *n == b"type").map(|(_, v)| String::from_utf8_lossy(v).into_owned());
             let type_name = type_name.ok_or_else(|| format!("connection {id} ({topic}) has no `type`"))?;
             if MsgType::of(&type_name, &topic).is_some() && !out.topics.iter().any(|(t, _)| *t == topic) {
@@ -169,7 +137,7 @@ fn take(rec: &Record<'_>, walk: &mut Walk, out: &mut BagContents, at: Location) 
             }
             walk.conns.insert(id, (topic, type_name));
         }
-        Some(OP_MSG_DATA) => {
+        OP_MSG_DATA => {
             let id = rec.u32_field("conn")?;
             let t_ns = match rec.field("time") {
                 Some(v) if v.len() == 8 => {
@@ -181,9 +149,10 @@ fn take(rec: &Record<'_>, walk: &mut Walk, out: &mut BagContents, at: Location) 
                 None => return Err(format!("message data of connection {id} has no `time` field")),
             };
             out.saw(t_ns);
+            drop(rec);
             match walk.conns.contains_key(&id) {
-                true => walk.push(id, t_ns, rec.data.to_vec(), at, out),
-                false => walk.orphans.push((id, t_ns, rec.data.to_vec(), at)),
+                true => walk.push(id, t_ns, record.data, at, out),
+                false => walk.orphans.push((id, t_ns, record.data, at)),
             }
         }
         _ => {}
@@ -193,14 +162,16 @@ fn take(rec: &Record<'_>, walk: &mut Walk, out: &mut BagContents, at: Location) 
 
 /// The records of a chunk's uncompressed data, each handed to [`take`]; on the first that does
 /// not parse, its offset in `records` and why (the records after it are lost with their framing).
-fn walk_chunk(records: &[u8], walk: &mut Walk, out: &mut BagContents, at: Location) -> Result<(), (usize, String)> {
-    let mut pos = 0;
-    while pos < records.len() {
-        let (rec, next) = record_at(records, pos).map_err(|e| (pos, e.replace("of the file", "of the chunk")))?;
-        take(&rec, walk, out, at).map_err(|e| (pos, e))?;
-        pos = next;
+fn walk_chunk(records: &[u8], walk: &mut Walk, out: &mut BagContents, at: Location) -> Result<(), (u64, String)> {
+    let mut inner = Records { r: std::io::Cursor::new(records), pos: 0, len: records.len() as u64, scope: "chunk" };
+    loop {
+        let pos = inner.pos;
+        match inner.next() {
+            Ok(Some(record)) => take(record, walk, out, at).map_err(|e| (pos, e))?,
+            Ok(None) => return Ok(()),
+            Err(e) => return Err((pos, e)),
+        }
     }
-    Ok(())
 }
 
 /// Reads a ROS 1 bag (format 2.0) held in `buf` (the fuzz target's way in; `lives replay`
@@ -226,7 +197,7 @@ pub fn read_bag1_file(file: &Path) -> BagContents {
 pub fn read_bag1_from(file: &Path, r: impl Read + Seek, len: u64) -> BagContents {
     let mut out = BagContents::default();
     let mut walk = Walk::default();
-    read_records(file, &mut TopLevel { r, pos: 0, len }, &mut walk, &mut out);
+    read_records(file, &mut Records { r, pos: 0, len, scope: "file" }, &mut walk, &mut out);
     // Messages whose connection came later (the index section repeats every connection).
     for (id, t_ns, data, at) in std::mem::take(&mut walk.orphans) {
         walk.push(id, t_ns, data, at, &mut out);
@@ -234,22 +205,32 @@ pub fn read_bag1_from(file: &Path, r: impl Read + Seek, len: u64) -> BagContents
     out
 }
 
-/// The file's top level, read a record at a time.
-struct TopLevel<R> {
+/// Records read one at a time: the file's top level, or the records of a chunk.
+struct Records<R> {
     r: R,
     pos: u64,
     len: u64,
+    /// What holds them, for the messages: `file` or `chunk`.
+    scope: &'static str,
 }
 
-/// A top-level record: its header, its data if replay reads it (chunks, connections, messages;
+/// A record: its `op`, its header, its data if replay reads it (chunks, connections, messages;
 /// the index is stepped over), and where its data starts.
 struct Owned {
+    op: u8,
     header: Vec<u8>,
     data: Vec<u8>,
     data_at: u64,
 }
 
-impl<R: Read + Seek> TopLevel<R> {
+impl Owned {
+    /// Its header's fields (parsed when the record was read, so they parse).
+    fn header(&self) -> Header<'_> {
+        Header(parse_fields(&self.header).unwrap_or_default())
+    }
+}
+
+impl<R: Read + Seek> Records<R> {
     fn bytes(&mut self, n: u64, what: &str) -> Result<Vec<u8>, String> {
         let mut v = vec![0u8; n as usize];
         self.r.read_exact(&mut v).map_err(|e| format!("cannot read {what} at byte {}: {e}", self.pos))?;
@@ -259,13 +240,17 @@ impl<R: Read + Seek> TopLevel<R> {
 
     fn length(&mut self, what: &str) -> Result<u64, String> {
         if self.len - self.pos < 4 {
-            return Err(format!("record {what} length cut off: {} of 4 bytes before the end of the file (truncated)", self.len - self.pos));
+            return Err(format!(
+                "record {what} length cut off: {} of 4 bytes before the end of the {} (truncated)",
+                self.len - self.pos,
+                self.scope
+            ));
         }
         let b = self.bytes(4, what)?;
         Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as u64)
     }
 
-    /// The next record (its header fields checked), or `None` at the end of the file.
+    /// The next record (its header fields checked), or `None` at the end.
     fn next(&mut self) -> Result<Option<Owned>, String> {
         if self.pos >= self.len {
             return Ok(None);
@@ -278,40 +263,39 @@ impl<R: Read + Seek> TopLevel<R> {
         }
         if header_len > self.len - self.pos {
             return Err(format!(
-                "record header of {header_len} bytes runs past the end of the file, {} bytes left (truncated)",
+                "record header of {header_len} bytes runs past the end of the {}, {} bytes left (truncated)",
+                self.scope,
                 self.len - self.pos
             ));
         }
         let header = self.bytes(header_len, "a record header")?;
-        let op = {
-            let fields = parse_fields(&header).map_err(|e| format!("record header damaged: {e}"))?;
-            Record { fields, data: &[] }.op()
-        };
+        let op = Header(parse_fields(&header).map_err(|e| format!("record header damaged: {e}"))?).op();
         let data_len = self.length("data")?;
         if data_len > self.len - self.pos {
             return Err(format!(
-                "record data of {data_len} bytes runs past the end of the file, {} bytes left (truncated)",
+                "record data of {data_len} bytes runs past the end of the {}, {} bytes left (truncated)",
+                self.scope,
                 self.len - self.pos
             ));
         }
         let data_at = self.pos;
+        let Some(op) = op else { return Err("record header has no one-byte `op` field".into()) };
         let data = match op {
-            None => return Err("record header has no one-byte `op` field".into()),
-            Some(OP_CHUNK | OP_CONNECTION | OP_MSG_DATA) if data_len > MAX_CHUNK_UNCOMPRESSED => {
+            OP_CHUNK | OP_CONNECTION | OP_MSG_DATA if data_len > MAX_CHUNK_UNCOMPRESSED => {
                 return Err(format!("record data of {data_len} bytes is more than this reader holds at once ({MAX_CHUNK_UNCOMPRESSED})"));
             }
-            Some(OP_CHUNK | OP_CONNECTION | OP_MSG_DATA) => self.bytes(data_len, "a record's data")?,
-            Some(_) => {
+            OP_CHUNK | OP_CONNECTION | OP_MSG_DATA => self.bytes(data_len, "a record's data")?,
+            _ => {
                 self.r.seek(SeekFrom::Current(data_len as i64)).map_err(|e| format!("cannot skip a record's data: {e}"))?;
                 self.pos += data_len;
                 Vec::new()
             }
         };
-        Ok(Some(Owned { header, data, data_at }))
+        Ok(Some(Owned { op, header, data, data_at }))
     }
 }
 
-fn read_records(file: &Path, top: &mut TopLevel<impl Read + Seek>, walk: &mut Walk, out: &mut BagContents) {
+fn read_records(file: &Path, top: &mut Records<impl Read + Seek>, walk: &mut Walk, out: &mut BagContents) {
     let damage = |offset: u64, reason: String| ReplayError::Bag { file: file.to_path_buf(), offset, reason };
     let chunk_damage = |offset: u64, reason: String| ReplayError::BagChunk { file: file.to_path_buf(), offset, reason };
     let magic = top.bytes(ROS1_BAG_MAGIC.len().min(top.len as usize) as u64, "the first line").unwrap_or_default();
@@ -339,16 +323,10 @@ fn read_records(file: &Path, top: &mut TopLevel<impl Read + Seek>, walk: &mut Wa
                 return;
             }
         };
-        let rec = match parse_fields(&owned.header) {
-            Ok(fields) => Record { fields, data: &owned.data },
-            Err(e) => {
-                // `TopLevel::next` parsed these fields already; kept as an error, not a panic.
-                out.error = Some(damage(pos, format!("record header damaged: {e}")));
-                return;
-            }
-        };
-        if rec.op() == Some(OP_CHUNK) {
-            let chunk = rec
+        let op = owned.op;
+        if op == OP_CHUNK {
+            let header = owned.header();
+            let chunk = header
                 .text_field("compression")
                 .and_then(|c| {
                     let codec = match c.as_str() {
@@ -357,9 +335,9 @@ fn read_records(file: &Path, top: &mut TopLevel<impl Read + Seek>, walk: &mut Wa
                         "lz4" => Codec::Lz4,
                         other => return Err(format!("unknown chunk compression {other:?} (ROS 1 bags know none, bz2 and lz4)")),
                     };
-                    Ok((codec, rec.u32_field("size")?))
+                    Ok((codec, header.u32_field("size")?))
                 })
-                .and_then(|(codec, size)| decompress_bounded(codec, size as u64, rec.data, owned.data_at as usize, top.len as usize));
+                .and_then(|(codec, size)| decompress_bounded(codec, size as u64, &owned.data, owned.data_at as usize, top.len as usize));
             match chunk {
                 Ok(records) => {
                     if let Err((k, why)) = walk_chunk(&records, walk, out, Location::Offset(pos)) {
@@ -373,9 +351,9 @@ fn read_records(file: &Path, top: &mut TopLevel<impl Read + Seek>, walk: &mut Wa
                 // The chunk's own lengths are intact: skip it, read on after it.
                 Err(reason) => out.bad.add(chunk_damage(pos, format!("damaged chunk, skipped: {reason}"))),
             }
-        } else if let Err(reason) = take(&rec, walk, out, Location::Offset(pos)) {
+        } else if let Err(reason) = take(owned, walk, out, Location::Offset(pos)) {
             // Its lengths are intact: skip it, read on after it.
-            out.bad.add(damage(pos, format!("{} record skipped: {reason}", op_name(rec.op().unwrap_or(0)))));
+            out.bad.add(damage(pos, format!("{} record skipped: {reason}", op_name(op))));
         }
     }
 }

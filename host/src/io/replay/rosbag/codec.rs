@@ -33,15 +33,6 @@ impl Codec {
     }
 }
 
-/// The cargo feature a codec needs, if this build lacks it.
-fn missing_feature(codec: Codec) -> Option<&'static str> {
-    match codec {
-        Codec::Zstd if !cfg!(feature = "zstd") => Some("zstd"),
-        Codec::Lz4 if !cfg!(feature = "lz4") => Some("lz4"),
-        _ => None,
-    }
-}
-
 /// The `claimed` bytes that `data` (at byte `data_at` of a file of `file_len` bytes) decompresses
 /// to. The claim must be within [`MAX_CHUNK_UNCOMPRESSED`] and [`MAX_CHUNK_RATIO`] × the file's
 /// size, the decoder may not write more than it and must write all of it. Nothing is allocated
@@ -49,38 +40,38 @@ fn missing_feature(codec: Codec) -> Option<&'static str> {
 /// like (the `mcap` crate's own chunk reader sized its buffer from the damaged stream).
 pub fn decompress_bounded(codec: Codec, claimed: u64, data: &[u8], data_at: usize, file_len: usize) -> Result<Cow<'_, [u8]>, String> {
     let limit = MAX_CHUNK_UNCOMPRESSED.min((file_len as u64).saturating_mul(MAX_CHUNK_RATIO));
-    if codec == Codec::None {
-        if claimed != data.len() as u64 {
-            return Err(format!("its uncompressed size field says {claimed} bytes, its records take {} (byte {data_at})", data.len()));
-        }
-        return Ok(Cow::Borrowed(data));
-    }
-    if claimed > limit {
-        return Err(format!(
-            "it claims {claimed} bytes uncompressed from {} compressed, more than this reader allows for a file of {file_len} bytes ({limit}: {MAX_CHUNK_RATIO} × the file's size, at most {MAX_CHUNK_UNCOMPRESSED})",
-            data.len()
-        ));
-    }
-    if let Some(feature) = missing_feature(codec) {
-        return Err(format!(
+    #[allow(unused_variables)] // every codec's feature on: nothing is missing
+    let missing = |feature: &str| {
+        format!(
             "chunk compressed with {}, which this `lives` was built without (rebuild with `--features {feature}`, or `ros-bags`)",
             codec.name()
-        ));
-    }
+        )
+    };
     let out = match codec {
-        Codec::None => unreachable!("returned above"),
+        Codec::None if claimed != data.len() as u64 => {
+            return Err(format!("its uncompressed size field says {claimed} bytes, its records take {} (byte {data_at})", data.len()));
+        }
+        Codec::None => return Ok(Cow::Borrowed(data)),
+        _ if claimed > limit => {
+            return Err(format!(
+                "it claims {claimed} bytes uncompressed from {} compressed, more than this reader allows for a file of {file_len} bytes ({limit}: {MAX_CHUNK_RATIO} × the file's size, at most {MAX_CHUNK_UNCOMPRESSED})",
+                data.len()
+            ));
+        }
         #[cfg(feature = "zstd")]
         Codec::Zstd => zstd::bulk::decompress(data, claimed as usize).map_err(|e| {
             format!("its zstd data (byte {data_at}, {} bytes) does not decompress to the {claimed} bytes it claims: {e}", data.len())
         })?,
+        #[cfg(not(feature = "zstd"))]
+        Codec::Zstd => return Err(missing("zstd")),
         #[cfg(feature = "lz4")]
         Codec::Lz4 => {
             let decoder = lz4::Decoder::new(data).map_err(|e| format!("its lz4 data (byte {data_at}) does not start a frame: {e}"))?;
             read_bounded(decoder, claimed, "lz4", data_at, data.len())?
         }
+        #[cfg(not(feature = "lz4"))]
+        Codec::Lz4 => return Err(missing("lz4")),
         Codec::Bz2 => read_bounded(bzip2::read::BzDecoder::new(data), claimed, "bz2", data_at, data.len())?,
-        #[allow(unreachable_patterns)]
-        _ => unreachable!("a codec without its feature returned above"),
     };
     if out.len() as u64 != claimed {
         return Err(format!("its {} data decompresses to {} bytes, not the {claimed} it claims", codec.name(), out.len()));
