@@ -25,6 +25,8 @@ enum Cmd {
     Soak(cli::soak::SoakArgs),
     Node(cli::node::NodeArgs),
     Bridge(cli::bridge::BridgeArgs),
+    #[cfg(feature = "ros2")]
+    Ros2(cli::ros2::Ros2Args),
     #[cfg(feature = "train")]
     Train(cli::train::TrainArgs),
     #[cfg(feature = "train")]
@@ -92,6 +94,8 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Soak(args) => cli::soak::run(args),
         Cmd::Node(args) => cli::node::run(args),
         Cmd::Bridge(args) => cli::bridge::run(args),
+        #[cfg(feature = "ros2")]
+        Cmd::Ros2(args) => cli::ros2::run(args),
         #[cfg(feature = "train")]
         Cmd::Train(args) => cli::train::train(args),
         #[cfg(feature = "train")]

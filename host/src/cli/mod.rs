@@ -8,6 +8,8 @@ pub mod common;
 pub mod dataset;
 pub mod eval;
 pub mod node;
+#[cfg(feature = "ros2")]
+pub mod ros2;
 pub mod search;
 pub mod soak;
 pub mod trace;

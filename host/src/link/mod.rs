@@ -22,6 +22,8 @@ pub mod bridge;
 pub mod fault;
 pub mod node;
 pub mod robot;
+#[cfg(feature = "ros2")]
+pub mod ros2;
 pub mod sim_bridge;
 pub mod source;
 

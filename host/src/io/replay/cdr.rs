@@ -188,6 +188,11 @@ impl<'a> CdrReader<'a> {
         Ok(b)
     }
 
+    /// A `uint8` (or a `bool`, `byte`, `char`).
+    pub fn u8(&mut self, what: &'static str) -> Result<u8, CdrError> {
+        Ok(self.fixed::<1>(what)?[0])
+    }
+
     /// A `uint32`.
     pub fn u32(&mut self, what: &'static str) -> Result<u32, CdrError> {
         Ok(u32::from_ne_bytes(self.fixed::<4>(what)?))
@@ -334,7 +339,8 @@ pub struct TransformStamped {
     pub transform: Transform,
 }
 
-fn header(r: &mut CdrReader) -> Result<Header, CdrError> {
+/// A `std_msgs/Header`.
+pub fn header(r: &mut CdrReader) -> Result<Header, CdrError> {
     if r.ros1 {
         r.u32("header.seq")?;
         // ROS 1 time is unsigned; stamps past 2038 wrap negative and count as unstamped.
@@ -349,7 +355,8 @@ fn header(r: &mut CdrReader) -> Result<Header, CdrError> {
     Ok(Header { stamp: Time { sec, nanosec }, frame_id })
 }
 
-fn transform(r: &mut CdrReader, what: &'static str) -> Result<Transform, CdrError> {
+/// A `geometry_msgs/Transform` (or a `Pose`: the same seven `float64`s).
+pub fn transform(r: &mut CdrReader, what: &'static str) -> Result<Transform, CdrError> {
     let translation = r.f64s::<3>(what)?;
     let rotation = r.f64s::<4>(what)?;
     Ok(Transform { translation, rotation })
@@ -442,13 +449,15 @@ impl CdrWriter {
         self.buf
     }
 
-    fn header(&mut self, h: &Header) {
+    /// A `std_msgs/Header`.
+    pub fn header(&mut self, h: &Header) {
         self.put(h.stamp.sec.to_le_bytes());
         self.put(h.stamp.nanosec.to_le_bytes());
         self.string(&h.frame_id);
     }
 
-    fn transform(&mut self, t: &Transform) {
+    /// A `Transform` or a `Pose` (translation or position, then the quaternion).
+    pub fn transform(&mut self, t: &Transform) {
         for v in t.translation.iter().chain(t.rotation.iter()) {
             self.put(v.to_le_bytes());
         }

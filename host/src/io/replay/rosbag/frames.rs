@@ -5,24 +5,24 @@ use std::collections::HashMap;
 
 /// A rigid transform in 3D, for walking the frame tree.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Iso {
-    pub(super) t: [f64; 3],
+pub(crate) struct Iso {
+    pub(crate) t: [f64; 3],
     /// `[x, y, z, w]`, unit.
-    pub(super) q: [f64; 4],
+    pub(crate) q: [f64; 4],
 }
 
 impl Iso {
     const IDENTITY: Iso = Iso { t: [0.0; 3], q: [0.0, 0.0, 0.0, 1.0] };
 
     /// From a message's transform; `None` when it is not finite or the quaternion is zero.
-    pub(super) fn from(t: &Transform) -> Option<Iso> {
+    pub(crate) fn from(t: &Transform) -> Option<Iso> {
         let q = t.rotation;
         let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
         let finite = t.translation.iter().chain(q.iter()).all(|v| v.is_finite());
         (finite && n > 1e-9).then(|| Iso { t: t.translation, q: [q[0] / n, q[1] / n, q[2] / n, q[3] / n] })
     }
 
-    pub(super) fn rotate(&self, v: [f64; 3]) -> [f64; 3] {
+    pub(crate) fn rotate(&self, v: [f64; 3]) -> [f64; 3] {
         let [x, y, z, w] = self.q;
         // v + 2w (u × v) + 2 u × (u × v), u = (x, y, z).
         let c1 = [y * v[2] - z * v[1], z * v[0] - x * v[2], x * v[1] - y * v[0]];
@@ -31,7 +31,7 @@ impl Iso {
     }
 
     /// `self ∘ other`: `other` expressed in `self`'s parent.
-    pub(super) fn compose(&self, other: &Iso) -> Iso {
+    pub(crate) fn compose(&self, other: &Iso) -> Iso {
         let r = self.rotate(other.t);
         let (a, b) = (self.q, other.q);
         let q = [
@@ -61,17 +61,17 @@ pub const MAX_SPEED_M_S: f64 = 10.0;
 /// One edge of the frame tree: its parent, and the child's pose in it over time (one sample for
 /// a `tf_static` edge).
 #[derive(Clone, Debug)]
-pub(super) struct Edge {
+pub(crate) struct Edge {
     parent: String,
     /// From `tf_static`: holds at every time.
     fixed: bool,
     /// `(stamp ns, pose)`, stamps non-decreasing.
-    pub(super) samples: Vec<(u64, Iso)>,
+    pub(crate) samples: Vec<(u64, Iso)>,
 }
 
 /// Why a moving transform was not taken.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum EdgeReject {
+pub(crate) enum EdgeReject {
     /// Not finite, a zero quaternion, or a frame its own parent.
     Invalid,
     /// It would close a cycle in the frame tree.
@@ -84,7 +84,7 @@ pub(super) enum EdgeReject {
 
 /// Why a scan could not be placed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum PoseError {
+pub(crate) enum PoseError {
     /// Its frame is in no tree with a root (or a cycle).
     NoPose,
     /// The odometry has no sample at or before the scan's stamp.
@@ -96,18 +96,18 @@ pub(super) enum PoseError {
 /// The frame tree: child → edge. Moving edges keep every sample, so a scan is placed with the
 /// transforms interpolated to its own stamp.
 #[derive(Default)]
-pub(super) struct FrameTree {
-    pub(super) edges: HashMap<String, Edge>,
+pub(crate) struct FrameTree {
+    pub(crate) edges: HashMap<String, Edge>,
 }
 
 /// Frame names without the ROS 1 leading slash.
-pub(super) fn frame(name: &str) -> String {
+pub(crate) fn frame(name: &str) -> String {
     name.trim_start_matches('/').to_string()
 }
 
 /// Shortest-arc spherical interpolation between unit quaternions (for a planar pose: yaw
 /// interpolated the short way round), `s` in [0, 1].
-pub(super) fn slerp(a: [f64; 4], b: [f64; 4], s: f64) -> [f64; 4] {
+pub(crate) fn slerp(a: [f64; 4], b: [f64; 4], s: f64) -> [f64; 4] {
     let mut d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
     let mut b = b;
     if d < 0.0 {
@@ -127,7 +127,7 @@ pub(super) fn slerp(a: [f64; 4], b: [f64; 4], s: f64) -> [f64; 4] {
 }
 
 /// `a` and `b` interpolated at `s` in [0, 1]: translation linear, rotation shortest arc.
-pub(super) fn interpolate(a: &Iso, b: &Iso, s: f64) -> Iso {
+pub(crate) fn interpolate(a: &Iso, b: &Iso, s: f64) -> Iso {
     Iso { t: [0, 1, 2].map(|i| a.t[i] + (b.t[i] - a.t[i]) * s), q: slerp(a.q, b.q, s) }
 }
 
@@ -148,7 +148,7 @@ impl FrameTree {
     }
 
     /// A `tf_static` edge: holds at every time, replaces what the edge was.
-    pub(super) fn set_static(&mut self, parent: &str, child: &str, t: &Transform) -> Result<(), EdgeReject> {
+    pub(crate) fn set_static(&mut self, parent: &str, child: &str, t: &Transform) -> Result<(), EdgeReject> {
         let (parent, child) = (frame(parent), frame(child));
         let iso = Iso::from(t).filter(|_| parent != child).ok_or(EdgeReject::Invalid)?;
         if self.closes_loop(&parent, &child) {
@@ -160,7 +160,7 @@ impl FrameTree {
 
     /// A moving edge's sample at `t_ns` (odometry or `tf`). A new parent for the child starts a
     /// new history.
-    pub(super) fn push(&mut self, parent: &str, child: &str, t_ns: u64, t: &Transform) -> Result<(), EdgeReject> {
+    pub(crate) fn push(&mut self, parent: &str, child: &str, t_ns: u64, t: &Transform) -> Result<(), EdgeReject> {
         let (parent, child) = (frame(parent), frame(child));
         let iso = Iso::from(t).filter(|_| parent != child).ok_or(EdgeReject::Invalid)?;
         let same_parent = self.edges.get(&child).is_some_and(|e| e.parent == parent);
@@ -183,13 +183,45 @@ impl FrameTree {
         Ok(())
     }
 
+    /// The newest stamp of the first moving edge from `f` up (the odometry that places it), if
+    /// any: a live source waits for it to reach a scan's stamp before placing the scan (as tf2's
+    /// message filter waits for the transform at the scan's time).
+    pub(crate) fn moving_until(&self, f: &str) -> Option<u64> {
+        let mut cur = frame(f);
+        for _ in 0..=64 {
+            let e = self.edges.get(&cur)?;
+            if !e.fixed {
+                return e.samples.last().map(|s| s.0);
+            }
+            cur = e.parent.clone();
+        }
+        None
+    }
+
+    /// Whether `f` is a frame of the tree (the child of an edge, or some edge's parent).
+    pub(crate) fn knows(&self, f: &str) -> bool {
+        let f = frame(f);
+        self.edges.contains_key(&f) || self.edges.values().any(|e| e.parent == f)
+    }
+
+    /// Drops the samples of moving edges older than `t_ns`, keeping each edge's newest sample
+    /// before it (a live source's memory stays bounded).
+    pub(crate) fn forget_before(&mut self, t_ns: u64) {
+        for e in self.edges.values_mut().filter(|e| !e.fixed) {
+            let k = e.samples.partition_point(|s| s.0 < t_ns);
+            if k > 1 {
+                e.samples.drain(..k - 1);
+            }
+        }
+    }
+
     /// The pose of `f` in the root of its tree at time `t_ns`, the root's name and the number of
     /// edges walked. Moving edges are interpolated to `t_ns` between the samples around it. The
     /// first moving edge from `f` up (the odometry) must have a sample at or before `t_ns`
     /// ([`PoseError::NoOdometryYet`]) and one within [`MAX_POSE_AGE_NS`] of it
     /// ([`PoseError::Stale`]); edges above it (e.g. `map` → `odom`, published slowly) hold their
     /// nearest sample outside the span of their samples.
-    pub(super) fn resolve_at(&self, f: &str, t_ns: u64) -> Result<(Iso, String, usize), PoseError> {
+    pub(crate) fn resolve_at(&self, f: &str, t_ns: u64) -> Result<(Iso, String, usize), PoseError> {
         let mut pose = Iso::IDENTITY;
         let mut cur = frame(f);
         let mut odometry_seen = false;

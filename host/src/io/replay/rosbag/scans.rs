@@ -31,7 +31,7 @@ pub struct BagScans {
     pub bad_records: BadRecords,
 }
 
-pub(super) enum Decoded {
+pub(crate) enum Decoded {
     Scan(cdr::LaserScan),
     Odom(cdr::Odometry),
     Tf(Vec<cdr::TransformStamped>),
@@ -39,7 +39,7 @@ pub(super) enum Decoded {
 
 /// A header stamp in nanoseconds; `fallback` (the receive time) when the stamp is zero or
 /// negative (a bag whose publisher did not stamp).
-pub(super) fn stamp_ns(h: &cdr::Header, fallback: u64) -> u64 {
+pub(crate) fn stamp_ns(h: &cdr::Header, fallback: u64) -> u64 {
     let ns = h.stamp.sec as i64 * 1_000_000_000 + h.stamp.nanosec as i64;
     if ns > 0 {
         ns as u64
@@ -176,7 +176,7 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
 }
 
 /// A scan in the replay's terms: the laser's planar pose and ranges by the ROS conventions.
-pub(super) fn scan_record(s: &cdr::LaserScan, pose: &Iso, t_ns: u64, at: Location) -> ScanRecord {
+pub(crate) fn scan_record(s: &cdr::LaserScan, pose: &Iso, t_ns: u64, at: Location) -> ScanRecord {
     let x_axis = pose.rotate([1.0, 0.0, 0.0]);
     let z_axis = pose.rotate([0.0, 0.0, 1.0]);
     let yaw = x_axis[1].atan2(x_axis[0]);

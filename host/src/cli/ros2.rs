@@ -1,0 +1,100 @@
+//! `lives ros2`: the controller on a robot's ROS 2 graph (host::link::ros2, docs/ros2.md).
+
+use super::common::say;
+use host::link::ros2::{self, Ros2Options};
+use host::search::PlannerChoice;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+/// Joins a ROS 2 graph over DDS (no ROS installation) and searches with the robot on it:
+/// subscribes to `scan`, `odom`, `tf`, `tf_static`, `target`, `detections` and `base_blocked`;
+/// publishes `goal_pose`, `plan`, `lives/status`, `lives/lidar_map`, `lives/camera_map` and
+/// `lives/markers` (docs/ros2.md). The domain is `ROS_DOMAIN_ID`; `ROS_LOCALHOST_ONLY=1` or
+/// `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST` keep it on this machine.
+#[derive(clap::Args)]
+pub struct Ros2Args {
+    /// lives, multisensor, nearest, explore-lite or rrt (`lives-gt` needs the simulator's labels).
+    #[arg(long, default_value = "lives")]
+    planner: PlannerChoice,
+    /// Override a controller parameter, e.g. `--set w_dist_per_m=2` (repeatable; `lives params`).
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    set: Vec<String>,
+    /// The int8 classifier blob `lives` runs (default: the committed geometric one).
+    #[arg(long)]
+    model: Option<PathBuf>,
+    /// The grid's lower-left corner `X,Y` in the odometry frame, metres (default: a 51.2 m grid
+    /// centred on the first placed scan).
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    origin: Option<String>,
+    /// Remap a topic, `FROM:=TO` (repeatable), e.g. `--remap scan:=/spot/lidar/scan`.
+    #[arg(long, value_name = "FROM:=TO")]
+    remap: Vec<String>,
+    /// Answer every scan, in stamp order (a simulator that waits for each answer); default: the
+    /// newest scan every 200 ms.
+    #[arg(long)]
+    lockstep: bool,
+    /// Stop after this many seconds of wall time.
+    #[arg(long, value_name = "S")]
+    max_wall: Option<f64>,
+    /// Keep DDS on the loopback interface (as `ROS_LOCALHOST_ONLY=1`).
+    #[arg(long)]
+    localhost: bool,
+    /// Print one JSON object at the end.
+    #[arg(long)]
+    json: bool,
+}
+
+static STOP: AtomicBool = AtomicBool::new(false);
+
+pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
+    let Ros2Args { planner, set, model, origin, remap, lockstep, max_wall, localhost, json } = args;
+    if planner == PlannerChoice::LivesGt {
+        return Err("`lives-gt` runs on the simulator's ground-truth labels, which do not travel over ROS; use `lives`".into());
+    }
+    let mut opts = Ros2Options::from_env()?;
+    opts.lockstep = lockstep;
+    opts.localhost_only |= localhost;
+    for r in &remap {
+        let (from, to) =
+            r.split_once(":=").filter(|(f, t)| !f.is_empty() && !t.is_empty()).ok_or_else(|| format!("--remap {r}: expected FROM:=TO"))?;
+        opts.remap.push((from.to_string(), to.to_string()));
+    }
+    if let Some(s) = max_wall {
+        if !(s.is_finite() && s > 0.0) {
+            return Err(format!("--max-wall {s}: expected a positive number of seconds"));
+        }
+        opts.max_wall = Some(Duration::from_secs_f64(s));
+    }
+    let origin = origin.as_deref().map(host::link::robot::parse_origin).transpose()?;
+    let mut cfg = firmware::Config { scan_matching: false, ..firmware::Config::DEFAULT };
+    for a in &set {
+        host::overrides::apply(&mut cfg, a)?;
+    }
+    let cfg = cfg.with_planner(planner.kind());
+    let blob = if planner.uses_classifier() { host::learn::model::model_option(model.as_deref(), false)? } else { None };
+    if model.is_some() && blob.is_none() {
+        return Err(format!("--model is the classifier `lives` runs; `{planner}` runs none"));
+    }
+    let run = ros2::run(opts, cfg, origin, blob, &STOP).map_err(|e| e.to_string())?;
+    let lat = host::link::Summary::of(&run.answer_us);
+    if json {
+        say!(
+            "{}",
+            serde_json::json!({
+                "end": format!("{:?}", run.end).to_lowercase(),
+                "ticks": run.ticks,
+                "wall_s": run.wall_s,
+                "goals": run.goals,
+                "answer_us": lat,
+                "received": run.received,
+                "rejected": run.rejected,
+            })
+        );
+    } else {
+        say!("{:?} after {} ticks, {} goals, {:.1} s wall", run.end, run.ticks, run.goals.len(), run.wall_s);
+        say!("scan to answer: p50 {:.0} us, p95 {:.0} us; received {:?}; rejected {:?}", lat.p50, lat.p95, run.received, run.rejected);
+    }
+    Ok(if run.end == host::run::End::Found { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}

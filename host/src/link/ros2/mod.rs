@@ -1,0 +1,900 @@
+//! `lives ros2`: the controller on a robot's ROS 2 graph (feature `ros2`; `docs/ros2.md`).
+//!
+//! The graph is a run source ([`Ros2Source`], a [`crate::run::Source`]): scans, odometry,
+//! `tf`/`tf_static`, detections and the base's blocked flag come in over DDS and become the
+//! run's frames; the controller core runs in this process ([`InProcess`]) and its answers go out
+//! as `goal_pose`, `plan`, the two grids, markers and a status topic. Messages are decoded with
+//! the bag reader's CDR code and placed with its frame tree ([`crate::io::replay::rosbag`]): a
+//! live scan is placed as a recorded one, with the transforms interpolated to its stamp, after
+//! the odometry has reached that stamp (as tf2's message filter waits), or within
+//! [`Ros2Options::pose_wait`].
+//!
+//! Time: a frame's time is the scan's header stamp. `--lockstep` answers every scan, in stamp
+//! order (a simulator that waits for each answer gets the run `lives search` would make, tick for
+//! tick); otherwise a tick takes the newest placed scan every [`Ros2Options::period`].
+//!
+//! Safety: the controller's `Stop` and the end of a run publish an empty `plan` and a goal at
+//! the robot's pose (a "zero goal"); so does odometry older than [`Ros2Options::watchdog`]
+//! while a goal is out, with the reason on the status topic. Bad input is counted by name on the
+//! status topic and stderr, and dropped; nothing else stops.
+
+pub mod wire;
+
+use crate::io::range::{EncodedScan, RangeLimits};
+use crate::io::replay::cdr::{self, Transform};
+use crate::io::replay::rosbag::{scan_record, EdgeReject, FrameTree, PoseError, MAX_POSE_AGE_NS};
+use crate::io::replay::Location;
+use crate::run::{drive, Act, Answer, End, Frame, InProcess, Source};
+use firmware::capacity::{CELLS_PER_METER, GRID_CELLS};
+use firmware::grid::{beam_angle, mm_to_meters};
+use firmware::scan::{BeamLabel, RANGE_INVALID, RANGE_NO_RETURN};
+use firmware::{Config, Controller, Mode, Pose2};
+use rustdds::mio1::{Events, Interest, Poll, Token};
+use rustdds::no_key::{DataReader, DataWriter};
+use rustdds::{DomainParticipant, DomainParticipantBuilder, RTPSEntity, StatusEvented, TopicKind, GUID};
+use serde_json::json;
+use std::cell::{Cell, RefCell};
+use std::collections::{BTreeMap, HashMap, VecDeque};
+use std::net::{IpAddr, Ipv4Addr};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+use wire::{marker, Marker, Qos, Raw, RawCdr};
+
+/// How `lives ros2` joins the graph and runs.
+#[derive(Clone, Debug)]
+pub struct Ros2Options {
+    /// The DDS domain (`ROS_DOMAIN_ID`).
+    pub domain: u16,
+    /// Keep DDS on the loopback interface (`ROS_LOCALHOST_ONLY=1`, or
+    /// `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST` as in Jazzy).
+    pub localhost_only: bool,
+    /// Topic remappings `from` → `to` (names as in the table of `docs/ros2.md`).
+    pub remap: Vec<(String, String)>,
+    /// Answer every scan in order (a simulator waiting for each answer) instead of the newest
+    /// every period.
+    pub lockstep: bool,
+    /// The tick period in real time.
+    pub period: Duration,
+    /// How long a scan waits for the odometry to reach its stamp (and for its frame to appear).
+    pub pose_wait: Duration,
+    /// Odometry older than this stops the base.
+    pub watchdog: Duration,
+    /// The grids are published every this much log time (and when the run ends), nanoseconds.
+    pub map_period_ns: u64,
+    /// Stop after this much wall time.
+    pub max_wall: Option<Duration>,
+}
+
+impl Default for Ros2Options {
+    fn default() -> Self {
+        Ros2Options {
+            domain: 0,
+            localhost_only: false,
+            remap: Vec::new(),
+            lockstep: false,
+            period: Duration::from_millis(200),
+            pose_wait: Duration::from_millis(500),
+            watchdog: Duration::from_secs(1),
+            map_period_ns: 1_000_000_000,
+            max_wall: None,
+        }
+    }
+}
+
+impl Ros2Options {
+    /// The domain and interface choice from the environment, as a ROS 2 node reads them.
+    pub fn from_env() -> Result<Self, String> {
+        let mut o = Ros2Options::default();
+        if let Ok(d) = std::env::var("ROS_DOMAIN_ID") {
+            if !d.trim().is_empty() {
+                o.domain = d
+                    .trim()
+                    .parse()
+                    .ok()
+                    .filter(|&d: &u16| d <= 232)
+                    .ok_or_else(|| format!("ROS_DOMAIN_ID `{d}` is not a domain (0-232)"))?;
+            }
+        }
+        o.localhost_only = std::env::var("ROS_LOCALHOST_ONLY").is_ok_and(|v| v == "1")
+            || std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE").is_ok_and(|v| v.eq_ignore_ascii_case("localhost"));
+        Ok(o)
+    }
+
+    fn topic(&self, name: &str) -> String {
+        self.remap.iter().rev().find(|(f, _)| f.trim_start_matches('/') == name).map_or(name.to_string(), |(_, t)| t.clone())
+    }
+}
+
+/// The topics, their types and QoS: `(name, ROS type, QoS)`.
+pub const SUBSCRIBED: [(&str, &str, Qos); 7] = [
+    ("scan", "sensor_msgs/msg/LaserScan", Qos::Sensor),
+    // Odometry is published reliable or best effort: a best-effort reader matches both.
+    ("odom", "nav_msgs/msg/Odometry", Qos::Sensor),
+    ("tf", "tf2_msgs/msg/TFMessage", Qos::Reliable(100)),
+    ("tf_static", "tf2_msgs/msg/TFMessage", Qos::Latched),
+    ("target", "geometry_msgs/msg/PointStamped", Qos::Reliable(10)),
+    ("detections", "vision_msgs/msg/Detection2DArray", Qos::Reliable(10)),
+    ("base_blocked", "std_msgs/msg/Bool", Qos::Reliable(10)),
+];
+
+/// What `lives ros2` publishes: `(name, ROS type, QoS)`.
+pub const PUBLISHED: [(&str, &str, Qos); 6] = [
+    ("goal_pose", "geometry_msgs/msg/PoseStamped", Qos::Reliable(10)),
+    ("plan", "nav_msgs/msg/Path", Qos::Reliable(10)),
+    ("lives/status", "std_msgs/msg/String", Qos::Reliable(100)),
+    ("lives/lidar_map", "nav_msgs/msg/OccupancyGrid", Qos::Latched),
+    ("lives/camera_map", "nav_msgs/msg/OccupancyGrid", Qos::Latched),
+    ("lives/markers", "visualization_msgs/msg/MarkerArray", Qos::Reliable(10)),
+];
+
+const SCAN: usize = 0;
+const ODOM: usize = 1;
+const TF: usize = 2;
+const TF_STATIC: usize = 3;
+const TARGET: usize = 4;
+const DETECTIONS: usize = 5;
+const BLOCKED: usize = 6;
+
+const GOAL: usize = 0;
+const PLAN: usize = 1;
+const STATUS: usize = 2;
+const LIDAR_MAP: usize = 3;
+const CAMERA_MAP: usize = 4;
+const MARKERS: usize = 5;
+
+/// Why `lives ros2` could not join the graph.
+#[derive(Debug)]
+pub struct Ros2Error(pub String);
+
+impl std::fmt::Display for Ros2Error {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+/// A scan waiting for its pose.
+struct Pending {
+    scan: cdr::LaserScan,
+    t_ns: u64,
+    since: Instant,
+}
+
+/// The robot's ROS 2 graph as a run source.
+pub struct Ros2Source {
+    opts: Ros2Options,
+    _dp: DomainParticipant,
+    readers: Vec<DataReader<Raw, RawCdr>>,
+    writers: Vec<DataWriter<Raw, RawCdr>>,
+    topics: Vec<String>,
+    reader_topic: HashMap<GUID, String>,
+    status_listener: rustdds::DomainParticipantStatusListener,
+    poll: Poll,
+    events: Events,
+    tree: FrameTree,
+    pending: VecDeque<Pending>,
+    ready: VecDeque<(Frame, String)>,
+    last_scan_ns: HashMap<String, u64>,
+    detection: bool,
+    blocked: bool,
+    /// Where the base is now (the newest placed scan's pose) and in which frame.
+    pose: Cell<Option<([f64; 3], u64)>>,
+    root: RefCell<String>,
+    received: RefCell<BTreeMap<&'static str, u64>>,
+    rejected: RefCell<BTreeMap<String, u64>>,
+    started: Instant,
+    next_tick: Instant,
+    last_odom: Option<Instant>,
+    /// A goal is out (not stopped since).
+    driving: Cell<bool>,
+    last_map_ns: Cell<Option<u64>>,
+    ticks: Cell<u64>,
+    stop: &'static AtomicBool,
+    /// Wall time from a scan's arrival to its answer's publication, microseconds.
+    pub answer_us: RefCell<Vec<f64>>,
+    arrived: Cell<Option<Instant>>,
+    /// The goals published, `[x, y, yaw]`.
+    pub goals: RefCell<Vec<[f64; 3]>>,
+}
+
+impl Ros2Source {
+    /// Joins domain `opts.domain`: one reader per subscribed topic, one writer per published one.
+    pub fn join(opts: Ros2Options, stop: &'static AtomicBool) -> Result<Self, Ros2Error> {
+        let mut b = DomainParticipantBuilder::new(opts.domain);
+        if opts.localhost_only {
+            b = b.with_only_networks([IpAddr::V4(Ipv4Addr::LOCALHOST)]);
+        }
+        let dp = b.build().map_err(|e| Ros2Error(format!("cannot join DDS domain {}: {e:?}", opts.domain)))?;
+        let status_listener = dp.status_listener();
+        let sub = dp.create_subscriber(&Qos::Reliable(10).policies()).map_err(|e| Ros2Error(format!("DDS subscriber: {e:?}")))?;
+        let publ = dp.create_publisher(&Qos::Reliable(10).policies()).map_err(|e| Ros2Error(format!("DDS publisher: {e:?}")))?;
+        let poll = Poll::new().map_err(|e| Ros2Error(format!("poll: {e}")))?;
+        let mut readers = Vec::new();
+        let mut reader_topic = HashMap::new();
+        let mut topics = Vec::new();
+        for (i, (name, ty, qos)) in SUBSCRIBED.iter().enumerate() {
+            let name = opts.topic(name);
+            let topic = dp
+                .create_topic(wire::dds_topic(&name), wire::dds_type(ty), &qos.policies(), TopicKind::NoKey)
+                .map_err(|e| Ros2Error(format!("topic {name}: {e:?}")))?;
+            let mut r = sub
+                .create_datareader_no_key::<Raw, RawCdr>(&topic, Some(qos.policies()))
+                .map_err(|e| Ros2Error(format!("reader {name}: {e:?}")))?;
+            poll.registry().register(&mut r, Token(i), Interest::READABLE).map_err(|e| Ros2Error(format!("poll: {e}")))?;
+            reader_topic.insert(r.guid(), name.clone());
+            readers.push(r);
+            topics.push(name);
+        }
+        let mut writers = Vec::new();
+        for (name, ty, qos) in PUBLISHED {
+            let name = opts.topic(name);
+            let topic = dp
+                .create_topic(wire::dds_topic(&name), wire::dds_type(ty), &qos.policies(), TopicKind::NoKey)
+                .map_err(|e| Ros2Error(format!("topic {name}: {e:?}")))?;
+            writers.push(
+                publ.create_datawriter_no_key::<Raw, RawCdr>(&topic, Some(qos.policies()))
+                    .map_err(|e| Ros2Error(format!("writer {name}: {e:?}")))?,
+            );
+            topics.push(name);
+        }
+        let now = Instant::now();
+        Ok(Ros2Source {
+            opts,
+            _dp: dp,
+            readers,
+            writers,
+            topics,
+            reader_topic,
+            status_listener,
+            poll,
+            events: Events::with_capacity(64),
+            tree: FrameTree::default(),
+            pending: VecDeque::new(),
+            ready: VecDeque::new(),
+            last_scan_ns: HashMap::new(),
+            detection: false,
+            blocked: false,
+            pose: Cell::new(None),
+            root: RefCell::new("odom".to_string()),
+            received: RefCell::new(BTreeMap::new()),
+            rejected: RefCell::new(BTreeMap::new()),
+            started: now,
+            next_tick: now,
+            last_odom: None,
+            driving: Cell::new(false),
+            last_map_ns: Cell::new(None),
+            ticks: Cell::new(0),
+            stop,
+            answer_us: RefCell::new(Vec::new()),
+            arrived: Cell::new(None),
+            goals: RefCell::new(Vec::new()),
+        })
+    }
+
+    /// Counts a rejection by name, says so on stderr and the status topic.
+    fn reject(&self, name: &str, detail: String) {
+        let n = {
+            let mut r = self.rejected.borrow_mut();
+            let n = r.entry(name.to_string()).or_insert(0);
+            *n += 1;
+            *n
+        };
+        // The first of a kind, then every hundredth: a flood does not flood the log.
+        if n == 1 || n % 100 == 0 {
+            eprintln!("lives ros2: rejected ({name}, {n} so far): {detail}");
+        }
+        let msg = json!({ "kind": "rejection", "name": name, "detail": detail, "rejected": *self.rejected.borrow() });
+        self.write(STATUS, wire::encode_string(&msg.to_string()));
+    }
+
+    fn write(&self, w: usize, data: Vec<u8>) {
+        if let Err(e) = self.writers[w].write(Raw(data), None) {
+            eprintln!("lives ros2: publishing on {} failed: {e:?}", self.topics[SUBSCRIBED.len() + w]);
+        }
+    }
+
+    fn count(&self, topic: &'static str) {
+        *self.received.borrow_mut().entry(topic).or_insert(0) += 1;
+    }
+
+    /// Takes everything the readers hold and the participant's status events.
+    fn take_all(&mut self) {
+        while let Some(ev) = self.status_listener.try_recv_status() {
+            if let rustdds::DomainParticipantStatusEvent::RemoteWriterQosIncompatible { local_reader, requested_qos, offered_qos, .. } = ev
+            {
+                let topic = self.reader_topic.get(&local_reader).cloned().unwrap_or_default();
+                self.reject(
+                    "incompatible-qos",
+                    format!("a publisher on `{topic}` offers QoS {offered_qos:?}, this reader requests {requested_qos:?}: not matched"),
+                );
+            }
+        }
+        for i in 0..self.readers.len() {
+            loop {
+                let sample = match self.readers[i].take_next_sample() {
+                    Ok(Some(s)) => s.into_value(),
+                    Ok(None) => break,
+                    Err(e) => {
+                        self.reject("malformed", format!("{}: {e:?}", self.topics[i]));
+                        continue;
+                    }
+                };
+                self.ingest(i, &sample.0);
+            }
+        }
+    }
+
+    /// One message from reader `i`.
+    fn ingest(&mut self, i: usize, buf: &[u8]) {
+        let wire = cdr::Wire::Cdr;
+        let topic = self.topics[i].clone();
+        let bad = |s: &Self, e: cdr::CdrError| s.reject("malformed", format!("{topic}: {e}"));
+        match i {
+            SCAN => match cdr::decode_laser_scan(buf, wire) {
+                Ok(s) => {
+                    self.count("scan");
+                    self.arrived.set(Some(Instant::now()));
+                    if let Some((name, detail)) = scan_problem(&s) {
+                        self.reject(name, format!("{topic}: {detail}"));
+                        return;
+                    }
+                    let t_ns = stamp(&s.header);
+                    let laser = s.header.frame_id.clone();
+                    if self.last_scan_ns.get(&laser).is_some_and(|&p| t_ns <= p) {
+                        self.reject(
+                            "scan-stamp-backwards",
+                            format!("{topic}: a scan stamped {} s, not after the one before", t_ns as f64 / 1e9),
+                        );
+                        return;
+                    }
+                    self.last_scan_ns.insert(laser, t_ns);
+                    self.pending.push_back(Pending { scan: s, t_ns, since: Instant::now() });
+                }
+                Err(e) => bad(self, e),
+            },
+            ODOM => match cdr::decode_odometry(buf, wire) {
+                Ok(o) => {
+                    self.count("odom");
+                    let t = stamp(&o.header);
+                    match self.tree.push(&o.header.frame_id, &o.child_frame_id, t, &o.pose) {
+                        Ok(()) => self.last_odom = Some(Instant::now()),
+                        Err(r) => self.reject(
+                            edge_reject_name(r),
+                            format!("{topic}: {} → {} at {} s", o.header.frame_id, o.child_frame_id, t as f64 / 1e9),
+                        ),
+                    }
+                }
+                Err(e) => bad(self, e),
+            },
+            TF | TF_STATIC => match cdr::decode_tf_message(buf, wire) {
+                Ok(ts) => {
+                    self.count(if i == TF { "tf" } else { "tf_static" });
+                    for t in ts {
+                        let r = if i == TF {
+                            let r = self.tree.push(&t.header.frame_id, &t.child_frame_id, stamp(&t.header), &t.transform);
+                            if r.is_ok() {
+                                self.last_odom = Some(Instant::now());
+                            }
+                            r
+                        } else {
+                            self.tree.set_static(&t.header.frame_id, &t.child_frame_id, &t.transform)
+                        };
+                        if let Err(r) = r {
+                            self.reject(edge_reject_name(r), format!("{topic}: {} → {}", t.header.frame_id, t.child_frame_id));
+                        }
+                    }
+                }
+                Err(e) => bad(self, e),
+            },
+            TARGET => match wire::decode_point_stamped(buf) {
+                Ok((_, p)) if p.iter().all(|v| v.is_finite()) => {
+                    self.count("target");
+                    self.detection = true;
+                }
+                Ok(_) => self.reject("target-not-finite", format!("{topic}: a target point that is not finite")),
+                Err(e) => bad(self, e),
+            },
+            DETECTIONS => match wire::decode_detection2d_array(buf) {
+                Ok((_, d)) => {
+                    self.count("detections");
+                    if !d.is_empty() {
+                        self.detection = true;
+                    }
+                }
+                Err(e) => bad(self, e),
+            },
+            BLOCKED => match wire::decode_bool(buf) {
+                Ok(b) => {
+                    self.count("base_blocked");
+                    self.blocked |= b;
+                }
+                Err(e) => bad(self, e),
+            },
+            _ => {}
+        }
+    }
+
+    /// Places the scans whose pose is known (or whose wait is over) as frames, in order.
+    fn place(&mut self) {
+        while let Some(p) = self.pending.front() {
+            let laser = p.scan.header.frame_id.clone();
+            let waited = p.since.elapsed() >= self.opts.pose_wait;
+            if !self.tree.knows(&laser) {
+                if !waited {
+                    return;
+                }
+                let p = self.pending.pop_front().expect("a front");
+                self.reject(
+                    "unknown-frame",
+                    format!("scan frame `{laser}` is in no transform (tf, tf_static, odom) after {:?}", self.opts.pose_wait),
+                );
+                drop(p);
+                continue;
+            }
+            let odom_caught_up = self.tree.moving_until(&laser).is_some_and(|t| t >= p.t_ns);
+            if !odom_caught_up && !waited {
+                return;
+            }
+            let p = self.pending.pop_front().expect("a front");
+            match self.tree.resolve_at(&laser, p.t_ns) {
+                Ok((pose, root, depth)) if depth > 0 => {
+                    let r = scan_record(&p.scan, &pose, p.t_ns, Location::Offset(0));
+                    let Some(pose2) = Pose2::from_f64(r.pose[0], r.pose[1], r.pose[2]) else {
+                        self.reject("pose-not-finite", format!("the laser's pose at {} s is not finite", p.t_ns as f64 / 1e9));
+                        continue;
+                    };
+                    let limits = RangeLimits::new(r.range_limits_m[0], r.range_limits_m[1]);
+                    let Some(scan) = encode_ranges(r.angle_min, r.angle_increment, &r.ranges_m, limits) else {
+                        self.reject("scan-angle-increment", "beam angles that are not finite".into());
+                        continue;
+                    };
+                    let frame = Frame {
+                        t_us: p.t_ns / 1000,
+                        pose: Some(pose2),
+                        base_pose: r.pose,
+                        time_s: p.t_ns as f64 / 1e9,
+                        scan,
+                        labels: false,
+                        detection: false,
+                        base_blocked: false,
+                    };
+                    self.ready.push_back((frame, root));
+                    self.tree.forget_before(p.t_ns.saturating_sub(2 * MAX_POSE_AGE_NS));
+                }
+                Ok(_) | Err(PoseError::NoPose) => self.reject("unknown-frame", format!("scan frame `{laser}` has no root frame")),
+                Err(PoseError::NoOdometryYet) => {
+                    self.reject("no-odometry-yet", format!("a scan stamped {} s, before the first odometry", p.t_ns as f64 / 1e9))
+                }
+                Err(PoseError::Stale) => self.reject(
+                    "stale-pose",
+                    format!("no odometry within {} s of the scan stamped {} s", MAX_POSE_AGE_NS as f64 / 1e9, p.t_ns as f64 / 1e9),
+                ),
+            }
+        }
+    }
+
+    /// Publishes a stop: an empty plan and a goal where the robot is.
+    fn publish_stop(&self, t_ns: u64, why: &str) {
+        let root = self.root.borrow().clone();
+        let h = wire::header_at(t_ns, &root);
+        self.write(PLAN, wire::encode_path(&h, &[]));
+        if let Some((p, _)) = self.pose.get() {
+            self.write(GOAL, wire::encode_pose_stamped(&h, &wire::pose_of(p[0], p[1], p[2])));
+        }
+        if self.driving.replace(false) {
+            eprintln!("lives ros2: base stopped: {why}");
+        }
+    }
+
+    /// What the controller answered to `frame`, on the graph: the plan and goal, the status, and
+    /// (every map period and at the end) the grids and markers.
+    pub fn publish(&self, frame: &Frame, answer: &Answer, ctrl: &Controller) {
+        let t_ns = frame.t_us * 1000;
+        let root = self.root.borrow().clone();
+        let h = wire::header_at(t_ns, &root);
+        let mut acts = Vec::new();
+        let mut gaze = None;
+        for a in &answer.acts {
+            match a {
+                Act::Path(path, yaw) if answer.end.is_none() => {
+                    let poses = path_poses(path, *yaw);
+                    self.write(PLAN, wire::encode_path(&h, &poses));
+                    if let (Some(last), Some(p)) = (poses.last(), path.last()) {
+                        self.write(GOAL, wire::encode_pose_stamped(&h, last));
+                        self.goals.borrow_mut().push([p[0], p[1], yaw.unwrap_or(0.0)]);
+                    }
+                    self.driving.set(true);
+                    acts.push("path");
+                }
+                Act::Stop => {
+                    self.publish_stop(t_ns, "the controller said stop");
+                    acts.push("stop");
+                }
+                Act::Gaze(g) => gaze = *g,
+                _ => {}
+            }
+        }
+        if answer.end.is_some() && !acts.contains(&"stop") {
+            self.publish_stop(t_ns, "the search ended");
+            acts.push("stop");
+        }
+        let out = ctrl.goal().map(|g| {
+            let (x, y, th) = g.pose.to_f64();
+            [x, y, th]
+        });
+        let end = answer.end.map(|e| match e {
+            End::Found => "found",
+            End::Exhausted => "exhausted",
+            End::Stopped | End::Source => "stopped",
+        });
+        let status = json!({
+            "kind": "tick",
+            "stamp_ns": t_ns,
+            "tick": self.ticks.replace(self.ticks.get() + 1),
+            "mode": mode_name(ctrl.mode()),
+            "acts": acts,
+            "gaze": gaze,
+            "end": end,
+            "goal": out,
+            "received": *self.received.borrow(),
+            "rejected": *self.rejected.borrow(),
+        });
+        self.write(STATUS, wire::encode_string(&status.to_string()));
+        if let Some(t) = self.arrived.get() {
+            self.answer_us.borrow_mut().push(t.elapsed().as_secs_f64() * 1e6);
+        }
+        let due = self.last_map_ns.get().is_none_or(|t| t_ns >= t.saturating_add(self.opts.map_period_ns));
+        if due || answer.end.is_some() {
+            self.last_map_ns.set(Some(t_ns));
+            self.publish_maps(&h, ctrl);
+            self.publish_markers(&h, frame, ctrl);
+        }
+    }
+
+    fn publish_maps(&self, h: &cdr::Header, ctrl: &Controller) {
+        let geom = ctrl.lidar.geom;
+        let n = GRID_CELLS as u32;
+        let origin = [geom.origin_x.to_num::<f64>(), geom.origin_y.to_num::<f64>()];
+        for (w, grid) in [(LIDAR_MAP, &ctrl.lidar.grid), (CAMERA_MAP, &ctrl.visual.grid)] {
+            let mut data = Vec::with_capacity((n * n) as usize);
+            for y in 0..n as i32 {
+                for x in 0..n as i32 {
+                    data.push(grid.get(x, y).to_ros());
+                }
+            }
+            self.write(w, wire::encode_occupancy_grid(h, 1.0 / CELLS_PER_METER as f32, n, n, origin, &data));
+        }
+    }
+
+    fn publish_markers(&self, h: &cdr::Header, frame: &Frame, ctrl: &Controller) {
+        let geom = ctrl.lidar.geom;
+        let centre = |c: (i32, i32)| {
+            let (x, y) = geom.center_of(c.0, c.1);
+            [x.to_num::<f64>(), y.to_num::<f64>()]
+        };
+        let [px, py, pyaw] = frame.base_pose;
+        let (mut points, mut colors) = (Vec::new(), Vec::new());
+        let beams = ctrl.beams();
+        for (b, (&r, &label)) in beams.ranges_mm.iter().zip(beams.labels.iter()).enumerate() {
+            if r == RANGE_INVALID || r == RANGE_NO_RETURN {
+                continue;
+            }
+            let (m, a) = (mm_to_meters(r).to_num::<f64>(), beam_angle(b).to_radians() + pyaw);
+            points.push([px + m * a.cos(), py + m * a.sin()]);
+            colors.push(match label {
+                BeamLabel::Map => [0.35, 0.47, 0.78, 1.0],
+                BeamLabel::NonMap => [1.0, 0.55, 0.0, 1.0],
+                BeamLabel::Unlabelled => [0.63, 0.63, 0.63, 1.0],
+            });
+        }
+        let mut markers = vec![
+            Marker { action: marker::DELETE_ALL, ..Marker::default() },
+            Marker {
+                ns: "scan".into(),
+                kind: marker::POINTS,
+                scale: [0.05, 0.05, 0.0],
+                color: [1.0; 4],
+                points,
+                colors,
+                ..Marker::default()
+            },
+        ];
+        let (mut lidar, mut camera) = (Vec::new(), Vec::new());
+        for f in ctrl.frontiers.frontiers() {
+            let p = centre(f.anchor);
+            if f.source == firmware::frontier::FrontierSource::Lidar {
+                lidar.push(p)
+            } else {
+                camera.push(p)
+            }
+        }
+        markers.push(Marker {
+            ns: "frontiers/lidar".into(),
+            kind: marker::SPHERE_LIST,
+            scale: [0.3; 3],
+            color: [0.0, 0.8, 0.9, 0.8],
+            points: lidar,
+            ..Marker::default()
+        });
+        markers.push(Marker {
+            ns: "frontiers/camera".into(),
+            id: 1,
+            kind: marker::SPHERE_LIST,
+            scale: [0.3; 3],
+            color: [0.8, 0.2, 0.9, 0.8],
+            points: camera,
+            ..Marker::default()
+        });
+        for (i, v) in ctrl.planner.candidates.iter().enumerate() {
+            let [x, y] = centre(v.cell);
+            markers.push(Marker {
+                ns: "candidates".into(),
+                id: i as i32,
+                kind: marker::ARROW,
+                pose: Some(wire::pose_of(x, y, v.heading.to_radians())),
+                scale: [0.5, 0.08, 0.08],
+                color: [0.2, 0.8, 0.2, 0.9],
+                ..Marker::default()
+            });
+        }
+        self.write(MARKERS, wire::encode_marker_array(h, &markers));
+    }
+
+    fn wait(&mut self, timeout: Duration) {
+        let _ = self.poll.poll(&mut self.events, Some(timeout));
+        self.take_all();
+        self.place();
+    }
+
+    /// The rejections so far, by name.
+    pub fn rejected(&self) -> BTreeMap<String, u64> {
+        self.rejected.borrow().clone()
+    }
+
+    /// Messages received so far, by topic.
+    pub fn received(&self) -> BTreeMap<&'static str, u64> {
+        self.received.borrow().clone()
+    }
+}
+
+impl Source for Ros2Source {
+    fn sense(&mut self, _tick: u32) -> Option<Frame> {
+        loop {
+            if self.stop.load(Ordering::Relaxed) || self.opts.max_wall.is_some_and(|m| self.started.elapsed() >= m) {
+                return None;
+            }
+            // The watchdog: odometry stopped while a goal is out.
+            if self.driving.get() && self.last_odom.is_some_and(|t| t.elapsed() >= self.opts.watchdog) {
+                let t_ns = self.pose.get().map_or(0, |(_, t)| t);
+                self.publish_stop(t_ns, "no odometry for the watchdog period");
+                let msg =
+                    json!({ "kind": "stop", "reason": "stale-odometry", "detail": format!("no odometry for {:?}", self.opts.watchdog) });
+                self.write(STATUS, wire::encode_string(&msg.to_string()));
+            }
+            let due = self.opts.lockstep || Instant::now() >= self.next_tick;
+            if due && !self.ready.is_empty() {
+                let (mut frame, root) = if self.opts.lockstep {
+                    self.ready.pop_front().expect("not empty")
+                } else {
+                    // Real time: the newest placed scan; older ones are superseded.
+                    let newest = self.ready.pop_back().expect("not empty");
+                    self.ready.clear();
+                    crate::link::advance_deadline(&mut self.next_tick, self.opts.period, Instant::now());
+                    newest
+                };
+                frame.detection = std::mem::take(&mut self.detection);
+                frame.base_blocked = std::mem::take(&mut self.blocked);
+                self.pose.set(Some((frame.base_pose, frame.t_us * 1000)));
+                *self.root.borrow_mut() = root;
+                return Some(frame);
+            }
+            let wait = if self.opts.lockstep {
+                Duration::from_millis(50)
+            } else {
+                self.next_tick.saturating_duration_since(Instant::now()).clamp(Duration::from_millis(1), Duration::from_millis(50))
+            };
+            self.wait(wait);
+        }
+    }
+
+    fn act(&mut self, _answer: &Answer) -> bool {
+        // The answer went out in `publish` (the observer), with the status that belongs to it.
+        true
+    }
+}
+
+/// A scan that cannot be used as it is: `(rejection name, detail)`.
+fn scan_problem(s: &cdr::LaserScan) -> Option<(&'static str, String)> {
+    if s.ranges.is_empty() {
+        return Some(("scan-empty", "a scan with no ranges".into()));
+    }
+    if s.ranges.len() > 1 && !(s.angle_increment.is_finite() && s.angle_increment != 0.0) {
+        return Some(("scan-angle-increment", format!("angle_increment {} with {} ranges", s.angle_increment, s.ranges.len())));
+    }
+    if !s.angle_min.is_finite() {
+        return Some(("scan-angle-increment", format!("angle_min {}", s.angle_min)));
+    }
+    if !s.intensities.is_empty() && s.intensities.len() != s.ranges.len() {
+        return Some(("scan-length-mismatch", format!("{} ranges but {} intensities", s.ranges.len(), s.intensities.len())));
+    }
+    let span = s.angle_increment as f64 * (s.ranges.len() - 1) as f64;
+    let declared = s.angle_max as f64 - s.angle_min as f64;
+    if s.angle_max.is_finite() && (span - declared).abs() > (s.angle_increment as f64).abs() * 1.5 + 1e-3 {
+        return Some((
+            "scan-length-mismatch",
+            format!("{} ranges at {} rad span {span:.4} rad, angle_max − angle_min is {declared:.4}", s.ranges.len(), s.angle_increment),
+        ));
+    }
+    None
+}
+
+/// A header's stamp in nanoseconds, as it is (zero is a simulator's first tick; a stamp before
+/// 1970 counts as zero).
+fn stamp(h: &cdr::Header) -> u64 {
+    (h.stamp.sec as i64 * 1_000_000_000 + h.stamp.nanosec as i64).max(0) as u64
+}
+
+fn edge_reject_name(r: EdgeReject) -> &'static str {
+    match r {
+        EdgeReject::Invalid => "pose-not-finite",
+        EdgeReject::Loop => "tf-loop",
+        EdgeReject::Backwards => "stamp-backwards",
+        EdgeReject::Jump => "odometry-jump",
+    }
+}
+
+/// A scan in the core's encoding (more beams than a frame carries are decimated, as for the
+/// base adapter's scans).
+fn encode_ranges(angle_min: f64, angle_increment: f64, ranges: &[f32], limits: RangeLimits) -> Option<EncodedScan> {
+    let k = ranges.len().div_ceil(firmware::protocol::MAX_WIRE_BEAMS).max(1);
+    EncodedScan::new(angle_min, angle_increment * k as f64, ranges.iter().step_by(k).map(|&r| r as f64), &limits)
+}
+
+/// A path's poses: each facing the next point, the last facing `yaw` (the goal's heading).
+fn path_poses(path: &[[f64; 2]], yaw: Option<f64>) -> Vec<Transform> {
+    let n = path.len();
+    (0..n)
+        .map(|i| {
+            let heading = if i + 1 < n {
+                (path[i + 1][1] - path[i][1]).atan2(path[i + 1][0] - path[i][0])
+            } else {
+                yaw.unwrap_or_else(|| if n > 1 { (path[n - 1][1] - path[n - 2][1]).atan2(path[n - 1][0] - path[n - 2][0]) } else { 0.0 })
+            };
+            wire::pose_of(path[i][0], path[i][1], heading)
+        })
+        .collect()
+}
+
+fn mode_name(m: Mode) -> &'static str {
+    match m {
+        Mode::Idle => "idle",
+        Mode::Exploring => "exploring",
+        Mode::TargetFound => "target-found",
+        Mode::Exhausted => "exhausted",
+        Mode::Stopped => "stopped",
+    }
+}
+
+/// A run's outcome.
+pub struct Ros2Run {
+    /// How it ended.
+    pub end: End,
+    /// Ticks answered.
+    pub ticks: u32,
+    /// Wall time, seconds.
+    pub wall_s: f64,
+    /// Goals published, `[x, y, yaw]`.
+    pub goals: Vec<[f64; 3]>,
+    /// From a scan's arrival to its answer's publication, microseconds, every tick.
+    pub answer_us: Vec<f64>,
+    /// Messages received by topic.
+    pub received: BTreeMap<&'static str, u64>,
+    /// Rejections by name.
+    pub rejected: BTreeMap<String, u64>,
+}
+
+/// Runs the controller configured by `cfg` (its grid's lower-left corner at `origin`, or
+/// centred on the first placed scan; classifier `model`) on the graph until the target is found,
+/// the search is exhausted, `stop` is set or `opts.max_wall` passes.
+pub fn run(
+    opts: Ros2Options,
+    cfg: Config,
+    origin: Option<[f64; 2]>,
+    model: Option<&'static [u8]>,
+    stop: &'static AtomicBool,
+) -> Result<Ros2Run, Ros2Error> {
+    let mut source = Ros2Source::join(opts, stop)?;
+    // The grid is placed once the first scan is: centred on it unless told where.
+    let Some(first) = source.sense(0) else {
+        return Ok(source.finish(End::Source, 0));
+    };
+    let [ox, oy] = origin.unwrap_or_else(|| crate::run::centred_origin([first.base_pose[0], first.base_pose[1]]));
+    let bad_origin = || Ros2Error(format!("the grid origin ({ox}, {oy}) is out of the controller's range"));
+    let cfg = Config {
+        origin_x_m: fixed_point::meters_from_f64(ox).ok_or_else(bad_origin)?,
+        origin_y_m: fixed_point::meters_from_f64(oy).ok_or_else(bad_origin)?,
+        ..cfg
+    };
+    eprintln!("lives ros2: first scan placed in `{}`; grid origin ({ox:.1}, {oy:.1})", source.root.borrow());
+    let mut ctrl = Box::new(Controller::new(cfg));
+    if let Some(blob) = model {
+        ctrl.set_model(blob).map_err(|e| Ros2Error(format!("the classifier model does not validate: {e}")))?;
+    }
+    let root = source.root.borrow().clone();
+    source.ready.push_front((first, root));
+    let mut brain = InProcess::new(ctrl);
+    let mut publish = |src: &Ros2Source, frame: &Frame, brain: &InProcess, answer: &Answer| src.publish(frame, answer, &brain.ctrl);
+    let ended = drive(&mut source, &mut brain, &mut [&mut publish]).unwrap_or_else(|e| match e {});
+    if ended.end == End::Source {
+        // Told to stop or out of time: the base stands.
+        let t_ns = source.pose.get().map_or(0, |(_, t)| t);
+        source.publish_stop(t_ns, "lives ros2 is shutting down");
+        let msg = json!({ "kind": "stop", "reason": "shutdown", "detail": "lives ros2 stopped" });
+        source.write(STATUS, wire::encode_string(&msg.to_string()));
+    }
+    Ok(source.finish(ended.end, ended.ticks))
+}
+
+impl Ros2Source {
+    fn finish(self, end: End, ticks: u32) -> Ros2Run {
+        // Let reliable writers deliver the last messages before the participant goes.
+        std::thread::sleep(Duration::from_millis(300));
+        Ros2Run {
+            end,
+            ticks,
+            wall_s: self.started.elapsed().as_secs_f64(),
+            goals: self.goals.take(),
+            answer_us: self.answer_us.take(),
+            received: self.received(),
+            rejected: self.rejected(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scan(n: usize, inc: f32, intensities: usize) -> cdr::LaserScan {
+        cdr::LaserScan {
+            header: wire::header_at(1, "laser"),
+            angle_min: -1.0,
+            angle_max: -1.0 + inc * (n as f32 - 1.0),
+            angle_increment: inc,
+            time_increment: 0.0,
+            scan_time: 0.0,
+            range_min: 0.1,
+            range_max: 10.0,
+            ranges: vec![1.0; n],
+            intensities: vec![1.0; intensities],
+        }
+    }
+
+    #[test]
+    fn bad_scans_are_named() {
+        assert_eq!(scan_problem(&scan(10, 0.01, 10)), None);
+        assert_eq!(scan_problem(&scan(10, 0.01, 0)), None);
+        assert_eq!(scan_problem(&scan(10, 0.0, 0)).unwrap().0, "scan-angle-increment");
+        assert_eq!(scan_problem(&scan(10, f32::NAN, 0)).unwrap().0, "scan-angle-increment");
+        assert_eq!(scan_problem(&scan(10, 0.01, 7)).unwrap().0, "scan-length-mismatch");
+        assert_eq!(scan_problem(&scan(0, 0.01, 0)).unwrap().0, "scan-empty");
+        let mut s = scan(10, 0.01, 0);
+        s.angle_max = 2.0;
+        assert_eq!(scan_problem(&s).unwrap().0, "scan-length-mismatch");
+    }
+
+    #[test]
+    fn a_path_faces_along_itself_and_ends_at_the_goal_heading() {
+        let p = path_poses(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], Some(3.0));
+        let yaw = |t: &Transform| 2.0 * t.rotation[2].atan2(t.rotation[3]);
+        assert!((yaw(&p[0]) - 0.0).abs() < 1e-12);
+        assert!((yaw(&p[1]) - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        assert!((yaw(&p[2]) - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn remapping_and_the_environment() {
+        let o = Ros2Options { remap: vec![("scan".into(), "/spot/lidar/scan".into())], ..Ros2Options::default() };
+        assert_eq!(o.topic("scan"), "/spot/lidar/scan");
+        assert_eq!(o.topic("odom"), "odom");
+    }
+}
