@@ -35,9 +35,16 @@ pub struct Ros2Args {
     /// newest scan every 200 ms.
     #[arg(long)]
     lockstep: bool,
+    /// Never end the run: search again when exhausted, as `lives replay` does (a robot driven by
+    /// someone else, a log played back); stop it with --max-wall or a signal.
+    #[arg(long)]
+    continuous: bool,
     /// Stop after this many seconds of wall time.
     #[arg(long, value_name = "S")]
     max_wall: Option<f64>,
+    /// Stop when no scan has arrived for this many seconds (after the first).
+    #[arg(long, value_name = "S")]
+    max_idle: Option<f64>,
     /// Keep DDS on the loopback interface (as `ROS_LOCALHOST_ONLY=1`).
     #[arg(long)]
     localhost: bool,
@@ -49,24 +56,21 @@ pub struct Ros2Args {
 static STOP: AtomicBool = AtomicBool::new(false);
 
 pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
-    let Ros2Args { planner, set, model, origin, remap, lockstep, max_wall, localhost, json } = args;
+    let Ros2Args { planner, set, model, origin, remap, lockstep, continuous, max_wall, max_idle, localhost, json } = args;
     if planner == PlannerChoice::LivesGt {
         return Err("`lives-gt` runs on the simulator's ground-truth labels, which do not travel over ROS; use `lives`".into());
     }
     let mut opts = Ros2Options::from_env()?;
     opts.lockstep = lockstep;
+    opts.continuous = continuous;
     opts.localhost_only |= localhost;
     for r in &remap {
         let (from, to) =
             r.split_once(":=").filter(|(f, t)| !f.is_empty() && !t.is_empty()).ok_or_else(|| format!("--remap {r}: expected FROM:=TO"))?;
         opts.remap.push((from.to_string(), to.to_string()));
     }
-    if let Some(s) = max_wall {
-        if !(s.is_finite() && s > 0.0) {
-            return Err(format!("--max-wall {s}: expected a positive number of seconds"));
-        }
-        opts.max_wall = Some(Duration::from_secs_f64(s));
-    }
+    opts.max_wall = max_wall.map(|s| positive_secs("--max-wall", s)).transpose()?;
+    opts.max_idle = max_idle.map(|s| positive_secs("--max-idle", s)).transpose()?;
     let origin = origin.as_deref().map(host::link::robot::parse_origin).transpose()?;
     let mut cfg = firmware::Config { scan_matching: false, ..firmware::Config::DEFAULT };
     for a in &set {
@@ -97,4 +101,8 @@ pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
         say!("scan to answer: p50 {:.0} us, p95 {:.0} us; received {:?}; rejected {:?}", lat.p50, lat.p95, run.received, run.rejected);
     }
     Ok(if run.end == host::run::End::Found { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+fn positive_secs(flag: &str, s: f64) -> Result<Duration, String> {
+    (s.is_finite() && s > 0.0).then(|| Duration::from_secs_f64(s)).ok_or_else(|| format!("{flag} {s}: expected a positive number of seconds"))
 }

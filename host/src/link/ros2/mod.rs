@@ -63,6 +63,11 @@ pub struct Ros2Options {
     pub map_period_ns: u64,
     /// Stop after this much wall time.
     pub max_wall: Option<Duration>,
+    /// Stop when no scan has arrived for this long (after the first).
+    pub max_idle: Option<Duration>,
+    /// Never end the run: start the search again when it is exhausted (every replanning
+    /// interval at most), as `lives replay` does: a robot driven by someone else, a log played.
+    pub continuous: bool,
 }
 
 impl Default for Ros2Options {
@@ -77,6 +82,8 @@ impl Default for Ros2Options {
             watchdog: Duration::from_secs(1),
             map_period_ns: 1_000_000_000,
             max_wall: None,
+            continuous: false,
+            max_idle: None,
         }
     }
 }
@@ -272,6 +279,16 @@ impl Ros2Source {
 
     /// Counts a rejection by name, says so on stderr and the status topic.
     fn reject(&self, name: &str, detail: String) {
+        self.reject_at(name, detail, None)
+    }
+
+    /// A scan's rejection: the status message carries its stamp (a player in lockstep waits for
+    /// an answer or a rejection of each scan).
+    fn reject_scan(&self, name: &str, detail: String, t_ns: u64) {
+        self.reject_at(name, detail, Some(t_ns))
+    }
+
+    fn reject_at(&self, name: &str, detail: String, t_ns: Option<u64>) {
         let n = {
             let mut r = self.rejected.borrow_mut();
             let n = r.entry(name.to_string()).or_insert(0);
@@ -282,7 +299,7 @@ impl Ros2Source {
         if n == 1 || n % 100 == 0 {
             eprintln!("lives ros2: rejected ({name}, {n} so far): {detail}");
         }
-        let msg = json!({ "kind": "rejection", "name": name, "detail": detail, "rejected": *self.rejected.borrow() });
+        let msg = json!({ "kind": "rejection", "name": name, "detail": detail, "stamp_ns": t_ns, "rejected": *self.rejected.borrow() });
         self.write(STATUS, wire::encode_string(&msg.to_string()));
     }
 
@@ -333,11 +350,11 @@ impl Ros2Source {
                 Ok(s) => {
                     self.count("scan");
                     self.arrived.set(Some(Instant::now()));
+                    let t_ns = stamp(&s.header);
                     if let Some((name, detail)) = scan_problem(&s) {
-                        self.reject(name, format!("{topic}: {detail}"));
+                        self.reject_scan(name, format!("{topic}: {detail}"), t_ns);
                         return;
                     }
-                    let t_ns = stamp(&s.header);
                     let laser = s.header.frame_id.clone();
                     if self.last_scan_ns.get(&laser).is_some_and(|&p| t_ns <= p) {
                         self.reject(
@@ -418,33 +435,33 @@ impl Ros2Source {
         while let Some(p) = self.pending.front() {
             let laser = p.scan.header.frame_id.clone();
             let waited = p.since.elapsed() >= self.opts.pose_wait;
-            if !self.tree.knows(&laser) {
-                if !waited {
-                    return;
-                }
-                let p = self.pending.pop_front().expect("a front");
-                self.reject(
-                    "unknown-frame",
-                    format!("scan frame `{laser}` is in no transform (tf, tf_static, odom) after {:?}", self.opts.pose_wait),
-                );
-                drop(p);
-                continue;
-            }
-            let odom_caught_up = self.tree.moving_until(&laser).is_some_and(|t| t >= p.t_ns);
-            if !odom_caught_up && !waited {
+            let until = self.tree.moving_until(&laser);
+            if !until.is_some_and(|t| t >= p.t_ns) && !waited {
                 return;
             }
             let p = self.pending.pop_front().expect("a front");
+            let at = p.t_ns as f64 / 1e9;
+            if !self.tree.knows(&laser) {
+                let wait = self.opts.pose_wait;
+                self.reject_scan("unknown-frame", format!("scan frame `{laser}` is in no transform (tf, tf_static, odom) after {wait:?}"), p.t_ns);
+                continue;
+            }
+            if until.is_none() {
+                // Only fixed transforms place it: without odometry it would be drawn at the
+                // mount's offset from a made-up origin.
+                self.reject_scan("no-odometry-yet", format!("no odometry or tf moves scan frame `{laser}` (scan at {at} s)"), p.t_ns);
+                continue;
+            }
             match self.tree.resolve_at(&laser, p.t_ns) {
                 Ok((pose, root, depth)) if depth > 0 => {
                     let r = scan_record(&p.scan, &pose, p.t_ns, Location::Offset(0));
                     let Some(pose2) = Pose2::from_f64(r.pose[0], r.pose[1], r.pose[2]) else {
-                        self.reject("pose-not-finite", format!("the laser's pose at {} s is not finite", p.t_ns as f64 / 1e9));
+                        self.reject_scan("pose-not-finite", format!("the laser's pose at {at} s is not finite"), p.t_ns);
                         continue;
                     };
                     let limits = RangeLimits::new(r.range_limits_m[0], r.range_limits_m[1]);
                     let Some(scan) = encode_ranges(r.angle_min, r.angle_increment, &r.ranges_m, limits) else {
-                        self.reject("scan-angle-increment", "beam angles that are not finite".into());
+                        self.reject_scan("scan-angle-increment", "beam angles that are not finite".into(), p.t_ns);
                         continue;
                     };
                     let frame = Frame {
@@ -659,7 +676,8 @@ impl Ros2Source {
 impl Source for Ros2Source {
     fn sense(&mut self, _tick: u32) -> Option<Frame> {
         loop {
-            if self.stop.load(Ordering::Relaxed) || self.opts.max_wall.is_some_and(|m| self.started.elapsed() >= m) {
+            let idle = self.opts.max_idle.is_some_and(|m| self.arrived.get().is_some_and(|t| t.elapsed() >= m));
+            if idle || self.stop.load(Ordering::Relaxed) || self.opts.max_wall.is_some_and(|m| self.started.elapsed() >= m) {
                 return None;
             }
             // The watchdog: odometry stopped while a goal is out.
@@ -821,12 +839,15 @@ pub fn run(
     }
     let root = source.root.borrow().clone();
     source.ready.push_front((first, root));
-    let mut brain = InProcess::new(ctrl);
+    let continuous = source.opts.continuous;
+    let mut brain = if continuous { InProcess::restarting(ctrl, cfg.replan_interval_us) } else { InProcess::new(ctrl) };
     let mut publish = |src: &Ros2Source, frame: &Frame, brain: &InProcess, answer: &Answer| src.publish(frame, answer, &brain.ctrl);
     let ended = drive(&mut source, &mut brain, &mut [&mut publish]).unwrap_or_else(|e| match e {});
+    // The final grids (latched: a late subscriber gets them too).
+    let t_ns = source.pose.get().map_or(0, |(_, t)| t);
+    source.publish_maps(&wire::header_at(t_ns, &source.root.borrow()), &brain.ctrl);
     if ended.end == End::Source {
         // Told to stop or out of time: the base stands.
-        let t_ns = source.pose.get().map_or(0, |(_, t)| t);
         source.publish_stop(t_ns, "lives ros2 is shutting down");
         let msg = json!({ "kind": "stop", "reason": "shutdown", "detail": "lives ros2 stopped" });
         source.write(STATUS, wire::encode_string(&msg.to_string()));
