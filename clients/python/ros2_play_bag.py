@@ -124,6 +124,7 @@ def main():
             if not isinstance(s, m.String):
                 continue  # a writer gone (an invalid sample carries no data)
             d = json.loads(s.data)
+            if os.environ.get("PLAY_DEBUG"): print(s.data[:200], file=sys.stderr)
             if d.get("kind") == "rejection":
                 rejected[d["name"]] = rejected.get(d["name"], 0) + 1
             if d.get("stamp_ns") is not None and d.get("kind") in ("tick", "rejection"):

@@ -477,14 +477,12 @@ impl Ros2Source {
                     self.ready.push_back((frame, root));
                     self.tree.forget_before(p.t_ns.saturating_sub(2 * MAX_POSE_AGE_NS));
                 }
-                Ok(_) | Err(PoseError::NoPose) => self.reject("unknown-frame", format!("scan frame `{laser}` has no root frame")),
-                Err(PoseError::NoOdometryYet) => {
-                    self.reject("no-odometry-yet", format!("a scan stamped {} s, before the first odometry", p.t_ns as f64 / 1e9))
+                Ok(_) | Err(PoseError::NoPose) => self.reject_scan("unknown-frame", format!("scan frame `{laser}` has no root frame"), p.t_ns),
+                Err(PoseError::NoOdometryYet) => self.reject_scan("no-odometry-yet", format!("a scan stamped {at} s, before the first odometry"), p.t_ns),
+                Err(PoseError::Stale) => {
+                    let age = MAX_POSE_AGE_NS as f64 / 1e9;
+                    self.reject_scan("stale-pose", format!("no odometry within {age} s of the scan stamped {at} s"), p.t_ns)
                 }
-                Err(PoseError::Stale) => self.reject(
-                    "stale-pose",
-                    format!("no odometry within {} s of the scan stamped {} s", MAX_POSE_AGE_NS as f64 / 1e9, p.t_ns as f64 / 1e9),
-                ),
             }
         }
     }
