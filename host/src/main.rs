@@ -25,6 +25,7 @@ enum Cmd {
     Soak(cli::soak::SoakArgs),
     Node(cli::node::NodeArgs),
     Bridge(cli::bridge::BridgeArgs),
+    SimServe(cli::sim_serve::SimServeArgs),
     #[cfg(feature = "train")]
     Train(cli::train::TrainArgs),
     #[cfg(feature = "train")]
@@ -92,6 +93,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Soak(args) => cli::soak::run(args),
         Cmd::Node(args) => cli::node::run(args),
         Cmd::Bridge(args) => cli::bridge::run(args),
+        Cmd::SimServe(args) => cli::sim_serve::run(args),
         #[cfg(feature = "train")]
         Cmd::Train(args) => cli::train::train(args),
         #[cfg(feature = "train")]

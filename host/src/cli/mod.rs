@@ -9,6 +9,7 @@ pub mod dataset;
 pub mod eval;
 pub mod node;
 pub mod search;
+pub mod sim_serve;
 pub mod soak;
 pub mod trace;
 #[cfg(feature = "train")]
