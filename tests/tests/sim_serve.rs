@@ -130,7 +130,8 @@ fn frame(v: &Value, hello: &Value) -> Frame {
         pose: if p.is_null() { None } else { Pose2::from_f64(f(&p[0]), f(&p[1]), f(&p[2])) },
         base_pose: [0.0; 3],
         time_s: 0.0,
-        scan: EncodedScan::new(f(&s["angle_min"]), f(&s["angle_increment"]), ranges, &limits).unwrap(),
+        // As float32, as a LaserScan carries them.
+        scan: EncodedScan::new(f(&s["angle_min"]) as f32 as f64, f(&s["angle_increment"]) as f32 as f64, ranges, &limits).unwrap(),
         labels: false,
         detection: v["detection"].as_bool().unwrap(),
         base_blocked: v["blocked"].as_bool().unwrap(),
