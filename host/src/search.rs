@@ -415,12 +415,7 @@ pub fn run(spec: &SearchSpec, progress: impl FnMut(f64)) -> SearchRun {
     run_with(&spec, Box::new(Controller::new(cfg)), progress, |_| {})
 }
 
-fn run_with(
-    spec: &SearchSpec,
-    ctrl: Box<Controller>,
-    mut progress: impl FnMut(f64),
-    mut observe: impl FnMut(&TickView<'_>),
-) -> SearchRun {
+fn run_with(spec: &SearchSpec, ctrl: Box<Controller>, mut progress: impl FnMut(f64), mut observe: impl FnMut(&TickView<'_>)) -> SearchRun {
     let classifier = spec.classifier();
     let mut source = spec.sim_source();
     let mut brain = InProcess::new(ctrl);

@@ -64,14 +64,19 @@ fn a_brain_that_always_stops_runs_to_the_time_limit_and_a_bad_answer_is_refused(
         assert_eq!(v["t_us"], ticks * 200_000);
         let (pose, quat) = (&v["pose"], &v["quat"]);
         let yaw = pose[2].as_f64().unwrap();
-        assert!((quat[0].as_f64().unwrap() - (yaw / 2.0).sin()).abs() < 1e-12 && (quat[1].as_f64().unwrap() - (yaw / 2.0).cos()).abs() < 1e-12);
+        assert!(
+            (quat[0].as_f64().unwrap() - (yaw / 2.0).sin()).abs() < 1e-12 && (quat[1].as_f64().unwrap() - (yaw / 2.0).cos()).abs() < 1e-12
+        );
         assert!(v["scan"]["ranges_mm"].as_array().unwrap().len() > 100);
         writeln!(stdin, r#"{{"acts":[{{"stop":true}}],"end":null}}"#).unwrap();
         ticks += 1;
     };
     assert!(child.wait().unwrap().success());
     // Ten ticks of 200 ms, standing still, to the time limit.
-    assert_eq!((result["ticks"].as_u64(), result["time_s"].as_f64(), result["outcome"].as_str()), (Some(10), Some(2.0), Some("time-limit")));
+    assert_eq!(
+        (result["ticks"].as_u64(), result["time_s"].as_f64(), result["outcome"].as_str()),
+        (Some(10), Some(2.0), Some("time-limit"))
+    );
     assert_eq!((result["path_m"].as_f64(), result["goals"].as_u64(), result["found"].as_bool()), (Some(0.0), Some(0), Some(false)));
     assert_eq!(ticks, 10);
 

@@ -76,7 +76,9 @@ pub fn lives_ros2_args(spec: &SearchSpec) -> Result<(Vec<String>, [f64; 2]), Str
         args.extend(["--set".to_string(), set]);
     }
     if check != cfg {
-        return Err(format!("the controller's configuration cannot be written as `lives ros2` arguments ({args:?}):\n{cfg:?}\nvs\n{check:?}"));
+        return Err(format!(
+            "the controller's configuration cannot be written as `lives ros2` arguments ({args:?}):\n{cfg:?}\nvs\n{check:?}"
+        ));
     }
     Ok((args, origin))
 }
@@ -163,7 +165,8 @@ fn snapped(v: &Value, what: &str) -> Result<Option<f64>, String> {
 
 /// One act: `{"path":[[x,y],…],"yaw":RAD|null}`, `{"stop":true}` or `{"gaze":RAD|null}`.
 fn parse_act(v: &Value) -> Result<Act, String> {
-    let unknown = || format!("unknown act {v}: expected {{\"path\":[[x,y],…],\"yaw\":RAD|null}}, {{\"stop\":true}} or {{\"gaze\":RAD|null}}");
+    let unknown =
+        || format!("unknown act {v}: expected {{\"path\":[[x,y],…],\"yaw\":RAD|null}}, {{\"stop\":true}} or {{\"gaze\":RAD|null}}");
     let o = v.as_object().ok_or_else(unknown)?;
     let keys: Vec<&str> = o.keys().map(String::as_str).collect();
     match keys[..] {
@@ -211,8 +214,12 @@ mod tests {
     #[test]
     fn answers_parse_and_bad_ones_are_named() {
         let (mut g, mut b) = (0, 0);
-        let a = parse_answer(r#"{"acts":[{"path":[[1,2],[3.5,4]],"yaw":0.5},{"stop":true},{"gaze":null}],"end":null,"goals":3}"#, &mut g, &mut b)
-            .unwrap();
+        let a = parse_answer(
+            r#"{"acts":[{"path":[[1,2],[3.5,4]],"yaw":0.5},{"stop":true},{"gaze":null}],"end":null,"goals":3}"#,
+            &mut g,
+            &mut b,
+        )
+        .unwrap();
         let yaw = BinaryAngle::from_radians(0.5).unwrap().to_radians();
         assert_eq!(a.acts, vec![Act::Path(vec![[1.0, 2.0], [3.5, 4.0]], Some(yaw)), Act::Stop, Act::Gaze(None)]);
         assert_eq!((a.end, g, b), (None, 3, 0));
