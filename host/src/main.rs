@@ -27,6 +27,7 @@ enum Cmd {
     Bridge(cli::bridge::BridgeArgs),
     #[cfg(feature = "ros2")]
     Ros2(cli::ros2::Ros2Args),
+    SimServe(cli::sim_serve::SimServeArgs),
     #[cfg(feature = "train")]
     Train(cli::train::TrainArgs),
     #[cfg(feature = "train")]
@@ -96,6 +97,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Bridge(args) => cli::bridge::run(args),
         #[cfg(feature = "ros2")]
         Cmd::Ros2(args) => cli::ros2::run(args),
+        Cmd::SimServe(args) => cli::sim_serve::run(args),
         #[cfg(feature = "train")]
         Cmd::Train(args) => cli::train::train(args),
         #[cfg(feature = "train")]

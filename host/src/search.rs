@@ -167,6 +167,23 @@ impl SearchSpec {
     pub fn scenario_label(&self) -> &'static str {
         self.scenario.map_or("file", Scenario::as_str)
     }
+
+    /// The controller labels the scans itself: the planner runs a classifier and a model is given.
+    pub fn classifier(&self) -> bool {
+        self.planner.uses_classifier() && self.model.is_some()
+    }
+
+    /// The simulator gives the brain its ground-truth labels (`lives-gt`, and `lives` without a
+    /// model).
+    pub fn sim_labels(&self) -> bool {
+        !self.classifier() && self.planner.uses_labels()
+    }
+
+    /// This search's simulator as the run loop's source: lockstep, in the odometry frame, until
+    /// the world's time limit, with the labels of [`SearchSpec::sim_labels`].
+    pub fn sim_source(&self) -> SimSource {
+        SimSource::new(Sim::new(self.world.clone(), self.sim.clone(), self.seed), self.sim_labels(), self.world.time_limit_s)
+    }
 }
 
 impl Robot {
@@ -385,31 +402,22 @@ pub fn try_run_observed(
 ) -> Result<SearchRun, firmware::classifier::ModelError> {
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner.kind());
     let mut ctrl = Box::new(Controller::new(cfg));
-    let classifier = spec.planner.uses_classifier() && spec.model.is_some();
-    if let (true, Some(blob)) = (classifier, spec.model) {
+    if let (true, Some(blob)) = (spec.classifier(), spec.model) {
         ctrl.set_model(blob)?;
     }
-    Ok(run_with(spec, ctrl, classifier, progress, observe))
+    Ok(run_with(spec, ctrl, progress, observe))
 }
 
 /// [`try_run`] for specs without a model (ground-truth or no labels): cannot fail.
 pub fn run(spec: &SearchSpec, progress: impl FnMut(f64)) -> SearchRun {
     let spec = SearchSpec { model: None, ..spec.clone() };
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner.kind());
-    run_with(&spec, Box::new(Controller::new(cfg)), false, progress, |_| {})
+    run_with(&spec, Box::new(Controller::new(cfg)), progress, |_| {})
 }
 
-fn run_with(
-    spec: &SearchSpec,
-    ctrl: Box<Controller>,
-    classifier: bool,
-    mut progress: impl FnMut(f64),
-    mut observe: impl FnMut(&TickView<'_>),
-) -> SearchRun {
-    // Ground-truth labels for lives-gt, and for lives until a classifier model is installed.
-    let use_labels = !classifier && spec.planner.uses_labels();
-    let sim = Sim::new(spec.world.clone(), spec.sim.clone(), spec.seed);
-    let mut source = SimSource::new(sim, use_labels, spec.world.time_limit_s);
+fn run_with(spec: &SearchSpec, ctrl: Box<Controller>, mut progress: impl FnMut(f64), mut observe: impl FnMut(&TickView<'_>)) -> SearchRun {
+    let classifier = spec.classifier();
+    let mut source = spec.sim_source();
     let mut brain = InProcess::new(ctrl);
     let mut goals = Vec::new();
     let mut confusion = [[0u64; 2]; 2];

@@ -11,6 +11,7 @@ pub mod node;
 #[cfg(feature = "ros2")]
 pub mod ros2;
 pub mod search;
+pub mod sim_serve;
 pub mod soak;
 pub mod trace;
 #[cfg(feature = "train")]

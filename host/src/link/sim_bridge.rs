@@ -13,9 +13,8 @@ use super::bridge::{
     Base, Bridge, BridgeError, BridgeOptions, BridgeResult, ClassifierCheck, NOT_TICKING_ECHOES, NOT_TICKING_FOR, SEQ_BASE,
 };
 use super::{Link, TimeMode};
-use crate::run::{controller_config, drive, Act, Answer, Brain, Clock, End, Ended, Frame, SimSource};
+use crate::run::{controller_config, drive, Act, Answer, Brain, Clock, End, Ended, Frame};
 use crate::search::{SearchResult, SearchSpec};
-use crate::sim::Sim;
 use firmware::protocol::{
     BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, GoalMsg, HostToCore, PoseMsg, ScanMsg, StatusMsg, WireCommand, WireMode,
 };
@@ -284,16 +283,14 @@ impl Brain for NodeBrain<'_> {
 /// ([`super::run_bridge`] with [`super::Source::Sim`]).
 pub fn run_sim(link: &mut dyn Link, spec: SearchSpec, opts: &BridgeOptions, stop: &AtomicBool) -> Result<BridgeResult, BridgeError> {
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner.kind());
-    let sim = Sim::new(spec.world.clone(), spec.sim.clone(), spec.seed);
-    let base = QueuedBase { time_s: sim.time_s(), pose: sim.pose(), acts: Vec::new() };
+    // As in the in-process loop: ground-truth labels unless `lives` runs the node's classifier
+    // (then the node must have been started with the same model, see `NodeOptions::model`).
+    let classifier = spec.classifier();
+    let mut source = spec.sim_source();
+    let base = QueuedBase { time_s: source.sim.time_s(), pose: source.sim.pose(), acts: Vec::new() };
     let mut b = Bridge::new(link, opts, stop, base);
     let config_msg = ConfigMsg::from_config(&cfg);
     b.setup(&config_msg)?;
-    // As in the in-process loop: ground-truth labels unless `lives` runs the node's classifier
-    // (then the node must have been started with the same model, see `NodeOptions::model`).
-    let classifier = spec.planner.uses_classifier() && spec.model.is_some();
-    let use_labels = !classifier && spec.planner.uses_labels();
-    let mut source = SimSource::new(sim, use_labels, spec.world.time_limit_s);
     if opts.mode == TimeMode::RealTime {
         source = source.with_clock(Clock::SimTime, opts.period.as_secs_f64());
     }
