@@ -28,9 +28,9 @@ MSG
     exit 2
 fi
 
-say "Python mcap readers (tests/python/check_mcap.py reads run recordings back, check_ros2_bag.py decodes exported bags)"
+say "Python packages: mcap readers (tests/python/check_mcap.py reads run recordings back, check_ros2_bag.py decodes exported bags), cyclonedds (the independent ROS 2 peer of tests/tests/ros2.rs)"
 PYMCAP=target/py-mcap
-if "$PYMCAP/bin/python" -c "import mcap, mcap_ros2" 2>/dev/null; then
+if "$PYMCAP/bin/python" -c "import mcap, mcap_ros2, cyclonedds" 2>/dev/null; then
     echo "installed ($PYMCAP)"
 else
     need python3 "apt-get install -y python3 python3-venv (Debian/Ubuntu)"
@@ -42,8 +42,8 @@ else
         fi
         python3 -m venv "$PYMCAP" >/dev/null || { echo "missing: python3-venv (apt-get install -y python3-venv)" >&2; exit 2; }
     fi
-    "$PYMCAP/bin/python" -m pip install -q --disable-pip-version-check mcap mcap-ros2-support \
-        || { echo "missing: the PyPI packages mcap and mcap-ros2-support ($PYMCAP/bin/python -m pip install mcap mcap-ros2-support failed)" >&2; exit 2; }
+    "$PYMCAP/bin/python" -m pip install -q --disable-pip-version-check mcap mcap-ros2-support cyclonedds==11.0.1 \
+        || { echo "missing: the PyPI packages mcap, mcap-ros2-support and cyclonedds ($PYMCAP/bin/python -m pip install mcap mcap-ros2-support cyclonedds==11.0.1 failed)" >&2; exit 2; }
     echo "installed now ($PYMCAP)"
 fi
 export LIVES_PYTHON="$PWD/$PYMCAP/bin/python"

@@ -42,7 +42,7 @@ pub struct Ros2Args {
     /// Stop after this many seconds of wall time.
     #[arg(long, value_name = "S")]
     max_wall: Option<f64>,
-    /// Stop when no scan has arrived for this many seconds (after the first).
+    /// Stop when no scan has arrived for this many seconds (or none since the start).
     #[arg(long, value_name = "S")]
     max_idle: Option<f64>,
     /// Keep DDS on the loopback interface (as `ROS_LOCALHOST_ONLY=1`).
@@ -104,5 +104,7 @@ pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
 }
 
 fn positive_secs(flag: &str, s: f64) -> Result<Duration, String> {
-    (s.is_finite() && s > 0.0).then(|| Duration::from_secs_f64(s)).ok_or_else(|| format!("{flag} {s}: expected a positive number of seconds"))
+    (s.is_finite() && s > 0.0)
+        .then(|| Duration::from_secs_f64(s))
+        .ok_or_else(|| format!("{flag} {s}: expected a positive number of seconds"))
 }

@@ -24,7 +24,7 @@ pub fn lives() -> &'static Path {
                 "-p",
                 "host",
                 "--features",
-                "ros-bags",
+                "ros-bags,ros2",
                 "--bin",
                 "lives",
                 "--message-format=json-render-diagnostics",

@@ -63,7 +63,7 @@ pub struct Ros2Options {
     pub map_period_ns: u64,
     /// Stop after this much wall time.
     pub max_wall: Option<Duration>,
-    /// Stop when no scan has arrived for this long (after the first).
+    /// Stop when no scan has arrived for this long (or none since the start).
     pub max_idle: Option<Duration>,
     /// Never end the run: start the search again when it is exhausted (every replanning
     /// interval at most), as `lives replay` does: a robot driven by someone else, a log played.
@@ -321,7 +321,11 @@ impl Ros2Source {
                 let topic = self.reader_topic.get(&local_reader).cloned().unwrap_or_default();
                 self.reject(
                     "incompatible-qos",
-                    format!("a publisher on `{topic}` offers QoS {offered_qos:?}, this reader requests {requested_qos:?}: not matched"),
+                    format!(
+                        "a publisher on `{topic}` offers {}, this reader needs {}: not matched",
+                        qos_words(&offered_qos),
+                        qos_words(&requested_qos)
+                    ),
                 );
             }
         }
@@ -443,7 +447,11 @@ impl Ros2Source {
             let at = p.t_ns as f64 / 1e9;
             if !self.tree.knows(&laser) {
                 let wait = self.opts.pose_wait;
-                self.reject_scan("unknown-frame", format!("scan frame `{laser}` is in no transform (tf, tf_static, odom) after {wait:?}"), p.t_ns);
+                self.reject_scan(
+                    "unknown-frame",
+                    format!("scan frame `{laser}` is in no transform (tf, tf_static, odom) after {wait:?}"),
+                    p.t_ns,
+                );
                 continue;
             }
             if until.is_none() {
@@ -477,8 +485,12 @@ impl Ros2Source {
                     self.ready.push_back((frame, root));
                     self.tree.forget_before(p.t_ns.saturating_sub(2 * MAX_POSE_AGE_NS));
                 }
-                Ok(_) | Err(PoseError::NoPose) => self.reject_scan("unknown-frame", format!("scan frame `{laser}` has no root frame"), p.t_ns),
-                Err(PoseError::NoOdometryYet) => self.reject_scan("no-odometry-yet", format!("a scan stamped {at} s, before the first odometry"), p.t_ns),
+                Ok(_) | Err(PoseError::NoPose) => {
+                    self.reject_scan("unknown-frame", format!("scan frame `{laser}` has no root frame"), p.t_ns)
+                }
+                Err(PoseError::NoOdometryYet) => {
+                    self.reject_scan("no-odometry-yet", format!("a scan stamped {at} s, before the first odometry"), p.t_ns)
+                }
                 Err(PoseError::Stale) => {
                     let age = MAX_POSE_AGE_NS as f64 / 1e9;
                     self.reject_scan("stale-pose", format!("no odometry within {age} s of the scan stamped {at} s"), p.t_ns)
@@ -502,7 +514,8 @@ impl Ros2Source {
 
     /// What the controller answered to `frame`, on the graph: the plan and goal, the status, and
     /// (every map period and at the end) the grids and markers.
-    pub fn publish(&self, frame: &Frame, answer: &Answer, ctrl: &Controller) {
+    pub fn publish(&self, frame: &Frame, answer: &Answer, brain: &InProcess) {
+        let ctrl = &brain.ctrl;
         let t_ns = frame.t_us * 1000;
         let root = self.root.borrow().clone();
         let h = wire::header_at(t_ns, &root);
@@ -550,6 +563,8 @@ impl Ros2Source {
             "gaze": gaze,
             "end": end,
             "goal": out,
+            "goals": brain.outputs().map_or(0, |o| o.status.goals),
+            "blacklisted": brain.outputs().map_or(0, |o| o.status.blacklisted),
             "received": *self.received.borrow(),
             "rejected": *self.rejected.borrow(),
         });
@@ -674,7 +689,7 @@ impl Ros2Source {
 impl Source for Ros2Source {
     fn sense(&mut self, _tick: u32) -> Option<Frame> {
         loop {
-            let idle = self.opts.max_idle.is_some_and(|m| self.arrived.get().is_some_and(|t| t.elapsed() >= m));
+            let idle = self.opts.max_idle.is_some_and(|m| self.arrived.get().unwrap_or(self.started).elapsed() >= m);
             if idle || self.stop.load(Ordering::Relaxed) || self.opts.max_wall.is_some_and(|m| self.started.elapsed() >= m) {
                 return None;
             }
@@ -747,6 +762,22 @@ fn scan_problem(s: &cdr::LaserScan) -> Option<(&'static str, String)> {
 /// 1970 counts as zero).
 fn stamp(h: &cdr::Header) -> u64 {
     (h.stamp.sec as i64 * 1_000_000_000 + h.stamp.nanosec as i64).max(0) as u64
+}
+
+/// A QoS's reliability and durability in ROS's words.
+fn qos_words(q: &rustdds::QosPolicies) -> String {
+    use rustdds::policy::{Durability, Reliability};
+    let rel = match q.reliability() {
+        Some(Reliability::Reliable { .. }) => "reliable",
+        _ => "best effort",
+    };
+    let dur = match q.durability() {
+        Some(Durability::TransientLocal) => "transient local",
+        Some(Durability::Transient) => "transient",
+        Some(Durability::Persistent) => "persistent",
+        _ => "volatile",
+    };
+    format!("{rel}, {dur}")
 }
 
 fn edge_reject_name(r: EdgeReject) -> &'static str {
@@ -839,7 +870,7 @@ pub fn run(
     source.ready.push_front((first, root));
     let continuous = source.opts.continuous;
     let mut brain = if continuous { InProcess::restarting(ctrl, cfg.replan_interval_us) } else { InProcess::new(ctrl) };
-    let mut publish = |src: &Ros2Source, frame: &Frame, brain: &InProcess, answer: &Answer| src.publish(frame, answer, &brain.ctrl);
+    let mut publish = |src: &Ros2Source, frame: &Frame, brain: &InProcess, answer: &Answer| src.publish(frame, answer, brain);
     let ended = drive(&mut source, &mut brain, &mut [&mut publish]).unwrap_or_else(|e| match e {});
     // The final grids (latched: a late subscriber gets them too).
     let t_ns = source.pose.get().map_or(0, |(_, t)| t);
