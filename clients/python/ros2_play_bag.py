@@ -9,7 +9,8 @@ bag's ``sensor_msgs/LaserScan``, ``nav_msgs/Odometry`` and ``tf2_msgs/TFMessage`
 does not depend on the machine's speed. After the last scan it collects the ``lives/lidar_map``
 and ``lives/camera_map`` grids (``nav_msgs/OccupancyGrid``, latched) until none has come for
 ``--settle`` seconds, and prints one JSON line: scans played, answered and rejected by name,
-and the last grid's occupied / free / unknown cell counts and origin.
+the stops ``lives ros2`` announced (``stale-odometry`` once the bag's odometry ends while a goal
+is out), and the last grid's occupied / free / unknown cell counts and origin.
 
 Exit status: 0 when every scan was answered or rejected and a LiDAR map came back; 1 otherwise;
 3 when nothing answered at all (discovery failed).
@@ -117,6 +118,7 @@ def main():
 
     answered, unanswered, played, latency = 0, [], 0, []
     rejected = {}
+    stops = []
     seen = set()
 
     def drain():
@@ -125,6 +127,8 @@ def main():
                 continue  # a writer gone (an invalid sample carries no data)
             d = json.loads(s.data)
             if os.environ.get("PLAY_DEBUG"): print(s.data[:200], file=sys.stderr)
+            if d.get("kind") == "stop":
+                stops.append(d.get("reason"))
             if d.get("kind") == "rejection":
                 rejected[d["name"]] = rejected.get(d["name"], 0) + 1
             if d.get("stamp_ns") is not None and d.get("kind") in ("tick", "rejection"):
@@ -175,7 +179,7 @@ def main():
         time.sleep(0.05)
     latency.sort()
     summary = {
-        "scans": played, "answered": answered, "unanswered": len(unanswered), "unanswered_stamps_ns": unanswered[:10], "rejected": rejected,
+        "scans": played, "answered": answered, "unanswered": len(unanswered), "unanswered_stamps_ns": unanswered[:10], "rejected": rejected, "stops": stops,
         "answer_ms": {"p50": round(1e3 * latency[len(latency) // 2], 3), "max": round(1e3 * latency[-1], 3)} if latency else None,
         "maps": last,
     }

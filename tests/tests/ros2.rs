@@ -67,8 +67,9 @@ fn json_line(text: &str) -> Value {
 /// The first 400 scans of the Intel Research Lab log (`tests/data/carmen`), exported as a robot
 /// records them (`lives export-bag`: `+inf` readings, odometry from the fourth scan on, the
 /// laser mounted rotated), played onto the graph; the grid that comes back is `lives replay`'s
-/// of the same bag, cell for cell in its counts, and the three scans before the odometry are
-/// rejected by name rather than drawn at a made-up origin.
+/// of the same bag, cell for cell in its counts; the three scans before the odometry are
+/// rejected by name rather than drawn at a made-up origin; and when the odometry ends with a goal
+/// out, the base is stopped with the reason on the status topic.
 #[test]
 fn a_bag_played_on_the_graph_gives_back_the_map_lives_replay_makes() {
     let py = python();
@@ -116,6 +117,8 @@ fn a_bag_played_on_the_graph_gives_back_the_map_lives_replay_makes() {
     assert_eq!(map["occupied"], replay["grid"]["occupied"], "walls: ROS 2 {map} vs replay {}", replay["grid"]);
     assert_eq!(map["free"], replay["grid"]["free"], "free: ROS 2 {map} vs replay {}", replay["grid"]);
     assert!(played["maps"]["camera_map"]["free"].as_u64().unwrap() > 0, "{played}");
+    // The bag's odometry ends with a goal out: the watchdog stops the base and says why.
+    assert!(played["stops"].as_array().unwrap().iter().any(|r| r == "stale-odometry"), "{played}");
     let run = json_line(&lives_out);
     assert_eq!(run["ticks"], 397, "{run}");
     assert_eq!(run["received"]["scan"], 400, "{run}");

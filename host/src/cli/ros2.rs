@@ -6,6 +6,7 @@ use host::search::PlannerChoice;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// Joins a ROS 2 graph over DDS (no ROS installation) and searches with the robot on it:
@@ -53,8 +54,6 @@ pub struct Ros2Args {
     json: bool,
 }
 
-static STOP: AtomicBool = AtomicBool::new(false);
-
 pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
     let Ros2Args { planner, set, model, origin, remap, lockstep, continuous, max_wall, max_idle, localhost, json } = args;
     if planner == PlannerChoice::LivesGt {
@@ -81,7 +80,12 @@ pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
     if model.is_some() && blob.is_none() {
         return Err(format!("--model is the classifier `lives` runs; `{planner}` runs none"));
     }
-    let run = ros2::run(opts, cfg, origin, blob, &STOP).map_err(|e| e.to_string())?;
+    // SIGINT or SIGTERM: stop the base (an empty plan and a goal where it stands), then exit.
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register(sig, stop.clone()).map_err(|e| format!("cannot handle signal {sig}: {e}"))?;
+    }
+    let run = ros2::run(opts, cfg, origin, blob, stop).map_err(|e| e.to_string())?;
     let lat = host::link::Summary::of(&run.answer_us);
     if json {
         say!(

@@ -37,6 +37,7 @@ use std::cell::{Cell, RefCell};
 use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::net::{IpAddr, Ipv4Addr};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 use wire::{marker, Marker, Qos, Raw, RawCdr};
 
@@ -195,7 +196,7 @@ pub struct Ros2Source {
     driving: Cell<bool>,
     last_map_ns: Cell<Option<u64>>,
     ticks: Cell<u64>,
-    stop: &'static AtomicBool,
+    stop: Arc<AtomicBool>,
     /// Wall time from a scan's arrival to its answer's publication, microseconds.
     pub answer_us: RefCell<Vec<f64>>,
     arrived: Cell<Option<Instant>>,
@@ -205,7 +206,7 @@ pub struct Ros2Source {
 
 impl Ros2Source {
     /// Joins domain `opts.domain`: one reader per subscribed topic, one writer per published one.
-    pub fn join(opts: Ros2Options, stop: &'static AtomicBool) -> Result<Self, Ros2Error> {
+    pub fn join(opts: Ros2Options, stop: Arc<AtomicBool>) -> Result<Self, Ros2Error> {
         let mut b = DomainParticipantBuilder::new(opts.domain);
         if opts.localhost_only {
             b = b.with_only_networks([IpAddr::V4(Ipv4Addr::LOCALHOST)]);
@@ -847,7 +848,7 @@ pub fn run(
     cfg: Config,
     origin: Option<[f64; 2]>,
     model: Option<&'static [u8]>,
-    stop: &'static AtomicBool,
+    stop: Arc<AtomicBool>,
 ) -> Result<Ros2Run, Ros2Error> {
     let mut source = Ros2Source::join(opts, stop)?;
     // The grid is placed once the first scan is: centred on it unless told where.
