@@ -91,6 +91,9 @@ def main():
     ap.add_argument("bag")
     ap.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for each scan's answer")
     ap.add_argument("--settle", type=float, default=3.0, help="seconds without a new grid before the last one counts")
+    ap.add_argument("--rate", type=float, default=0.0,
+                    help="play scans at this many per second without waiting for answers (`lives ros2` in real time): "
+                         "measures the scan rate it sustains; the summary's `received` is what its status counted")
     ap.add_argument("--discovery", type=float, default=10.0, help="seconds to wait for lives ros2 to appear")
     args = ap.parse_args()
 
@@ -127,6 +130,8 @@ def main():
                 continue  # a writer gone (an invalid sample carries no data)
             d = json.loads(s.data)
             if os.environ.get("PLAY_DEBUG"): print(s.data[:200], file=sys.stderr)
+            if d.get("kind") == "tick":
+                last_status.update(d)
             if d.get("kind") == "stop":
                 stops.append(d.get("reason"))
             if d.get("kind") == "rejection":
@@ -148,12 +153,21 @@ def main():
         else:
             unanswered.append(stamp)
 
+    last_status = {}
+    started = time.time()
+    next_at = time.time()
     for msg in read_ros2_messages(args.bag):
         kind = KINDS.get(msg.schema.name)
         if kind is None:
             continue
         name = "tf_static" if kind == "tf" and msg.channel.topic.endswith("tf_static") else kind
         out = convert(kind, msg.ros_msg)
+        if name == "scan" and args.rate > 0:
+            next_at += 1.0 / args.rate
+            time.sleep(max(0.0, next_at - time.time()))
+            writers["scan"].write(out)
+            played += 1
+            continue
         if name == "scan":
             if waiting:
                 settle(*waiting)
@@ -166,6 +180,7 @@ def main():
     if waiting:
         settle(*waiting)
 
+    play_s = time.time() - started
     last = {}
     quiet_since = time.time()
     while time.time() - quiet_since < args.settle:
@@ -183,6 +198,11 @@ def main():
         "answer_ms": {"p50": round(1e3 * latency[len(latency) // 2], 3), "max": round(1e3 * latency[-1], 3)} if latency else None,
         "maps": last,
     }
+    if args.rate > 0:
+        summary.update({"rate_hz": args.rate, "play_s": round(play_s, 3), "played_hz": round(played / play_s, 1),
+                        "received": last_status.get("received", {}), "ticks": last_status.get("tick")})
+        print(json.dumps(summary))
+        return 0
     print(json.dumps(summary))
     if answered == 0:
         return 3
