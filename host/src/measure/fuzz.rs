@@ -252,13 +252,18 @@ pub fn sqlite(data: &[u8]) {
     });
 }
 
-/// CDR messages: the three decoders on the same bytes.
+/// CDR messages: every decoder on the same bytes (the bags' three with both layouts, and what
+/// `lives ros2` reads besides).
 pub fn cdr_messages(data: &[u8]) {
     for wire in [cdr::Wire::Cdr, cdr::Wire::Ros1] {
         let _ = cdr::decode_laser_scan(data, wire);
         let _ = cdr::decode_odometry(data, wire);
         let _ = cdr::decode_tf_message(data, wire);
     }
+    // What `lives ros2` reads besides (CDR only: ROS 2's wire).
+    let _ = cdr::decode_detection2d_array(data);
+    let _ = cdr::decode_point_stamped(data);
+    let _ = cdr::decode_bool(data);
 }
 
 /// A classifier blob of either format: validates or is an error; one that validates installs in

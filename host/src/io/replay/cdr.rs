@@ -407,6 +407,45 @@ pub fn decode_tf_message(buf: &[u8], wire: Wire) -> Result<Vec<TransformStamped>
     Ok(out)
 }
 
+/// `std_msgs/msg/Bool`.
+pub fn decode_bool(buf: &[u8]) -> Result<bool, CdrError> {
+    let mut r = CdrReader::new(buf)?;
+    Ok(r.u8("data")? != 0)
+}
+
+/// `geometry_msgs/msg/PointStamped`: the header and `(x, y, z)`.
+pub fn decode_point_stamped(buf: &[u8]) -> Result<(Header, [f64; 3]), CdrError> {
+    let mut r = CdrReader::new(buf)?;
+    let h = header(&mut r)?;
+    Ok((h, r.f64s::<3>("point")?))
+}
+
+/// `vision_msgs/msg/Detection2DArray` (vision_msgs 4): the header and each detection's
+/// hypotheses as `(class_id, score)`.
+pub fn decode_detection2d_array(buf: &[u8]) -> Result<(Header, Vec<Vec<(String, f64)>>), CdrError> {
+    let mut r = CdrReader::new(buf)?;
+    let h = header(&mut r)?;
+    // A Detection2D is at least its header (12 bytes), two counts and the box (40 bytes).
+    let n = r.count("detections", 60)?;
+    let mut out = Vec::with_capacity(n);
+    for _ in 0..n {
+        header(&mut r)?;
+        let k = r.count("results", 8 + 8 + 56 + 288)?;
+        let mut hyps = Vec::with_capacity(k);
+        for _ in 0..k {
+            let class_id = r.string("results.hypothesis.class_id")?;
+            let score = r.f64("results.hypothesis.score")?;
+            transform(&mut r, "results.pose.pose")?;
+            r.f64s::<36>("results.pose.covariance")?;
+            hyps.push((class_id, score));
+        }
+        r.f64s::<5>("bbox")?;
+        r.string("id")?;
+        out.push(hyps);
+    }
+    Ok((h, out))
+}
+
 /// Writes CDR little-endian (encapsulation `00 01 00 00`).
 pub struct CdrWriter {
     buf: Vec<u8>,

@@ -407,7 +407,7 @@ impl Ros2Source {
                 }
                 Err(e) => bad(self, e),
             },
-            TARGET => match wire::decode_point_stamped(buf) {
+            TARGET => match cdr::decode_point_stamped(buf) {
                 Ok((_, p)) if p.iter().all(|v| v.is_finite()) => {
                     self.count("target");
                     self.detection = true;
@@ -415,7 +415,7 @@ impl Ros2Source {
                 Ok(_) => self.reject("target-not-finite", format!("{topic}: a target point that is not finite")),
                 Err(e) => bad(self, e),
             },
-            DETECTIONS => match wire::decode_detection2d_array(buf) {
+            DETECTIONS => match cdr::decode_detection2d_array(buf) {
                 Ok((_, d)) => {
                     self.count("detections");
                     if !d.is_empty() {
@@ -424,7 +424,7 @@ impl Ros2Source {
                 }
                 Err(e) => bad(self, e),
             },
-            BLOCKED => match wire::decode_bool(buf) {
+            BLOCKED => match cdr::decode_bool(buf) {
                 Ok(b) => {
                     self.count("base_blocked");
                     self.blocked |= b;

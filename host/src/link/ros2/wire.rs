@@ -6,7 +6,7 @@
 //! ROS 2 over DDS (the `rmw_*_cpp` convention): topic `/name` is DDS topic `rt/name`, type
 //! `pkg/msg/Type` is DDS type `pkg::msg::dds_::Type_`, the payload is plain CDR (XCDR1).
 
-use crate::io::replay::cdr::{self, CdrError, CdrReader, CdrWriter, Header, Time, Transform};
+use crate::io::replay::cdr::{CdrWriter, Header, Time, Transform};
 use rustdds::no_key::{Decode, DefaultDecoder, DeserializerAdapter, SerializerAdapter};
 use rustdds::policy::{Durability, History, Reliability};
 use rustdds::{QosPolicies, QosPolicyBuilder, RepresentationIdentifier};
@@ -259,48 +259,10 @@ pub fn encode_marker_array(h: &Header, markers: &[Marker]) -> Vec<u8> {
     w.finish()
 }
 
-/// `std_msgs/msg/Bool`.
-pub fn decode_bool(buf: &[u8]) -> Result<bool, CdrError> {
-    let mut r = CdrReader::new(buf)?;
-    Ok(r.u8("data")? != 0)
-}
-
-/// `geometry_msgs/msg/PointStamped`: the header and `(x, y, z)`.
-pub fn decode_point_stamped(buf: &[u8]) -> Result<(Header, [f64; 3]), CdrError> {
-    let mut r = CdrReader::new(buf)?;
-    let h = cdr::header(&mut r)?;
-    Ok((h, r.f64s::<3>("point")?))
-}
-
-/// `vision_msgs/msg/Detection2DArray` (vision_msgs 4): the header and each detection's
-/// hypotheses as `(class_id, score)`.
-pub fn decode_detection2d_array(buf: &[u8]) -> Result<(Header, Vec<Vec<(String, f64)>>), CdrError> {
-    let mut r = CdrReader::new(buf)?;
-    let h = cdr::header(&mut r)?;
-    // A Detection2D is at least its header (12 bytes), two counts and the box (40 bytes).
-    let n = r.count("detections", 60)?;
-    let mut out = Vec::with_capacity(n);
-    for _ in 0..n {
-        cdr::header(&mut r)?;
-        let k = r.count("results", 8 + 8 + 56 + 288)?;
-        let mut hyps = Vec::with_capacity(k);
-        for _ in 0..k {
-            let class_id = r.string("results.hypothesis.class_id")?;
-            let score = r.f64("results.hypothesis.score")?;
-            cdr::transform(&mut r, "results.pose.pose")?;
-            r.f64s::<36>("results.pose.covariance")?;
-            hyps.push((class_id, score));
-        }
-        r.f64s::<5>("bbox")?;
-        r.string("id")?;
-        out.push(hyps);
-    }
-    Ok((h, out))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::replay::cdr::{self, CdrReader};
 
     #[test]
     fn names_follow_the_rmw_dds_convention() {
@@ -334,9 +296,9 @@ mod tests {
         }
         w.string("");
         let buf = w.finish();
-        let (h, d) = decode_detection2d_array(&buf).unwrap();
+        let (h, d) = cdr::decode_detection2d_array(&buf).unwrap();
         assert_eq!(h.frame_id, "camera");
         assert_eq!(d, vec![vec![("target".to_string(), 0.9)]]);
-        assert!(decode_detection2d_array(&buf[..buf.len() - 9]).is_err());
+        assert!(cdr::decode_detection2d_array(&buf[..buf.len() - 9]).is_err());
     }
 }
