@@ -7,7 +7,7 @@ vision_msgs 4.x); ``float64[36]`` covariances are fixed-size arrays, ``T[]`` are
 Encode with XCDR1 (ROS 2's ``CDR_LE``), see :data:`XCDR1` in ``ros2_sim_robot.py``.
 
 Types: builtin_interfaces Time, Duration; std_msgs Header, ColorRGBA, Bool, String;
-geometry_msgs Point, Vector3, Quaternion, Pose, PoseStamped, PoseWithCovariance, Twist,
+geometry_msgs Point, Vector3, Quaternion, Pose, PointStamped, PoseStamped, PoseWithCovariance, Twist,
 TwistWithCovariance, Transform, TransformStamped; sensor_msgs LaserScan, CompressedImage;
 nav_msgs Odometry, Path, MapMetaData, OccupancyGrid; tf2_msgs TFMessage; visualization_msgs
 UVCoordinate, MeshFile, Marker, MarkerArray; vision_msgs Point2D, Pose2D, BoundingBox2D,
@@ -88,6 +88,12 @@ class Quaternion(IdlStruct, typename=_t("geometry_msgs", "Quaternion")):
 class Pose(IdlStruct, typename=_t("geometry_msgs", "Pose")):
     position: Point = field(default_factory=Point)
     orientation: Quaternion = field(default_factory=Quaternion)
+
+
+@dataclass
+class PointStamped(IdlStruct, typename=_t("geometry_msgs", "PointStamped")):
+    header: Header = field(default_factory=Header)
+    point: Point = field(default_factory=Point)
 
 
 @dataclass

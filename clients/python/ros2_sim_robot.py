@@ -8,8 +8,9 @@ PyPI ``cyclonedds`` (an implementation independent of the RustDDS in `lives ros2
 * per tick line from sim-serve it publishes, all stamped with the tick's time
   (``sec = t_us // 10**6``, ``nanosec = (t_us % 10**6) * 1000``): ``tf`` (``odom`` ->
   ``base_link``) and ``odom`` (``nav_msgs/Odometry``) when the pose is valid, ``base_blocked``
-  (``std_msgs/Bool``), ``detections`` (``vision_msgs/Detection2DArray``, one ``target``) when the
-  camera sees the target, and ``scan`` (``sensor_msgs/LaserScan``, frame ``laser``) last;
+  (``std_msgs/Bool``), ``detections`` (``vision_msgs/Detection2DArray``, one ``target``; or with
+  ``--detection-topic target`` a ``geometry_msgs/PointStamped`` on ``target``) when the camera sees
+  the target, and ``scan`` (``sensor_msgs/LaserScan``, frame ``laser``) last;
   ``tf_static`` (``base_link`` -> ``laser``, identity) once at the start;
 * it waits (``--timeout``, 20 s) for the ``lives/status`` tick whose ``stamp_ns`` is the tick's,
   and when its ``acts`` say ``path`` or ``stop`` for the ``plan`` with that stamp (an empty
@@ -36,7 +37,8 @@ set lo up``) and with ``CYCLONEDDS_URI=file://…/tests/ros2/cyclonedds-lo.xml``
 It prints one JSON summary line on stdout: ``ok``, sim-serve's ``result`` (what ``lives search
 --json`` prints for the same arguments, but ``classifier``), ``ticks``, the ``goals`` received
 (``[x, y, yaw, stamp_ns]``), the ``maps``/``markers`` received, the per-tick ``latency_ms``
-(scan published -> status received: median, p95, max), the ``rejections`` seen (names, in
+(scan published -> status received: median, p95, max), ``goal_latency_ms`` (scan published ->
+the ``goal_pose`` answering it received), the ``rejections`` seen (names, in
 order), the last tick status's ``received`` and ``rejected`` counts, ``discovery_s``, ``error``.
 With ``--hello FILE`` it writes sim-serve's hello line there as soon as it has it (its
 ``lives_ros2_args`` are what `lives ros2` needs to run the controller ``lives search`` runs).
@@ -93,6 +95,7 @@ class Inbox:
         self.status = {}  # stamp_ns -> tick status
         self.plans = {}  # stamp_ns -> [Path]
         self.goals = []
+        self.goal_at = {}
         self.rejections = []
         self.last_tick = None
         self.maps = {"lidar_map": 0, "camera_map": 0, "markers": 0}
@@ -135,6 +138,7 @@ class Inbox:
     def on_goal(self, g):
         q = g.pose.orientation
         self.goals.append([g.pose.position.x, g.pose.position.y, yaw_of(q), ns_of(g.header.stamp)])
+        self.goal_at.setdefault(ns_of(g.header.stamp), time.monotonic())
 
     def grid(self, name):
         def handle(g):
@@ -185,6 +189,7 @@ class Ros:
         self.tf = w("tf", m.TFMessage, self.qos(rel, vol, 100))
         self.tf_static = w("tf_static", m.TFMessage, self.qos(rel, tl, 1))
         self.detections = w("detections", m.Detection2DArray, self.qos(rel, vol, 10))
+        self.target = w("target", m.PointStamped, self.qos(rel, vol, 10))
         self.blocked = w("base_blocked", m.Bool, self.qos(rel, vol, 10))
         self.extra = []  # writers of the bad inputs, kept for the run
 
@@ -208,7 +213,7 @@ class Ros:
     def unmatched(self):
         """The endpoints `lives ros2` has not matched yet (discovery is done when none is left)."""
         ws = {"scan": self.scan, "odom": self.odom, "tf": self.tf, "tf_static": self.tf_static,
-              "detections": self.detections, "base_blocked": self.blocked}
+              "detections": self.detections, "target": self.target, "base_blocked": self.blocked}
         missing = [n for n, w in ws.items() if not w.get_matched_subscriptions()]
         return missing + [n for n in ("plan", "lives/status") if not self.readers[n].get_matched_publications()]
 
@@ -222,7 +227,7 @@ def header(t_us, frame):
     return m.Header(stamp=stamp_of(t_us), frame_id=frame)
 
 
-def publish_tick(ros, v):
+def publish_tick(ros, v, detection_topic="detections"):
     """Publishes one tick line's messages (the scan last)."""
     t = v["t_us"]
     if v["pose"] is not None:
@@ -235,7 +240,10 @@ def publish_tick(ros, v):
         ros.odom.write(m.Odometry(header=header(t, "odom"), child_frame_id="base_link",
                                   pose=m.PoseWithCovariance(pose=m.Pose(position=m.Point(x=x, y=y), orientation=q))))
     ros.blocked.write(m.Bool(data=bool(v["blocked"])))
-    if v["detection"]:
+    if v["detection"] and detection_topic == "target":
+        # A detector that publishes a point (the position is not used: the camera confirms).
+        ros.target.write(m.PointStamped(header=header(t, "camera"), point=m.Point(x=1.0)))
+    elif v["detection"]:
         hyp = m.ObjectHypothesisWithPose(hypothesis=m.ObjectHypothesis(class_id="target", score=1.0))
         ros.detections.write(m.Detection2DArray(header=header(t, "camera"), detections=[
             m.Detection2D(header=header(t, "camera"), results=[hyp], id="target")]))
@@ -330,6 +338,9 @@ def main():
     ap.add_argument("--bad-wait", type=float, default=5.0, help="seconds to wait for the rejections of --publish-bad")
     ap.add_argument("--maps-wait", type=float, default=5.0, help="seconds to wait at the end for maps and markers not yet seen")
     ap.add_argument("--hello", help="write sim-serve's hello line here")
+    ap.add_argument("--detection-topic", choices=["detections", "target"], default="detections",
+                    help="where the camera's sightings go: vision_msgs/Detection2DArray on `detections`, or "
+                         "geometry_msgs/PointStamped on `target`")
     ap.add_argument("sim_serve_args", nargs=argparse.REMAINDER, help="-- then the arguments of `lives sim-serve`")
     args = ap.parse_args()
     rest = args.sim_serve_args[1:] if args.sim_serve_args[:1] == ["--"] else args.sim_serve_args
@@ -339,6 +350,7 @@ def main():
     code = 1
     child = subprocess.Popen([args.lives, "sim-serve", *rest], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     latencies = []
+    sent_at = {}
     try:
         hello = json.loads(child.stdout.readline() or "null")
         if not hello or "hello" not in hello:
@@ -374,7 +386,8 @@ def main():
                 break
             stamp_ns = v["t_us"] * 1000
             sent = time.monotonic()
-            publish_tick(ros, v)
+            sent_at[stamp_ns] = sent
+            publish_tick(ros, v, args.detection_topic)
             a = answer(inbox, stamp_ns, args.timeout)
             latencies.append((inbox.status_at[stamp_ns] - sent) * 1000.0)
             child.stdin.write(json.dumps(a) + "\n")
@@ -403,6 +416,10 @@ def main():
         summary.update(
             goals_received=len(inbox.goals), goals=inbox.goals, maps=dict(inbox.maps), rejections=list(inbox.rejections),
             received=(inbox.last_tick or {}).get("received"), rejected=(inbox.last_tick or {}).get("rejected"))
+    goal_lat = [(t - sent_at[s]) * 1000.0 for s, t in inbox.goal_at.items() if s in sent_at]
+    if goal_lat:
+        summary["goal_latency_ms"] = {"n": len(goal_lat), "median": round(statistics.median(goal_lat), 3),
+                                      "p95": round(pct(goal_lat, 95), 3), "max": round(max(goal_lat), 3)}
     if latencies:
         summary["latency_ms"] = {"median": round(statistics.median(latencies), 3), "p95": round(pct(latencies, 95), 3),
                                  "max": round(max(latencies), 3)}

@@ -137,16 +137,15 @@ fn search_result(args: &[&str]) -> Value {
 
 /// The simulated robot (`lives sim-serve ARGS` relayed over cyclonedds) against `lives ros2
 /// --lockstep` configured as the hello line says: the peer's summary, and `lives ros2`'s.
-fn simulated(name: &str, domain: u8, args: &[&str], bad: &[&str]) -> (Value, Value) {
+fn simulated(name: &str, domain: u8, args: &[&str], peer_opts: &str) -> (Value, Value) {
     let py = python();
     let dir = scratch(name);
     let hello = Command::new(common::lives()).arg("sim-serve").args(args).stdin(std::process::Stdio::null()).output().unwrap();
     let hello = json_line(String::from_utf8_lossy(&hello.stdout).lines().next().unwrap_or_default());
     let ros2_args: Vec<String> =
         hello["hello"]["lives_ros2_args"].as_array().unwrap().iter().map(|a| format!("'{}'", a.as_str().unwrap())).collect();
-    let bad: String = bad.iter().map(|k| format!(" --publish-bad {k}")).collect();
     let peer = format!(
-        "{py} {} --lives {}{bad} -- {}",
+        "{py} {} --lives {} {peer_opts} -- {}",
         q(&common::root().join("clients/python/ros2_sim_robot.py")),
         q(common::lives()),
         args.join(" ")
@@ -160,15 +159,17 @@ fn simulated(name: &str, domain: u8, args: &[&str], bad: &[&str]) -> (Value, Val
 
 /// Through ROS 2 the search is `lives search`'s, tick for tick: the same outcome, time, path,
 /// goal count and motion (so the same goals), with every message type on the graph in both
-/// directions (scans, odometry, tf, tf_static, detections and the blocked flag in; goals, plans,
-/// status, both grids and markers out).
+/// directions (scans, odometry, tf, tf_static, detections of both kinds and the blocked flag in;
+/// goals, plans, status, both grids and markers out).
 #[test]
 fn the_simulated_robot_finds_the_target_through_ros2_as_lives_search_does() {
-    for args in
-        [["--world", "apartment", "--seed", "1", "--planner", "lives"], ["--world", "office", "--seed", "2", "--planner", "nearest"]]
-    {
+    // Detections as vision_msgs/Detection2DArray, then as geometry_msgs/PointStamped on `target`.
+    for (args, detection) in [
+        (["--world", "apartment", "--seed", "1", "--planner", "lives"], "detections"),
+        (["--world", "office", "--seed", "2", "--planner", "nearest"], "target"),
+    ] {
         let expected = search_result(&args);
-        let (robot, run) = simulated("sim", 12, &args, &[]);
+        let (robot, run) = simulated("sim", 12, &args, &format!("--detection-topic {detection}"));
         let mut got = robot["result"].clone();
         got.as_object_mut().unwrap().remove("classifier");
         assert_eq!(got, expected, "{args:?}: through ROS 2 {robot}");
@@ -181,7 +182,7 @@ fn the_simulated_robot_finds_the_target_through_ros2_as_lives_search_does() {
             assert!(run["received"][topic].as_u64().unwrap() > 0, "{topic}: {run}");
         }
         if expected["found"] == true {
-            assert!(run["received"]["detections"].as_u64().unwrap() > 0, "{run}");
+            assert!(run["received"][detection].as_u64().unwrap() > 0, "{run}");
         }
         assert_eq!(run["rejected"], serde_json::json!({}), "{run}");
     }
@@ -195,7 +196,8 @@ fn the_simulated_robot_finds_the_target_through_ros2_as_lives_search_does() {
 fn bad_input_on_the_graph_is_rejected_by_name_and_the_search_goes_on() {
     let args = ["--world", "apartment", "--seed", "1", "--planner", "lives"];
     let kinds = ["zero-increment", "length-mismatch", "nan-pose", "unknown-frame", "tf-loop", "incompatible-qos"];
-    let (robot, run) = simulated("bad", 13, &args, &kinds);
+    let bad: String = kinds.iter().map(|k| format!(" --publish-bad {k}")).collect();
+    let (robot, run) = simulated("bad", 13, &args, &bad);
     let mut names: Vec<&str> = robot["rejections"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
     names.sort_unstable();
     assert_eq!(
