@@ -34,6 +34,7 @@ pub mod config;
 pub mod controller;
 pub mod frontier;
 pub mod grid;
+pub mod knownmap;
 pub mod matcher;
 pub mod mcu;
 pub mod node;

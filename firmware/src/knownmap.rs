@@ -1,0 +1,352 @@
+//! LIVE's known-map classification (issue 32; METHOD.md §2, the paper's rule): with a prior map
+//! of the building, each scan's points are labelled online as
+//!
+//! * **LTF** (long-term feature, *map*): within [`LTF_GATE_MM`] of an occupied cell of the prior
+//!   map — the paper's `exp(−d(p, L)² / Σs) > τ` is exactly a distance gate (`τ = exp(−d_max² /
+//!   Σs)`, as the host's labeller says); here `L` is the prior's occupied cells near `p` rather
+//!   than the one line the beam is expected to hit (a grid has no lines), so a point near *any*
+//!   mapped wall is an LTF;
+//! * **STF** (short-term feature: static, not on the map): a non-LTF point within
+//!   [`STF_MATCH_MM`] of a non-LTF point of one of the last [`STF_HISTORY`] scans (the same
+//!   distance-gate reading of `exp(−‖p − q‖² / Σs) > τ`);
+//! * **DF** (dynamic feature): the other non-LTF points;
+//!
+//! and *map* = LTF, *non-map* = STF ∪ DF, as [`BeamLabel`].
+//!
+//! The prior map ([`PriorMap`]) is a bit per 0.1 m cell over its own fixed 51.2 m window (its
+//! lower-left corner is the map's, not the rolling LiDAR grid's), filled a row segment at a time
+//! ([`PriorMap::set_row_bits`], how the host sends it over the link in chunks). Everything is
+//! integer (millimetres) and in static buffers: 32 KiB of map bits and
+//! `(STF_HISTORY + 1) × BEAMS` points of history (57 KiB).
+//!
+//! Not yet wired into [`crate::Controller`] (a later step of issue 32: the configuration that
+//! turns it on, the link's map chunks, inspection regions from the STFs).
+
+use crate::capacity::{BEAMS, CELL_MM, GRID_CELLS};
+use crate::grid::{BitGrid, GridGeometry};
+use crate::nonmap::hit_point;
+use crate::scan::{BeamLabel, BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
+use fixed_point::{Meters, Pose2};
+
+/// The LTF gate: a point this close to an occupied prior cell's centre is on the map, mm. The
+/// host labeller's point-to-line gate is 100 mm; a cell centre is up to half a cell's diagonal
+/// (71 mm) from the wall line through it, hence the larger gate.
+pub const LTF_GATE_MM: i64 = 150;
+
+/// The STF match: a point this close to a non-LTF point of a recent scan is static, mm (the host
+/// labeller's 0.25 m).
+pub const STF_MATCH_MM: i64 = 250;
+
+/// Scans of non-LTF points kept for the STF test (the host labeller's history).
+pub const STF_HISTORY: usize = 3;
+
+/// A point's class.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Feature {
+    /// No return, or the beam was not read.
+    #[default]
+    None,
+    /// On the prior map.
+    Ltf,
+    /// Static, not on the map.
+    Stf,
+    /// Moving, not on the map.
+    Df,
+}
+
+impl Feature {
+    /// As the planner's label: map = LTF, non-map = STF ∪ DF.
+    pub fn label(self) -> BeamLabel {
+        match self {
+            Feature::None => BeamLabel::Unlabelled,
+            Feature::Ltf => BeamLabel::Map,
+            Feature::Stf | Feature::Df => BeamLabel::NonMap,
+        }
+    }
+}
+
+/// Why a row segment of the prior map was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PriorError {
+    /// The row is outside the map's window.
+    RowOutside,
+    /// The segment runs past the window's right edge.
+    SegmentTooLong,
+}
+
+/// The prior map: occupied cells over a fixed window with its own lower-left corner.
+pub struct PriorMap {
+    geom: GridGeometry,
+    occupied: BitGrid,
+    rows: u32,
+}
+
+impl PriorMap {
+    /// Empty, its window's lower-left corner at the origin.
+    pub const fn new() -> Self {
+        PriorMap { geom: GridGeometry { origin_x: Meters::ZERO, origin_y: Meters::ZERO }, occupied: BitGrid::new(), rows: 0 }
+    }
+
+    /// Forgets the map; the window's lower-left corner becomes `(x, y)`.
+    pub fn reset(&mut self, x: Meters, y: Meters) {
+        self.geom = GridGeometry { origin_x: x, origin_y: y };
+        self.occupied.clear();
+        self.rows = 0;
+    }
+
+    /// Row `y`'s cells from column `x0` on: bit `i` of `bits` (least significant first) is cell
+    /// `x0 + i`, 1 occupied; `n` cells.
+    pub fn set_row_bits(&mut self, y: usize, x0: usize, bits: &[u8], n: usize) -> Result<(), PriorError> {
+        if y >= GRID_CELLS {
+            return Err(PriorError::RowOutside);
+        }
+        if x0.checked_add(n).is_none_or(|end| end > GRID_CELLS) || n > bits.len() * 8 {
+            return Err(PriorError::SegmentTooLong);
+        }
+        for i in 0..n {
+            self.occupied.put((x0 + i) as i32, y as i32, bits[i / 8] >> (i % 8) & 1 != 0);
+        }
+        self.rows = self.rows.saturating_add(1);
+        Ok(())
+    }
+
+    /// Row segments received since the last reset (0: no map).
+    pub fn rows_received(&self) -> u32 {
+        self.rows
+    }
+
+    /// Whether the prior map's cell holding world point `(x, y)` is occupied.
+    pub fn occupied_at(&self, x: Meters, y: Meters) -> bool {
+        let (cx, cy) = self.geom.cell_of(x, y);
+        self.occupied.get(cx, cy)
+    }
+
+    /// Whether an occupied prior cell's centre lies within `gate_mm` of world point `(x, y)`.
+    pub fn near_occupied(&self, x: Meters, y: Meters, gate_mm: i64) -> bool {
+        let (cx, cy) = self.geom.cell_of(x, y);
+        let r = (gate_mm + CELL_MM - 1) / CELL_MM;
+        let (px, py) = (mm(x), mm(y));
+        for dy in -r..=r {
+            for dx in -r..=r {
+                let (qx, qy) = (cx + dx as i32, cy + dy as i32);
+                if !self.occupied.get(qx, qy) {
+                    continue;
+                }
+                let (mx, my) = self.geom.center_of(qx, qy);
+                let (ex, ey) = (mm(mx) - px, mm(my) - py);
+                if ex * ex + ey * ey <= gate_mm * gate_mm {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+impl Default for PriorMap {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Millimetres of a fixed-point length (rounded down).
+fn mm(v: Meters) -> i64 {
+    (v.to_bits() as i64 * 1000) >> 16
+}
+
+/// A non-LTF point of a recent scan: its bucket key (a [`STF_MATCH_MM`] square) and position, mm.
+#[derive(Clone, Copy, Default)]
+struct Kept {
+    key: i64,
+    x: i32,
+    y: i32,
+}
+
+/// The history's slots: the last [`STF_HISTORY`] scans and the one being classified.
+const SLOTS: usize = STF_HISTORY + 1;
+
+/// The classifier: the prior map and the recent non-LTF points.
+pub struct KnownMap {
+    /// The building's map.
+    pub prior: PriorMap,
+    /// The last [`STF_HISTORY`] scans' non-LTF points, each scan's sorted by key.
+    history: [[Kept; BEAMS]; SLOTS],
+    lens: [usize; SLOTS],
+    /// The slot the next scan's points go to.
+    next: usize,
+}
+
+fn bucket(v: i64) -> i64 {
+    v.div_euclid(STF_MATCH_MM)
+}
+
+fn key_of(x: i64, y: i64) -> i64 {
+    (bucket(x) << 32) ^ (bucket(y) & 0xffff_ffff)
+}
+
+impl KnownMap {
+    /// No map, no history.
+    pub const fn new() -> Self {
+        KnownMap { prior: PriorMap::new(), history: [[Kept { key: 0, x: 0, y: 0 }; BEAMS]; SLOTS], lens: [0; SLOTS], next: 0 }
+    }
+
+    /// Forgets the recent scans (a new mission; the map stays).
+    pub fn forget_history(&mut self) {
+        self.lens = [0; SLOTS];
+        self.next = 0;
+    }
+
+    /// Whether `(x, y)` (mm) is within [`STF_MATCH_MM`] of a kept point.
+    fn matches_history(&self, x: i64, y: i64) -> bool {
+        let (bx, by) = (bucket(x), bucket(y));
+        for (scan, &len) in self.history.iter().zip(&self.lens) {
+            let pts = &scan[..len];
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let k = ((bx + dx) << 32) ^ ((by + dy) & 0xffff_ffff);
+                    let start = pts.partition_point(|p| p.key < k);
+                    for p in pts[start..].iter().take_while(|p| p.key == k) {
+                        let (ex, ey) = (p.x as i64 - x, p.y as i64 - y);
+                        if ex * ex + ey * ey <= STF_MATCH_MM * STF_MATCH_MM {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+
+    /// Classifies the scan `beams` taken from `pose` (the laser's, in the map's frame) into
+    /// `out`, one per beam, and keeps its non-LTF points for the [`STF_HISTORY`] scans after it.
+    /// Returns the counts `[LTF, STF, DF]`.
+    pub fn classify(&mut self, pose: &Pose2, beams: &BeamScan, out: &mut [Feature; BEAMS]) -> [u32; 3] {
+        // The slot of the scan `STF_HISTORY + 1` ago takes this one's points: the others are
+        // the history searched.
+        let slot = self.next;
+        self.lens[slot] = 0;
+        let mut counts = [0u32; 3];
+        let mut kept = 0;
+        for (b, (&r, o)) in beams.ranges_mm.iter().zip(out.iter_mut()).enumerate() {
+            *o = Feature::None;
+            if r == RANGE_INVALID || r == RANGE_NO_RETURN {
+                continue;
+            }
+            let (x, y) = hit_point(pose, b, r);
+            if self.prior.near_occupied(x, y, LTF_GATE_MM) {
+                *o = Feature::Ltf;
+                counts[0] += 1;
+                continue;
+            }
+            let (px, py) = (mm(x), mm(y));
+            if self.matches_history(px, py) {
+                *o = Feature::Stf;
+                counts[1] += 1;
+            } else {
+                *o = Feature::Df;
+                counts[2] += 1;
+            }
+            self.history[slot][kept] = Kept { key: key_of(px, py), x: px as i32, y: py as i32 };
+            kept += 1;
+        }
+        self.history[slot][..kept].sort_unstable_by_key(|p| (p.key, p.x, p.y));
+        self.lens[slot] = kept;
+        self.next = (slot + 1) % SLOTS;
+        counts
+    }
+}
+
+impl Default for KnownMap {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::grid::beam_angle;
+    use std::boxed::Box;
+
+    /// A prior map with a wall along x = 5 m (cells of column 50), window at the origin.
+    fn walled() -> Box<KnownMap> {
+        let mut k = Box::new(KnownMap::new());
+        k.prior.reset(Meters::ZERO, Meters::ZERO);
+        let bits = [0u8; 64];
+        for y in 0..GRID_CELLS {
+            let mut row = bits;
+            row[50 / 8] |= 1 << (50 % 8);
+            k.prior.set_row_bits(y, 0, &row, GRID_CELLS).unwrap();
+        }
+        k
+    }
+
+    /// A scan from `(2, 10)` facing +x with one return per beam in `hits` (beam, range mm).
+    fn scan(hits: &[(usize, u16)]) -> BeamScan {
+        let mut s = BeamScan::new();
+        for &(b, r) in hits {
+            s.ranges_mm[b] = r;
+        }
+        s
+    }
+
+    fn ahead() -> usize {
+        // The beam pointing along the pose's heading (beam 0 is at −π).
+        (0..BEAMS).min_by_key(|&b| (beam_angle(b).0 as i64).abs()).unwrap()
+    }
+
+    #[test]
+    fn points_on_the_mapped_wall_are_ltf_and_the_rest_stf_or_df() {
+        let mut k = walled();
+        let pose = Pose2::from_f64(2.0, 10.0, 0.0).unwrap();
+        let b = ahead();
+        let mut out = [Feature::None; BEAMS];
+        // The wall is 3 m ahead (x = 5.0–5.1 m: the cell's centre 5.05 m): LTF; a box at 1.5 m: not.
+        let c = k.classify(&pose, &scan(&[(b, 3_040), (b + 5, 1_500)]), &mut out);
+        assert_eq!(out[b], Feature::Ltf);
+        assert_eq!(out[b + 5], Feature::Df, "a first sighting of an unmapped object moves, as far as one scan knows");
+        assert_eq!(c, [1, 0, 1]);
+        // Seen again, it is static.
+        let c = k.classify(&pose, &scan(&[(b, 3_040), (b + 5, 1_510)]), &mut out);
+        assert_eq!(out[b + 5], Feature::Stf);
+        assert_eq!(c, [1, 1, 0]);
+        assert_eq!(Feature::Stf.label(), BeamLabel::NonMap);
+        assert_eq!(Feature::Ltf.label(), BeamLabel::Map);
+    }
+
+    #[test]
+    fn a_point_past_the_gate_is_not_on_the_map_and_history_ages_out() {
+        let mut k = walled();
+        let pose = Pose2::from_f64(2.0, 10.0, 0.0).unwrap();
+        let b = ahead();
+        let mut out = [Feature::None; BEAMS];
+        // 0.3 m short of the wall: beyond the 0.15 m gate.
+        k.classify(&pose, &scan(&[(b, 2_700)]), &mut out);
+        assert_eq!(out[b], Feature::Df);
+        // STF_HISTORY empty scans push it out of the history.
+        for _ in 0..STF_HISTORY {
+            k.classify(&pose, &scan(&[]), &mut out);
+        }
+        k.classify(&pose, &scan(&[(b, 2_700)]), &mut out);
+        assert_eq!(out[b], Feature::Df);
+        // No returns: nothing.
+        k.classify(&pose, &scan(&[]), &mut out);
+        assert!(out.iter().all(|f| *f == Feature::None));
+    }
+
+    #[test]
+    fn bad_row_segments_are_refused() {
+        let mut p = PriorMap::new();
+        assert_eq!(p.set_row_bits(GRID_CELLS, 0, &[0xff], 8), Err(PriorError::RowOutside));
+        assert_eq!(p.set_row_bits(0, GRID_CELLS - 4, &[0xff], 8), Err(PriorError::SegmentTooLong));
+        assert_eq!(p.set_row_bits(0, 0, &[0xff], 9), Err(PriorError::SegmentTooLong));
+        assert_eq!(p.set_row_bits(0, usize::MAX, &[0xff], 8), Err(PriorError::SegmentTooLong));
+        assert_eq!(p.rows_received(), 0);
+        p.set_row_bits(3, 8, &[0b101], 3).unwrap();
+        assert!(p.occupied_at(Meters::from_num(0.85), Meters::from_num(0.35)));
+        assert!(!p.occupied_at(Meters::from_num(0.95), Meters::from_num(0.35)));
+        assert!(p.occupied_at(Meters::from_num(1.05), Meters::from_num(0.35)));
+        assert_eq!(p.rows_received(), 1);
+    }
+}
