@@ -23,7 +23,7 @@ pub mod wire;
 
 use crate::io::range::{EncodedScan, RangeLimits};
 use crate::io::replay::cdr;
-use crate::io::replay::rosbag::{scan_record, EdgeReject, FrameTree, PoseError, MAX_POSE_AGE_NS};
+use crate::io::replay::rosbag::{frame, scan_record, EdgeReject, FrameTree, PoseError, MAX_POSE_AGE_NS};
 use crate::io::replay::Location;
 use crate::run::{drive, Answer, End, Frame, InProcess, Source};
 use firmware::{Config, Controller, Pose2};
@@ -147,6 +147,17 @@ const STATUS: usize = 2;
 const LIDAR_MAP: usize = 3;
 const CAMERA_MAP: usize = 4;
 const MARKERS: usize = 5;
+
+/// Frames the tree holds at most (a publisher inventing frame names cannot grow it for ever).
+pub const MAX_FRAMES: usize = 256;
+
+/// Moving transforms are kept this long behind the newest, nanoseconds (a scan waits 0.5 s at
+/// most, and one older than the odometry by more than 0.5 s is stale anyway).
+const KEEP_NS: u64 = 10_000_000_000;
+
+/// Placed scans waiting for the controller at most (lockstep only: in real time a tick takes the
+/// newest and drops the rest).
+const MAX_READY: usize = 256;
 
 /// Why `lives ros2` could not join the graph.
 #[derive(Debug)]
@@ -334,8 +345,10 @@ impl Ros2Source {
                     Ok(Some(s)) => s.into_value(),
                     Ok(None) => break,
                     Err(e) => {
+                        // The reader's next call starts from the next sample; stop here so that
+                        // an error that repeats cannot hold the loop.
                         self.reject("malformed", format!("{}: {e:?}", self.topics[i]));
-                        continue;
+                        break;
                     }
                 };
                 self.ingest(i, &sample.0);
@@ -375,12 +388,8 @@ impl Ros2Source {
                 Ok(o) => {
                     self.count("odom");
                     let t = stamp(&o.header);
-                    match self.tree.push(&o.header.frame_id, &o.child_frame_id, t, &o.pose) {
-                        Ok(()) => self.last_odom = Some(Instant::now()),
-                        Err(r) => self.reject(
-                            edge_reject_name(r),
-                            format!("{topic}: {} → {} at {} s", o.header.frame_id, o.child_frame_id, t as f64 / 1e9),
-                        ),
+                    if let Err(name) = self.add_edge(&o.header.frame_id, &o.child_frame_id, Some(t), &o.pose) {
+                        self.reject(name, format!("{topic}: {} → {} at {} s", o.header.frame_id, o.child_frame_id, t as f64 / 1e9));
                     }
                 }
                 Err(e) => bad(self, e),
@@ -389,17 +398,9 @@ impl Ros2Source {
                 Ok(ts) => {
                     self.count(if i == TF { "tf" } else { "tf_static" });
                     for t in ts {
-                        let r = if i == TF {
-                            let r = self.tree.push(&t.header.frame_id, &t.child_frame_id, stamp(&t.header), &t.transform);
-                            if r.is_ok() {
-                                self.last_odom = Some(Instant::now());
-                            }
-                            r
-                        } else {
-                            self.tree.set_static(&t.header.frame_id, &t.child_frame_id, &t.transform)
-                        };
-                        if let Err(r) = r {
-                            self.reject(edge_reject_name(r), format!("{topic}: {} → {}", t.header.frame_id, t.child_frame_id));
+                        let at = (i == TF).then(|| stamp(&t.header));
+                        if let Err(name) = self.add_edge(&t.header.frame_id, &t.child_frame_id, at, &t.transform) {
+                            self.reject(name, format!("{topic}: {} → {}", t.header.frame_id, t.child_frame_id));
                         }
                     }
                 }
@@ -431,6 +432,24 @@ impl Ros2Source {
             },
             _ => {}
         }
+    }
+
+    /// An edge of the frame tree: a moving one's sample at `t_ns`, or a fixed one (`None`). The
+    /// tree holds at most [`MAX_FRAMES`] frames and [`KEEP_NS`] of samples per moving edge.
+    fn add_edge(&mut self, parent: &str, child: &str, t_ns: Option<u64>, t: &cdr::Transform) -> Result<(), &'static str> {
+        if self.tree.edges.len() >= MAX_FRAMES && !self.tree.edges.contains_key(frame(child).as_str()) {
+            return Err("too-many-frames");
+        }
+        let r = match t_ns {
+            Some(at) => self.tree.push(parent, child, at, t),
+            None => self.tree.set_static(parent, child, t),
+        };
+        r.map_err(edge_reject_name)?;
+        if let Some(at) = t_ns {
+            self.last_odom = Some(Instant::now());
+            self.tree.forget_before(at.saturating_sub(KEEP_NS));
+        }
+        Ok(())
     }
 
     /// Places the scans whose pose is known (or whose wait is over) as frames, in order.
@@ -481,8 +500,12 @@ impl Ros2Source {
                         detection: false,
                         base_blocked: false,
                     };
+                    if self.ready.len() >= MAX_READY {
+                        // Lockstep with a publisher faster than the controller: the oldest goes.
+                        self.ready.pop_front();
+                        self.reject("scan-overrun", format!("more than {MAX_READY} placed scans waiting for the controller"));
+                    }
                     self.ready.push_back((frame, root));
-                    self.tree.forget_before(p.t_ns.saturating_sub(2 * MAX_POSE_AGE_NS));
                 }
                 Ok(_) | Err(PoseError::NoPose) => {
                     self.reject_scan("unknown-frame", format!("scan frame `{laser}` has no root frame"), p.t_ns)
