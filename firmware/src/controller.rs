@@ -17,6 +17,7 @@ use crate::classifier::{Classifier, ClassifierConfig, LabelFeedback, ModelError,
 use crate::config::{Config, ConfigError};
 use crate::frontier::FrontierSet;
 use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
+use crate::knownmap::{KnownMap, PriorError};
 use crate::matcher::{ScanMatcher, MATCH_WARMUP_SCANS};
 use crate::nonmap::NonMapStore;
 use crate::planner::{Goal, PlanInputs, Planner, Site};
@@ -247,6 +248,10 @@ pub struct Controller {
     pub classifier: Classifier<'static>,
     /// The scan-to-map matcher ([`Config::scan_matching`]) and its counters.
     pub matcher: ScanMatcher,
+    /// LIVE's known-map classification ([`crate::knownmap`]): once a prior map is loaded
+    /// ([`Controller::prior_map_row`]) it labels every scan, before upstream labels and the
+    /// classifier.
+    pub known: KnownMap,
     beams: BeamScan,
     mode: Mode,
     /// The pose the maps are drawn at: the input pose corrected by `map_from_odom`.
@@ -285,6 +290,7 @@ impl Controller {
             planner: Planner::new(),
             classifier: Classifier::new(ClassifierConfig { feedback: LabelFeedback::Raw }),
             matcher: ScanMatcher::new(),
+            known: KnownMap::new(),
             beams: BeamScan::new(),
             mode: Mode::Idle,
             pose: None,
@@ -347,6 +353,18 @@ impl Controller {
         self.goal.as_ref()
     }
 
+    /// Forgets the prior map; its window's lower-left corner becomes `(x, y)` (LIVE's known-map
+    /// mode is off until a row arrives).
+    pub fn prior_map_reset(&mut self, x: Meters, y: Meters) {
+        self.known.prior.reset(x, y);
+    }
+
+    /// Row `y` of the prior map from column `x0`: `n` cells, bit `i` of `bits` (least
+    /// significant first) cell `x0 + i`, 1 occupied ([`crate::knownmap::PriorMap::set_row_bits`]).
+    pub fn prior_map_row(&mut self, y: usize, x0: usize, bits: &[u8], n: usize) -> Result<(), PriorError> {
+        self.known.prior.set_row_bits(y, x0, bits, n)
+    }
+
     /// The latest resampled scan, with the labels the core used for it (the upstream labels, or
     /// the classifier's once it labels scans).
     pub fn beams(&self) -> &BeamScan {
@@ -390,6 +408,7 @@ impl Controller {
         self.goal_progress_us = 0;
         self.blocked_since = None;
         self.classifier.reset();
+        self.known.forget_history();
         self.lidar.clear();
         self.visual.grid.clear();
         self.nonmap.clear();
@@ -482,7 +501,13 @@ impl Controller {
                     obs.begin(Stage::Match);
                     let pose = self.match_scan(&predicted);
                     obs.end(Stage::Match);
-                    if scan.labels.is_none() {
+                    if self.known.prior.rows_received() > 0 {
+                        // A known building: its map labels the scan (LTF map, STF and DF non-map).
+                        obs.begin(Stage::Classify);
+                        self.known.classify(&pose, &mut self.beams);
+                        obs.end(Stage::Classify);
+                        self.spent(Stage::Classify, crate::capacity::BEAMS as u32);
+                    } else if scan.labels.is_none() {
                         // No labels from upstream: the int8 network labels the scan (every beam
                         // stays unlabelled until a model is installed).
                         obs.begin(Stage::Classify);

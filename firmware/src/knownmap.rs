@@ -19,8 +19,9 @@
 //! integer (millimetres) and in static buffers: 32 KiB of map bits and
 //! `(STF_HISTORY + 1) × BEAMS` points of history (57 KiB).
 //!
-//! Not yet wired into [`crate::Controller`] (a later step of issue 32: the configuration that
-//! turns it on, the link's map chunks, inspection regions from the STFs).
+//! [`crate::Controller`] labels every scan with it once a prior map is loaded
+//! ([`crate::Controller::prior_map_row`]). Not yet: the link's map chunks, seeding the LiDAR grid
+//! from the prior, inspection regions from the STFs (later steps of issue 32).
 
 use crate::capacity::{BEAMS, CELL_MM, GRID_CELLS};
 use crate::grid::{BitGrid, GridGeometry};
@@ -169,6 +170,10 @@ const SLOTS: usize = STF_HISTORY + 1;
 pub struct KnownMap {
     /// The building's map.
     pub prior: PriorMap,
+    /// The last scan's classes, beam by beam.
+    pub features: [Feature; BEAMS],
+    /// How many of each class so far: `[LTF, STF, DF]`.
+    pub counts: [u32; 3],
     /// The last [`STF_HISTORY`] scans' non-LTF points, each scan's sorted by key.
     history: [[Kept; BEAMS]; SLOTS],
     lens: [usize; SLOTS],
@@ -187,7 +192,14 @@ fn key_of(x: i64, y: i64) -> i64 {
 impl KnownMap {
     /// No map, no history.
     pub const fn new() -> Self {
-        KnownMap { prior: PriorMap::new(), history: [[Kept { key: 0, x: 0, y: 0 }; BEAMS]; SLOTS], lens: [0; SLOTS], next: 0 }
+        KnownMap {
+            prior: PriorMap::new(),
+            features: [Feature::None; BEAMS],
+            counts: [0; 3],
+            history: [[Kept { key: 0, x: 0, y: 0 }; BEAMS]; SLOTS],
+            lens: [0; SLOTS],
+            next: 0,
+        }
     }
 
     /// Forgets the recent scans (a new mission; the map stays).
@@ -196,31 +208,23 @@ impl KnownMap {
         self.next = 0;
     }
 
-    /// Whether `(x, y)` (mm) is within [`STF_MATCH_MM`] of a kept point.
-    fn matches_history(&self, x: i64, y: i64) -> bool {
-        let (bx, by) = (bucket(x), bucket(y));
-        for (scan, &len) in self.history.iter().zip(&self.lens) {
-            let pts = &scan[..len];
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let k = ((bx + dx) << 32) ^ ((by + dy) & 0xffff_ffff);
-                    let start = pts.partition_point(|p| p.key < k);
-                    for p in pts[start..].iter().take_while(|p| p.key == k) {
-                        let (ex, ey) = (p.x as i64 - x, p.y as i64 - y);
-                        if ex * ex + ey * ey <= STF_MATCH_MM * STF_MATCH_MM {
-                            return true;
-                        }
-                    }
-                }
-            }
+    /// Classifies the scan `beams` taken from `pose` (the laser's, in the map's frame) into
+    /// [`KnownMap::features`] and the scan's labels (map = LTF, non-map = STF ∪ DF), and keeps its
+    /// non-LTF points for the [`STF_HISTORY`] scans after it. Returns this scan's counts
+    /// `[LTF, STF, DF]`.
+    pub fn classify(&mut self, pose: &Pose2, beams: &mut BeamScan) -> [u32; 3] {
+        let counts = self.classify_into(pose, beams);
+        for (l, f) in beams.labels.iter_mut().zip(self.features.iter()) {
+            *l = f.label();
         }
-        false
+        for (total, c) in self.counts.iter_mut().zip(counts) {
+            *total = total.saturating_add(c);
+        }
+        counts
     }
 
-    /// Classifies the scan `beams` taken from `pose` (the laser's, in the map's frame) into
-    /// `out`, one per beam, and keeps its non-LTF points for the [`STF_HISTORY`] scans after it.
-    /// Returns the counts `[LTF, STF, DF]`.
-    pub fn classify(&mut self, pose: &Pose2, beams: &BeamScan, out: &mut [Feature; BEAMS]) -> [u32; 3] {
+    fn classify_into(&mut self, pose: &Pose2, beams: &BeamScan) -> [u32; 3] {
+        let out = &mut self.features;
         // The slot of the scan `STF_HISTORY + 1` ago takes this one's points: the others are
         // the history searched.
         let slot = self.next;
@@ -239,7 +243,7 @@ impl KnownMap {
                 continue;
             }
             let (px, py) = (mm(x), mm(y));
-            if self.matches_history(px, py) {
+            if matches_history(&self.history, &self.lens, px, py) {
                 *o = Feature::Stf;
                 counts[1] += 1;
             } else {
@@ -254,6 +258,27 @@ impl KnownMap {
         self.next = (slot + 1) % SLOTS;
         counts
     }
+}
+
+/// Whether `(x, y)` (mm) is within [`STF_MATCH_MM`] of a kept point.
+fn matches_history(history: &[[Kept; BEAMS]; SLOTS], lens: &[usize; SLOTS], x: i64, y: i64) -> bool {
+    let (bx, by) = (bucket(x), bucket(y));
+    for (scan, &len) in history.iter().zip(lens) {
+        let pts = &scan[..len];
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                let k = ((bx + dx) << 32) ^ ((by + dy) & 0xffff_ffff);
+                let start = pts.partition_point(|p| p.key < k);
+                for p in pts[start..].iter().take_while(|p| p.key == k) {
+                    let (ex, ey) = (p.x as i64 - x, p.y as i64 - y);
+                    if ex * ex + ey * ey <= STF_MATCH_MM * STF_MATCH_MM {
+                        return true;
+                    }
+                }
+            }
+        }
+    }
+    false
 }
 
 impl Default for KnownMap {
@@ -301,14 +326,15 @@ mod tests {
         let mut k = walled();
         let pose = Pose2::from_f64(2.0, 10.0, 0.0).unwrap();
         let b = ahead();
-        let mut out = [Feature::None; BEAMS];
         // The wall is 3 m ahead (x = 5.0–5.1 m: the cell's centre 5.05 m): LTF; a box at 1.5 m: not.
-        let c = k.classify(&pose, &scan(&[(b, 3_040), (b + 5, 1_500)]), &mut out);
+        let c = k.classify(&pose, &mut scan(&[(b, 3_040), (b + 5, 1_500)]));
+        let out = k.features;
         assert_eq!(out[b], Feature::Ltf);
         assert_eq!(out[b + 5], Feature::Df, "a first sighting of an unmapped object moves, as far as one scan knows");
         assert_eq!(c, [1, 0, 1]);
         // Seen again, it is static.
-        let c = k.classify(&pose, &scan(&[(b, 3_040), (b + 5, 1_510)]), &mut out);
+        let c = k.classify(&pose, &mut scan(&[(b, 3_040), (b + 5, 1_510)]));
+        let out = k.features;
         assert_eq!(out[b + 5], Feature::Stf);
         assert_eq!(c, [1, 1, 0]);
         assert_eq!(Feature::Stf.label(), BeamLabel::NonMap);
@@ -320,19 +346,21 @@ mod tests {
         let mut k = walled();
         let pose = Pose2::from_f64(2.0, 10.0, 0.0).unwrap();
         let b = ahead();
-        let mut out = [Feature::None; BEAMS];
         // 0.3 m short of the wall: beyond the 0.15 m gate.
-        k.classify(&pose, &scan(&[(b, 2_700)]), &mut out);
-        assert_eq!(out[b], Feature::Df);
+        k.classify(&pose, &mut scan(&[(b, 2_700)]));
+        assert_eq!(k.features[b], Feature::Df);
         // STF_HISTORY empty scans push it out of the history.
         for _ in 0..STF_HISTORY {
-            k.classify(&pose, &scan(&[]), &mut out);
+            k.classify(&pose, &mut scan(&[]));
         }
-        k.classify(&pose, &scan(&[(b, 2_700)]), &mut out);
-        assert_eq!(out[b], Feature::Df);
+        let mut s = scan(&[(b, 2_700)]);
+        k.classify(&pose, &mut s);
+        assert_eq!(k.features[b], Feature::Df);
+        assert_eq!(s.labels[b], BeamLabel::NonMap);
         // No returns: nothing.
-        k.classify(&pose, &scan(&[]), &mut out);
-        assert!(out.iter().all(|f| *f == Feature::None));
+        k.classify(&pose, &mut scan(&[]));
+        assert!(k.features.iter().all(|f| *f == Feature::None));
+        assert_eq!(k.counts, [0, 0, 2]);
     }
 
     #[test]
