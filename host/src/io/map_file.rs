@@ -151,7 +151,8 @@ impl MapMeta {
         use serde_yaml_ng::Value;
         let doc: Value = serde_yaml_ng::from_str(text).map_err(|e| MapError {
             file: file.to_string(),
-            line: e.location().map(|l| l.line()),
+            // (libyaml may place an error at the end, past the last line.)
+            line: e.location().map(|l| l.line().clamp(1, yaml_lines(text))),
             message: format!("not valid YAML: {}", strip_location(&e.to_string())),
         })?;
         let Value::Mapping(map) = doc else {
@@ -252,12 +253,42 @@ impl MapMeta {
     }
 }
 
-/// serde_yaml_ng's messages end with " at line L column C"; the line is ours to report.
-fn strip_location(s: &str) -> String {
-    match s.rfind(" at line ") {
-        Some(i) => s[..i].to_string(),
-        None => s.to_string(),
+/// The lines of `text` as YAML counts them (breaks: CR LF, CR, LF, NEL, LS, PS); at least 1.
+pub fn yaml_lines(text: &str) -> usize {
+    let mut n = 1;
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '\r' => {
+                n += 1;
+                if chars.peek() == Some(&'\n') {
+                    chars.next();
+                }
+            }
+            '\n' | '\u{85}' | '\u{2028}' | '\u{2029}' => n += 1,
+            _ => {}
+        }
     }
+    // A final break ends the last line rather than starting one.
+    if text.ends_with(['\n', '\r', '\u{85}', '\u{2028}', '\u{2029}']) && n > 1 {
+        n -= 1;
+    }
+    n
+}
+
+/// serde_yaml_ng's messages say " at line L column C" (at the end, or before the context); the
+/// line is ours to report, so that part goes.
+fn strip_location(s: &str) -> String {
+    let mut out = s.to_string();
+    while let Some(i) = out.find(" at line ") {
+        let rest = out[i + " at line ".len()..].trim_start_matches(|c: char| c.is_ascii_digit());
+        let rest = match rest.strip_prefix(" column ") {
+            Some(r) => r.trim_start_matches(|c: char| c.is_ascii_digit()),
+            None => rest,
+        };
+        out = format!("{}{rest}", &out[..i]);
+    }
+    out
 }
 
 fn read_bounded(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>, MapError> {
