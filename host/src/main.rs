@@ -56,6 +56,8 @@ enum Cmd {
     /// readings, odometry starting a few scans late, a rotated laser mount (host::io::export_bag).
     ExportBag(host::io::export_bag::ExportBagArgs),
     Worlds(cli::worlds::WorldsArgs),
+    #[command(subcommand)]
+    Map(cli::map::MapCmd),
     Bench(cli::bench::BenchArgs),
     /// VLP-16 LiDAR: decode a capture (.pcap or raw payloads) or listen on UDP (docs/vlp16.md).
     #[command(subcommand)]
@@ -118,6 +120,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         }),
         Cmd::ExportBag(args) => host::io::export_bag::run_command(&args),
         Cmd::Worlds(args) => cli::worlds::run(args),
+        Cmd::Map(cmd) => cli::map::run(cmd),
         Cmd::Bench(args) => cli::bench::run(args),
         Cmd::Lidar(cmd) => host::io::sensors::run(cmd),
     }

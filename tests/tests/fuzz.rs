@@ -85,4 +85,4 @@ macro_rules! campaigns {
     };
 }
 
-campaigns!(frames_to_core, frames_to_host, world, carmen, vlp16, pcap, mcap, sqlite, ros1bag, cdr, model, adapter);
+campaigns!(frames_to_core, frames_to_host, world, carmen, vlp16, pcap, mcap, sqlite, ros1bag, cdr, model, adapter, map);

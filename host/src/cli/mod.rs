@@ -7,6 +7,7 @@ pub mod bridge;
 pub mod common;
 pub mod dataset;
 pub mod eval;
+pub mod map;
 pub mod node;
 #[cfg(feature = "ros2")]
 pub mod ros2;

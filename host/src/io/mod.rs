@@ -4,6 +4,7 @@
 //! millimetres for every source (`range`).
 
 pub mod export_bag;
+pub mod map_file;
 pub mod range;
 pub mod record;
 pub mod replay;

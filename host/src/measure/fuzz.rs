@@ -27,6 +27,7 @@
 //! | `cdr` | `decode_laser_scan`, `decode_odometry`, `decode_tf_message`, CDR and ROS 1 | — |
 //! | `model` | `model::validate_blob` (geometric and `LabelPoseNet` blobs) | a blob that validates installs in a `Controller` |
 //! | `adapter` | `link::adapter::parse_line` per line | — |
+//! | `map` | `map_file::MapMeta::parse` and `PriorMap::from_meta` (YAML, then `%%IMAGE%%` and the image) | an error names the file at fault; a YAML error's line is within the file; a map that loads resamples onto a grid |
 //!
 //! Allocation is bounded by the code under test, not by the fuzzer: the campaign builds without a
 //! sanitizer, where libFuzzer cannot check single allocations, so it runs with `-rss_limit_mb=2048`
@@ -39,8 +40,21 @@ use std::path::Path;
 
 /// The targets, by name (the directory names under `fuzz/corpus/` and the binaries under
 /// `fuzz/fuzz_targets/`).
-pub const TARGETS: &[&str] =
-    &["frames_to_core", "frames_to_host", "world", "carmen", "vlp16", "pcap", "mcap", "sqlite", "ros1bag", "cdr", "model", "adapter"];
+pub const TARGETS: &[&str] = &[
+    "frames_to_core",
+    "frames_to_host",
+    "world",
+    "carmen",
+    "vlp16",
+    "pcap",
+    "mcap",
+    "sqlite",
+    "ros1bag",
+    "cdr",
+    "model",
+    "adapter",
+    "map",
+];
 
 /// Runs target `name` on `data`. Panics on an unknown name.
 pub fn run(name: &str, data: &[u8]) {
@@ -57,6 +71,7 @@ pub fn run(name: &str, data: &[u8]) {
         "cdr" => cdr_messages(data),
         "model" => model(data),
         "adapter" => adapter(data),
+        "map" => map(data),
         other => panic!("no fuzz target {other:?} (targets: {})", TARGETS.join(", ")),
     }
 }
@@ -282,6 +297,47 @@ pub fn model(data: &[u8]) {
 pub fn adapter(data: &[u8]) {
     for line in data.split(|&b| b == b'\n') {
         let _ = crate::link::adapter::parse_line(line);
+    }
+}
+
+/// Separates a `map` input's YAML from its image.
+pub const MAP_IMAGE_MARK: &[u8] = b"\n%%IMAGE%%\n";
+
+/// A map_server map: the YAML text, then [`MAP_IMAGE_MARK`] and the image (PGM or PNG). Without
+/// the mark the bytes are tried as the YAML (with a 2 x 2 PGM) and as the image (with a good
+/// YAML). Errors name the file at fault (and a YAML error's line is within it); a map that
+/// loads is resampled onto a small grid.
+pub fn map(data: &[u8]) {
+    use crate::io::map_file::{MapMeta, PriorMap};
+    const YAML: &str = "image: m.pgm\nresolution: 0.05\norigin: [-0.1, 0.2, 0]\n";
+    const PGM: &[u8] = b"P5\n2 2\n255\n\x00\xfe\xcd\xfe";
+    let one = |yaml: &[u8], image: &[u8]| {
+        let text = String::from_utf8_lossy(yaml);
+        match MapMeta::parse(&text, "m.yaml") {
+            Err(e) => {
+                assert_eq!(e.file, "m.yaml", "{e}");
+                if let Some(l) = e.line {
+                    let lines = crate::io::map_file::yaml_lines(&text);
+                    assert!(l >= 1 && l <= lines, "line {l} of {lines}: {e}");
+                }
+            }
+            Ok(meta) => match PriorMap::from_meta(meta, image, "m.yaml", "m.pgm") {
+                Err(e) => assert_eq!(e.file, "m.pgm", "{e}"),
+                Ok(m) => {
+                    assert_eq!(m.cells.len(), m.width * m.height);
+                    if let Err(e) = m.to_grid(10.0, 32, [-1.0, -1.0]) {
+                        assert_eq!(e.file, "m.yaml", "{e}");
+                    }
+                }
+            },
+        }
+    };
+    match data.windows(MAP_IMAGE_MARK.len()).position(|w| w == MAP_IMAGE_MARK) {
+        Some(i) => one(&data[..i], &data[i + MAP_IMAGE_MARK.len()..]),
+        None => {
+            one(data, PGM);
+            one(YAML.as_bytes(), data);
+        }
     }
 }
 
