@@ -143,6 +143,10 @@ pub struct SearchSpec {
     /// The int8 classifier blob for `lives` (validated when the search starts). Without one,
     /// `lives` runs on the simulator's ground-truth labels.
     pub model: Option<&'static [u8]>,
+    /// LIVE's known-map mode: the building's map on the controller's grid (occupied cells, row by
+    /// row from the lowest y, `GRID_CELLS` square; `lives search --map`), which then labels the
+    /// scans ([`firmware::knownmap`]).
+    pub prior_map: Option<std::sync::Arc<Vec<bool>>>,
 }
 
 impl SearchSpec {
@@ -160,6 +164,23 @@ impl SearchSpec {
             trace: false,
             trace_candidates: 0,
             model: None,
+            prior_map: None,
+        }
+    }
+
+    /// Loads [`SearchSpec::prior_map`] into `ctrl`, whose grid it was drawn on.
+    pub fn load_prior(&self, ctrl: &mut Controller) {
+        let Some(cells) = &self.prior_map else { return };
+        let n = firmware::capacity::GRID_CELLS;
+        let cfg = ctrl.config();
+        ctrl.prior_map_reset(cfg.origin_x_m, cfg.origin_y_m);
+        for (y, row) in cells.chunks(n).enumerate().take(n) {
+            let mut bits = vec![0u8; n.div_ceil(8)];
+            for (x, _) in row.iter().enumerate().filter(|(_, &o)| o) {
+                bits[x / 8] |= 1 << (x % 8);
+            }
+            // Rows within the grid and the grid's width: cannot be refused.
+            let _ = ctrl.prior_map_row(y, 0, &bits, row.len());
         }
     }
 
@@ -405,6 +426,7 @@ pub fn try_run_observed(
     if let (true, Some(blob)) = (spec.classifier(), spec.model) {
         ctrl.set_model(blob)?;
     }
+    spec.load_prior(&mut ctrl);
     Ok(run_with(spec, ctrl, progress, observe))
 }
 
@@ -412,11 +434,14 @@ pub fn try_run_observed(
 pub fn run(spec: &SearchSpec, progress: impl FnMut(f64)) -> SearchRun {
     let spec = SearchSpec { model: None, ..spec.clone() };
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner.kind());
-    run_with(&spec, Box::new(Controller::new(cfg)), progress, |_| {})
+    let mut ctrl = Box::new(Controller::new(cfg));
+    spec.load_prior(&mut ctrl);
+    run_with(&spec, ctrl, progress, |_| {})
 }
 
 fn run_with(spec: &SearchSpec, ctrl: Box<Controller>, mut progress: impl FnMut(f64), mut observe: impl FnMut(&TickView<'_>)) -> SearchRun {
-    let classifier = spec.classifier();
+    // The labels the core used are scored against the truth: the classifier's or the map's.
+    let classifier = spec.classifier() || spec.prior_map.is_some();
     let mut source = spec.sim_source();
     let mut brain = InProcess::new(ctrl);
     let mut goals = Vec::new();
@@ -513,7 +538,7 @@ impl SearchResult {
             blacklisted,
             blocked: src.blocked,
             collisions: src.collisions,
-            labels: spec.planner.label_source(classifier).to_string(),
+            labels: if spec.prior_map.is_some() { "known-map" } else { spec.planner.label_source(classifier) }.to_string(),
             targets: src.sim.target_positions().iter().map(|p| [round3(p[0]), round3(p[1])]).collect(),
             motion: Some(src.tally.motion()),
             lidar_saw_target_s: src.tally.lidar_saw_target_s(),
