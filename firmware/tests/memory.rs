@@ -17,6 +17,7 @@ fn static_memory_matches_the_documented_budget() {
         ("BeamScan", size_of::<BeamScan>()),
         ("Classifier", size_of::<firmware::classifier::Classifier<'static>>()),
         ("ScanMatcher", size_of::<firmware::matcher::ScanMatcher>()),
+        ("KnownMap", size_of::<firmware::knownmap::KnownMap>()),
         ("Controller", size_of::<Controller>()),
     ];
     for (name, bytes) in sizes {
