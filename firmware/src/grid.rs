@@ -348,9 +348,7 @@ impl EvidenceGrid {
     /// The evidence at `(x, y)`, `None` if never observed (or out of bounds).
     #[inline]
     pub fn get(&self, x: i32, y: i32) -> Option<Evidence> {
-        let Some(i) = PackedGrid::index(x, y) else {
-            return None;
-        };
+        let i = PackedGrid::index(x, y)?;
         let v = (self.nibbles[i >> 1] >> ((i & 1) * 4)) & 15;
         (v != 0).then_some(v as Evidence - 8)
     }
@@ -359,9 +357,7 @@ impl EvidenceGrid {
     /// returns the new evidence, or `None` out of bounds.
     #[inline]
     pub fn add(&mut self, x: i32, y: i32, delta: Evidence) -> Option<Evidence> {
-        let Some(i) = PackedGrid::index(x, y) else {
-            return None;
-        };
+        let i = PackedGrid::index(x, y)?;
         let shift = (i & 1) * 4;
         let b = &mut self.nibbles[i >> 1];
         let v = (*b >> shift) & 15;

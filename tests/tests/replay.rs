@@ -1031,9 +1031,8 @@ fn vlp16_captures_replay_one_scan_per_rotation_at_the_origin() {
 fn bad_scans_in_a_bag_are_named_rejections_and_lose_nothing_good() {
     let mut m = bag_messages(YAW_90);
     // Scans 5, 10, 15 and 20 go bad, each its own way.
-    let mut k = 0;
-    for msg in m.iter_mut().filter(|msg| msg.0 == "/scan") {
-        let mut s = laser_scan(k, "laser");
+    for (k, msg) in m.iter_mut().filter(|msg| msg.0 == "/scan").enumerate() {
+        let mut s = laser_scan(k as u32, "laser");
         match k {
             5 => s.range_max = 0.0,
             10 => (s.range_min, s.range_max) = (5.0, 2.0),
@@ -1042,7 +1041,6 @@ fn bad_scans_in_a_bag_are_named_rejections_and_lose_nothing_good() {
             _ => {}
         }
         msg.3 = cdr::encode_laser_scan(&s);
-        k += 1;
     }
     let path = tmp("bad-scans.mcap");
     write_mcap(&path, &m, 4096);

@@ -211,8 +211,8 @@ impl MapMeta {
             None => false,
             Some(Value::Bool(b)) => *b,
             Some(v) => match as_number(v) {
-                Some(n) if n == 0.0 => false,
-                Some(n) if n == 1.0 => true,
+                Some(0.0) => false,
+                Some(1.0) => true,
                 _ => return Err(err("negate", format!("expected 0 or 1, found {}", value_text(v)))),
             },
         };

@@ -319,7 +319,7 @@ impl Timings {
         self.min = self.min.min(v);
         self.max = self.max.max(v);
         self.sum += v;
-        if self.n % self.stride == 0 {
+        if self.n.is_multiple_of(self.stride) {
             self.kept.push(v);
             if self.kept.len() >= Self::KEPT {
                 let halved: Vec<f64> = self.kept.iter().skip(1).step_by(2).copied().collect();

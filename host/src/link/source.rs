@@ -9,6 +9,8 @@ use crate::search::SearchSpec;
 use std::sync::atomic::AtomicBool;
 
 /// Where the data comes from.
+// One per run, moved once: the size difference between the variants costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 pub enum Source {
     /// The simulator, with this search's world, scenario, planner and seed.

@@ -200,7 +200,7 @@ impl StatusMsg {
             blacklisted: s.blacklisted,
             retired: s.retired,
             watchdog_trips: s.watchdog_trips,
-            cost: s.cost.into(),
+            cost: s.cost,
             overruns: s.overruns,
             heap_overflows: s.heap_overflows,
             link,

@@ -127,7 +127,7 @@ fn bad_images_are_errors_naming_the_image() {
 fn resampling_keeps_a_fine_maps_walls_and_spreads_a_coarse_maps_cells() {
     // 0.05 m map, 4 x 4, one occupied pixel at map cell (1, 2) (centre (-0.925, 2.125)).
     let mut px = vec![254u8; 16];
-    px[(4 - 1 - 2) * 4 + 1] = 0;
+    px[4 + 1] = 0; // row 4 - 1 - 2 from the top, column 1
     let m = map_of(GOOD, &pgm(4, 4, &px)).unwrap();
     let g = m.to_grid(10.0, 8, [-1.2, 1.8]).unwrap();
     let at = |x: usize, y: usize| g[y * 8 + x];

@@ -420,9 +420,12 @@ pub fn decode_point_stamped(buf: &[u8]) -> Result<(Header, [f64; 3]), CdrError> 
     Ok((h, r.f64s::<3>("point")?))
 }
 
+/// One detection's hypotheses: `(class_id, score)`.
+pub type Hypotheses = Vec<(String, f64)>;
+
 /// `vision_msgs/msg/Detection2DArray` (vision_msgs 4): the header and each detection's
 /// hypotheses as `(class_id, score)`.
-pub fn decode_detection2d_array(buf: &[u8]) -> Result<(Header, Vec<Vec<(String, f64)>>), CdrError> {
+pub fn decode_detection2d_array(buf: &[u8]) -> Result<(Header, Vec<Hypotheses>), CdrError> {
     let mut r = CdrReader::new(buf)?;
     let h = header(&mut r)?;
     // A Detection2D is at least its header (12 bytes), two counts and the box (40 bytes).

@@ -458,7 +458,7 @@ impl Ros2Source {
             let laser = p.scan.header.frame_id.clone();
             let waited = p.since.elapsed() >= self.opts.pose_wait;
             let until = self.tree.moving_until(&laser);
-            if !until.is_some_and(|t| t >= p.t_ns) && !waited {
+            if until.is_none_or(|t| t < p.t_ns) && !waited {
                 return;
             }
             let p = self.pending.pop_front().expect("a front");

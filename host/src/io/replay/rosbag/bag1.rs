@@ -77,7 +77,10 @@ impl<'a> Header<'a> {
 }
 
 /// The `name=value` fields of a record header or of a connection's data.
-fn parse_fields(mut b: &[u8]) -> Result<Vec<(&[u8], &[u8])>, String> {
+/// A header's fields: `(name, value)`, in order.
+type Fields<'a> = Vec<(&'a [u8], &'a [u8])>;
+
+fn parse_fields(mut b: &[u8]) -> Result<Fields<'_>, String> {
     let mut out = Vec::new();
     let total = b.len();
     while !b.is_empty() {

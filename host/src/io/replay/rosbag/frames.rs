@@ -183,6 +183,7 @@ impl FrameTree {
         Ok(())
     }
 
+    #[cfg(feature = "ros2")]
     /// The newest stamp of the first moving edge from `f` up (the odometry that places it), if
     /// any: a live source waits for it to reach a scan's stamp before placing the scan (as tf2's
     /// message filter waits for the transform at the scan's time).
@@ -198,12 +199,14 @@ impl FrameTree {
         None
     }
 
+    #[cfg(feature = "ros2")]
     /// Whether `f` is a frame of the tree (the child of an edge, or some edge's parent).
     pub(crate) fn knows(&self, f: &str) -> bool {
         let f = frame(f);
         self.edges.contains_key(&f) || self.edges.values().any(|e| e.parent == f)
     }
 
+    #[cfg(feature = "ros2")]
     /// Drops the samples of moving edges older than `t_ns`, keeping each edge's newest sample
     /// before it (a live source's memory stays bounded).
     pub(crate) fn forget_before(&mut self, t_ns: u64) {
