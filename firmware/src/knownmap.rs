@@ -185,8 +185,9 @@ fn bucket(v: i64) -> i64 {
     v.div_euclid(STF_MATCH_MM)
 }
 
-fn key_of(x: i64, y: i64) -> i64 {
-    (bucket(x) << 32) ^ (bucket(y) & 0xffff_ffff)
+/// The key of bucket `(bx, by)`.
+fn key(bx: i64, by: i64) -> i64 {
+    (bx << 32) ^ (by & 0xffff_ffff)
 }
 
 impl KnownMap {
@@ -213,49 +214,43 @@ impl KnownMap {
     /// non-LTF points for the [`STF_HISTORY`] scans after it. Returns this scan's counts
     /// `[LTF, STF, DF]`.
     pub fn classify(&mut self, pose: &Pose2, beams: &mut BeamScan) -> [u32; 3] {
-        let counts = self.classify_into(pose, beams);
-        for (l, f) in beams.labels.iter_mut().zip(self.features.iter()) {
-            *l = f.label();
-        }
-        for (total, c) in self.counts.iter_mut().zip(counts) {
-            *total = total.saturating_add(c);
-        }
-        counts
-    }
-
-    fn classify_into(&mut self, pose: &Pose2, beams: &BeamScan) -> [u32; 3] {
-        let out = &mut self.features;
         // The slot of the scan `STF_HISTORY + 1` ago takes this one's points: the others are
         // the history searched.
         let slot = self.next;
         self.lens[slot] = 0;
         let mut counts = [0u32; 3];
         let mut kept = 0;
-        for (b, (&r, o)) in beams.ranges_mm.iter().zip(out.iter_mut()).enumerate() {
-            *o = Feature::None;
-            if r == RANGE_INVALID || r == RANGE_NO_RETURN {
-                continue;
-            }
-            let (x, y) = hit_point(pose, b, r);
-            if self.prior.near_occupied(x, y, LTF_GATE_MM) {
-                *o = Feature::Ltf;
-                counts[0] += 1;
-                continue;
-            }
-            let (px, py) = (mm(x), mm(y));
-            if matches_history(&self.history, &self.lens, px, py) {
-                *o = Feature::Stf;
-                counts[1] += 1;
+        let BeamScan { ranges_mm, labels, .. } = beams;
+        for (b, ((&r, o), l)) in ranges_mm.iter().zip(self.features.iter_mut()).zip(labels.iter_mut()).enumerate() {
+            let f = if r == RANGE_INVALID || r == RANGE_NO_RETURN {
+                Feature::None
             } else {
-                *o = Feature::Df;
-                counts[2] += 1;
+                let (x, y) = hit_point(pose, b, r);
+                if self.prior.near_occupied(x, y, LTF_GATE_MM) {
+                    Feature::Ltf
+                } else {
+                    let (px, py) = (mm(x), mm(y));
+                    let f = if matches_history(&self.history, &self.lens, px, py) { Feature::Stf } else { Feature::Df };
+                    self.history[slot][kept] = Kept { key: key(bucket(px), bucket(py)), x: px as i32, y: py as i32 };
+                    kept += 1;
+                    f
+                }
+            };
+            match f {
+                Feature::None => {}
+                Feature::Ltf => counts[0] += 1,
+                Feature::Stf => counts[1] += 1,
+                Feature::Df => counts[2] += 1,
             }
-            self.history[slot][kept] = Kept { key: key_of(px, py), x: px as i32, y: py as i32 };
-            kept += 1;
+            *o = f;
+            *l = f.label();
         }
         self.history[slot][..kept].sort_unstable_by_key(|p| (p.key, p.x, p.y));
         self.lens[slot] = kept;
         self.next = (slot + 1) % SLOTS;
+        for (total, c) in self.counts.iter_mut().zip(counts) {
+            *total = total.saturating_add(c);
+        }
         counts
     }
 }
@@ -267,7 +262,7 @@ fn matches_history(history: &[[Kept; BEAMS]; SLOTS], lens: &[usize; SLOTS], x: i
         let pts = &scan[..len];
         for dy in -1..=1 {
             for dx in -1..=1 {
-                let k = ((bx + dx) << 32) ^ ((by + dy) & 0xffff_ffff);
+                let k = key(bx + dx, by + dy);
                 let start = pts.partition_point(|p| p.key < k);
                 for p in pts[start..].iter().take_while(|p| p.key == k) {
                     let (ex, ey) = (p.x as i64 - x, p.y as i64 - y);

@@ -71,7 +71,7 @@ pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
     opts.max_wall = max_wall.map(|s| positive_secs("--max-wall", s)).transpose()?;
     opts.max_idle = max_idle.map(|s| positive_secs("--max-idle", s)).transpose()?;
     let origin = origin.as_deref().map(host::link::robot::parse_origin).transpose()?;
-    let mut cfg = firmware::Config { scan_matching: false, ..firmware::Config::DEFAULT };
+    let mut cfg = host::link::robot::REAL_ROBOT_CONFIG;
     for a in &set {
         host::overrides::apply(&mut cfg, a)?;
     }

@@ -66,7 +66,7 @@ pub fn run(args: SimServeArgs) -> Result<ExitCode, String> {
 pub fn lives_ros2_args(spec: &SearchSpec) -> Result<(Vec<String>, [f64; 2]), String> {
     let kind = spec.planner.kind();
     let cfg = controller_config(&spec.controller, &spec.world, kind);
-    let base = Config { scan_matching: false, ..Config::DEFAULT }.with_planner(kind);
+    let base = host::link::robot::REAL_ROBOT_CONFIG.with_planner(kind);
     let origin = [metres(cfg.origin_x_m), metres(cfg.origin_y_m)];
     let mut args = vec!["--origin".to_string(), format!("{},{}", origin[0], origin[1]), "--planner".into(), spec.planner.to_string()];
     let mut check = Config { origin_x_m: cfg.origin_x_m, origin_y_m: cfg.origin_y_m, ..base };

@@ -56,6 +56,10 @@ pub enum LidarSource {
     Vlp16Udp(SocketAddr, Vlp16Config),
 }
 
+/// The controller's configuration for a real robot (the base adapter's, `lives ros2`'s): the
+/// default without scan matching (see [`RobotSpec::new`]).
+pub const REAL_ROBOT_CONFIG: Config = Config { scan_matching: false, ..Config::DEFAULT };
+
 /// A robot run: where the adapter listens and how the controller is configured.
 #[derive(Clone, Debug)]
 pub struct RobotSpec {
@@ -86,7 +90,7 @@ impl RobotSpec {
             listen,
             lidar: LidarSource::Adapter,
             planner: PlannerChoice::Lives,
-            controller: Config { scan_matching: false, ..Config::DEFAULT },
+            controller: REAL_ROBOT_CONFIG,
             origin: None,
             adapter: AdapterConfig::default(),
             on_listen: None,
@@ -113,7 +117,7 @@ pub struct RobotRun {
 /// Encodes a planar scan ([`crate::io::range`]: REP 117, its limits travel with it). More than
 /// [`MAX_WIRE_BEAMS`] ranges are decimated (every k-th range, the increment k times larger; the
 /// core resamples onto its 897 beams anyway).
-fn encode_planar(angle_min: f64, angle_increment: f64, ranges: &[f32], limits: RangeLimits) -> Option<EncodedScan> {
+pub(crate) fn encode_planar(angle_min: f64, angle_increment: f64, ranges: &[f32], limits: RangeLimits) -> Option<EncodedScan> {
     let k = ranges.len().div_ceil(MAX_WIRE_BEAMS).max(1);
     EncodedScan::new(angle_min, angle_increment * k as f64, ranges.iter().step_by(k).map(|&r| r as f64), &limits)
 }

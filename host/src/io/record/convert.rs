@@ -27,7 +27,7 @@ pub(super) fn base64(bytes: &[u8]) -> String {
 }
 
 /// The centre of cell `c`, metres.
-pub(super) fn cell_centre(geom: &GridGeometry, c: (i32, i32)) -> [f64; 2] {
+pub(crate) fn cell_centre(geom: &GridGeometry, c: (i32, i32)) -> [f64; 2] {
     let (x, y) = geom.center_of(c.0, c.1);
     [x.to_num::<f64>(), y.to_num::<f64>()]
 }

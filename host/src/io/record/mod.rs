@@ -67,7 +67,7 @@ use std::time::{Duration, Instant};
 mod msg;
 use msg::*;
 
-mod convert;
+pub(crate) mod convert;
 mod observer;
 use convert::*;
 pub use observer::*;

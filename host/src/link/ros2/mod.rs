@@ -21,10 +21,11 @@
 mod publish;
 pub mod wire;
 
-use crate::io::range::{EncodedScan, RangeLimits};
+use crate::io::range::RangeLimits;
 use crate::io::replay::cdr;
 use crate::io::replay::rosbag::{frame, scan_record, EdgeReject, FrameTree, PoseError, MAX_POSE_AGE_NS};
 use crate::io::replay::Location;
+use crate::link::robot::encode_planar;
 use crate::run::{drive, Answer, End, Frame, InProcess, Source};
 use firmware::{Config, Controller, Pose2};
 use rustdds::mio1::{Events, Interest, Poll, Token};
@@ -225,14 +226,16 @@ impl Ros2Source {
         let sub = dp.create_subscriber(&Qos::Reliable(10).policies()).map_err(|e| Ros2Error(format!("DDS subscriber: {e:?}")))?;
         let publ = dp.create_publisher(&Qos::Reliable(10).policies()).map_err(|e| Ros2Error(format!("DDS publisher: {e:?}")))?;
         let poll = Poll::new().map_err(|e| Ros2Error(format!("poll: {e}")))?;
+        let topic = |name: &str, ty: &str, qos: Qos| {
+            dp.create_topic(wire::dds_topic(name), wire::dds_type(ty), &qos.policies(), TopicKind::NoKey)
+                .map_err(|e| Ros2Error(format!("topic {name}: {e:?}")))
+        };
         let mut readers = Vec::new();
         let mut reader_topic = HashMap::new();
         let mut topics = Vec::new();
-        for (i, (name, ty, qos)) in SUBSCRIBED.iter().enumerate() {
+        for (i, &(name, ty, qos)) in SUBSCRIBED.iter().enumerate() {
             let name = opts.topic(name);
-            let topic = dp
-                .create_topic(wire::dds_topic(&name), wire::dds_type(ty), &qos.policies(), TopicKind::NoKey)
-                .map_err(|e| Ros2Error(format!("topic {name}: {e:?}")))?;
+            let topic = topic(&name, ty, qos)?;
             let mut r = sub
                 .create_datareader_no_key::<Raw, RawCdr>(&topic, Some(qos.policies()))
                 .map_err(|e| Ros2Error(format!("reader {name}: {e:?}")))?;
@@ -244,9 +247,7 @@ impl Ros2Source {
         let mut writers = Vec::new();
         for (name, ty, qos) in PUBLISHED {
             let name = opts.topic(name);
-            let topic = dp
-                .create_topic(wire::dds_topic(&name), wire::dds_type(ty), &qos.policies(), TopicKind::NoKey)
-                .map_err(|e| Ros2Error(format!("topic {name}: {e:?}")))?;
+            let topic = topic(&name, ty, qos)?;
             writers.push(
                 publ.create_datawriter_no_key::<Raw, RawCdr>(&topic, Some(qos.policies()))
                     .map_err(|e| Ros2Error(format!("writer {name}: {e:?}")))?,
@@ -486,7 +487,7 @@ impl Ros2Source {
                         continue;
                     };
                     let limits = RangeLimits::new(r.range_limits_m[0], r.range_limits_m[1]);
-                    let Some(scan) = encode_ranges(r.angle_min, r.angle_increment, &r.ranges_m, limits) else {
+                    let Some(scan) = encode_planar(r.angle_min, r.angle_increment, &r.ranges_m, limits) else {
                         self.reject_scan("scan-angle-increment", "beam angles that are not finite".into(), p.t_ns);
                         continue;
                     };
@@ -547,11 +548,7 @@ impl Source for Ros2Source {
             }
             // The watchdog: odometry stopped while a goal is out.
             if self.driving.get() && self.last_odom.is_some_and(|t| t.elapsed() >= self.opts.watchdog) {
-                let t_ns = self.pose.get().map_or(0, |(_, t)| t);
-                self.publish_stop(t_ns, "no odometry for the watchdog period");
-                let msg =
-                    json!({ "kind": "stop", "reason": "stale-odometry", "detail": format!("no odometry for {:?}", self.opts.watchdog) });
-                self.write(STATUS, wire::encode_string(&msg.to_string()));
+                self.announce_stop("stale-odometry", &format!("no odometry for {:?}", self.opts.watchdog));
             }
             let due = self.opts.lockstep || Instant::now() >= self.next_tick;
             if due && !self.ready.is_empty() {
@@ -641,13 +638,6 @@ fn edge_reject_name(r: EdgeReject) -> &'static str {
     }
 }
 
-/// A scan in the core's encoding (more beams than a frame carries are decimated, as for the
-/// base adapter's scans).
-fn encode_ranges(angle_min: f64, angle_increment: f64, ranges: &[f32], limits: RangeLimits) -> Option<EncodedScan> {
-    let k = ranges.len().div_ceil(firmware::protocol::MAX_WIRE_BEAMS).max(1);
-    EncodedScan::new(angle_min, angle_increment * k as f64, ranges.iter().step_by(k).map(|&r| r as f64), &limits)
-}
-
 /// A run's outcome.
 pub struct Ros2Run {
     /// How it ended.
@@ -704,9 +694,7 @@ pub fn run(
     source.publish_maps(&wire::header_at(t_ns, &source.root.borrow()), &brain.ctrl);
     if ended.end == End::Source {
         // Told to stop or out of time: the base stands.
-        source.publish_stop(t_ns, "lives ros2 is shutting down");
-        let msg = json!({ "kind": "stop", "reason": "shutdown", "detail": "lives ros2 stopped" });
-        source.write(STATUS, wire::encode_string(&msg.to_string()));
+        source.announce_stop("shutdown", "lives ros2 stopped");
     }
     Ok(source.finish(ended.end, ended.ticks))
 }

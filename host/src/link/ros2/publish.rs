@@ -3,10 +3,11 @@
 
 use super::wire::{self, marker, Marker};
 use super::{Ros2Source, CAMERA_MAP, GOAL, LIDAR_MAP, MARKERS, PLAN, STATUS};
+use crate::io::record::convert::cell_centre;
 use crate::io::replay::cdr::{self, Transform};
 use crate::run::{Act, Answer, End, Frame, InProcess};
 use firmware::capacity::{CELLS_PER_METER, GRID_CELLS};
-use firmware::grid::{beam_angle, mm_to_meters};
+use firmware::nonmap::hit_point;
 use firmware::scan::{BeamLabel, RANGE_INVALID, RANGE_NO_RETURN};
 use firmware::{Controller, Mode};
 use serde_json::json;
@@ -18,11 +19,20 @@ impl Ros2Source {
         let h = wire::header_at(t_ns, &root);
         self.write(PLAN, wire::encode_path(&h, &[]));
         if let Some((p, _)) = self.pose.get() {
-            self.write(GOAL, wire::encode_pose_stamped(&h, &wire::pose_of(p[0], p[1], p[2])));
+            self.write(GOAL, wire::encode_pose_stamped(&h, &Transform::planar(p[0], p[1], p[2])));
         }
         if self.driving.replace(false) {
             eprintln!("lives ros2: base stopped: {why}");
         }
+    }
+
+    /// A stop the controller did not ask for (`reason`: `stale-odometry`, `shutdown`): the
+    /// stop, and a status saying why.
+    pub(super) fn announce_stop(&self, reason: &str, detail: &str) {
+        let t_ns = self.pose.get().map_or(0, |(_, t)| t);
+        self.publish_stop(t_ns, detail);
+        let msg = json!({ "kind": "stop", "reason": reason, "detail": detail });
+        self.write(STATUS, wire::encode_string(&msg.to_string()));
     }
 
     /// What the controller answered to `frame`, on the graph: the plan and goal, the status, and
@@ -110,19 +120,16 @@ impl Ros2Source {
 
     fn publish_markers(&self, h: &cdr::Header, frame: &Frame, ctrl: &Controller) {
         let geom = ctrl.lidar.geom;
-        let centre = |c: (i32, i32)| {
-            let (x, y) = geom.center_of(c.0, c.1);
-            [x.to_num::<f64>(), y.to_num::<f64>()]
-        };
-        let [px, py, pyaw] = frame.base_pose;
+        let centre = |c: (i32, i32)| cell_centre(&geom, c);
         let (mut points, mut colors) = (Vec::new(), Vec::new());
         let beams = ctrl.beams();
+        let pose = frame.pose.unwrap_or_default();
         for (b, (&r, &label)) in beams.ranges_mm.iter().zip(beams.labels.iter()).enumerate() {
             if r == RANGE_INVALID || r == RANGE_NO_RETURN {
                 continue;
             }
-            let (m, a) = (mm_to_meters(r).to_num::<f64>(), beam_angle(b).to_radians() + pyaw);
-            points.push([px + m * a.cos(), py + m * a.sin()]);
+            let (x, y) = hit_point(&pose, b, r);
+            points.push([x.to_num::<f64>(), y.to_num::<f64>()]);
             colors.push(match label {
                 BeamLabel::Map => [0.35, 0.47, 0.78, 1.0],
                 BeamLabel::NonMap => [1.0, 0.55, 0.0, 1.0],
@@ -173,7 +180,7 @@ impl Ros2Source {
                 ns: "candidates".into(),
                 id: i as i32,
                 kind: marker::ARROW,
-                pose: Some(wire::pose_of(x, y, v.heading.to_radians())),
+                pose: Some(Transform::planar(x, y, v.heading.to_radians())),
                 scale: [0.5, 0.08, 0.08],
                 color: [0.2, 0.8, 0.2, 0.9],
                 ..Marker::default()
@@ -193,7 +200,7 @@ fn path_poses(path: &[[f64; 2]], yaw: Option<f64>) -> Vec<Transform> {
             } else {
                 yaw.unwrap_or_else(|| if n > 1 { (path[n - 1][1] - path[n - 2][1]).atan2(path[n - 1][0] - path[n - 2][0]) } else { 0.0 })
             };
-            wire::pose_of(path[i][0], path[i][1], heading)
+            Transform::planar(path[i][0], path[i][1], heading)
         })
         .collect()
 }

@@ -121,11 +121,6 @@ pub fn time_of(t_ns: u64) -> Time {
     Time { sec: (t_ns / 1_000_000_000).min(i32::MAX as u64) as i32, nanosec: (t_ns % 1_000_000_000) as u32 }
 }
 
-/// A planar pose as `geometry_msgs/Pose` (the same fields as a `Transform`).
-pub fn pose_of(x: f64, y: f64, yaw: f64) -> Transform {
-    Transform::planar(x, y, yaw)
-}
-
 /// `geometry_msgs/msg/PoseStamped`.
 pub fn encode_pose_stamped(h: &Header, pose: &Transform) -> Vec<u8> {
     let mut w = CdrWriter::new();
@@ -163,7 +158,7 @@ pub fn encode_occupancy_grid(h: &Header, resolution: f32, cols: u32, rows: u32, 
     w.put(resolution.to_le_bytes());
     w.put(cols.to_le_bytes());
     w.put(rows.to_le_bytes());
-    w.transform(&pose_of(origin[0], origin[1], 0.0));
+    w.transform(&Transform::planar(origin[0], origin[1], 0.0));
     w.put((data.len() as u32).to_le_bytes());
     for &v in data {
         w.put(v.to_le_bytes());
