@@ -374,9 +374,10 @@ impl Ros2Source {
                     }
                     let laser = s.header.frame_id.clone();
                     if self.last_scan_ns.get(&laser).is_some_and(|&p| t_ns <= p) {
-                        self.reject(
+                        self.reject_scan(
                             "scan-stamp-backwards",
                             format!("{topic}: a scan stamped {} s, not after the one before", t_ns as f64 / 1e9),
+                            t_ns,
                         );
                         return;
                     }
