@@ -73,3 +73,7 @@ pub const ROOM_QUEUE: usize = 16384;
 /// Object proposals (clusters of non-map points that fit a target) kept per planning step
 /// (`crate::planner::proposals`), best evidence first.
 pub const MAX_PROPOSALS: usize = 12;
+
+/// Waypoints of a coverage route (LIVE's waypoint manager, `crate::planner::coverage`): the
+/// host's route over a known building; more are refused.
+pub const MAX_ROUTE_WAYPOINTS: usize = 256;

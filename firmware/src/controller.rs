@@ -20,8 +20,10 @@ use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
 use crate::knownmap::{KnownMap, PriorError};
 use crate::matcher::{ScanMatcher, MATCH_WARMUP_SCANS};
 use crate::nonmap::NonMapStore;
+use crate::planner::coverage::{RouteFull, RouteWaypoint};
 use crate::planner::{Goal, PlanInputs, Planner, Site};
 use crate::scan::{BeamScan, ScanError, ScanInput};
+use crate::searchmap::SearchMap;
 use fixed_point::{hypot, BinaryAngle, Meters, Pose2};
 
 /// Operator commands.
@@ -207,6 +209,9 @@ pub struct Status {
     /// Which way the camera should face now while walking to the goal (`None`: the direction of
     /// travel, or the goal's heading once near it). See [`crate::Config::gaze`].
     pub gaze: Option<BinaryAngle>,
+    /// LIVE's search map: its entropy, bits (one per free cell of the prior map the camera has
+    /// not seen; 0 without a prior map). See [`crate::searchmap`].
+    pub search_entropy_bits: u32,
 }
 
 impl Status {
@@ -252,6 +257,11 @@ pub struct Controller {
     /// ([`Controller::prior_map_row`]) it labels every scan, before upstream labels and the
     /// classifier.
     pub known: KnownMap,
+    /// LIVE's search map over the prior's free space ([`crate::searchmap`]).
+    pub search: SearchMap,
+    /// The prior map has been seeded into the LiDAR grid as it is now (cleared by a new row,
+    /// a reset and a move of the window).
+    seeded: bool,
     beams: BeamScan,
     mode: Mode,
     /// The pose the maps are drawn at: the input pose corrected by `map_from_odom`.
@@ -291,6 +301,8 @@ impl Controller {
             classifier: Classifier::new(ClassifierConfig { feedback: LabelFeedback::Raw }),
             matcher: ScanMatcher::new(),
             known: KnownMap::new(),
+            search: SearchMap::new(),
+            seeded: false,
             beams: BeamScan::new(),
             mode: Mode::Idle,
             pose: None,
@@ -321,6 +333,7 @@ impl Controller {
                 overruns: [0; 5],
                 heap_overflows: 0,
                 gaze: None,
+                search_entropy_bits: 0,
             },
         }
     }
@@ -357,12 +370,34 @@ impl Controller {
     /// mode is off until a row arrives).
     pub fn prior_map_reset(&mut self, x: Meters, y: Meters) {
         self.known.prior.reset(x, y);
+        self.search = SearchMap::new();
+        self.seeded = false;
     }
 
     /// Row `y` of the prior map from column `x0`: `n` cells, bit `i` of `bits` (least
     /// significant first) cell `x0 + i`, 1 occupied ([`crate::knownmap::PriorMap::set_row_bits`]).
     pub fn prior_map_row(&mut self, y: usize, x0: usize, bits: &[u8], n: usize) -> Result<(), PriorError> {
+        self.seeded = false;
         self.known.prior.set_row_bits(y, x0, bits, n)
+    }
+
+    /// The free cells of row `y` of the prior map, as [`Controller::prior_map_row`] (1 free):
+    /// they seed the LiDAR grid's free space (so the planner can plan across the known
+    /// building) and are the cells LIVE's search map covers.
+    pub fn prior_map_free_row(&mut self, y: usize, x0: usize, bits: &[u8], n: usize) -> Result<(), PriorError> {
+        self.seeded = false;
+        self.known.prior.set_free_row_bits(y, x0, bits, n)
+    }
+
+    /// Forgets the coverage route (LIVE's waypoint manager, [`crate::planner::coverage`]).
+    pub fn route_clear(&mut self) {
+        self.planner.route.clear();
+    }
+
+    /// Appends a waypoint to the coverage route: where to stand and which way to face, in the
+    /// map's frame. Refused when the route holds [`crate::capacity::MAX_ROUTE_WAYPOINTS`].
+    pub fn route_push(&mut self, x: Meters, y: Meters, heading: BinaryAngle) -> Result<(), RouteFull> {
+        self.planner.route.push(RouteWaypoint { x, y, heading })
     }
 
     /// The latest resampled scan, with the labels the core used for it (the upstream labels, or
@@ -409,6 +444,7 @@ impl Controller {
         self.blocked_since = None;
         self.classifier.reset();
         self.known.forget_history();
+        self.seeded = false;
         self.lidar.clear();
         self.visual.grid.clear();
         self.nonmap.clear();
@@ -483,11 +519,21 @@ impl Controller {
                 if crate::rolling::follow(maps, &p, self.cfg.nonmap_pool_radius_m) {
                     self.last_plan_us = None;
                     self.plan_prepared = false;
+                    self.seeded = false;
                 }
             } else {
                 self.status.poses_rejected += 1;
                 pose_refused = true;
             }
+        }
+
+        if !self.seeded && self.known.prior.rows_received() > 0 {
+            // A known building: its map seeds the LiDAR grid's unobserved cells, and the search
+            // map is counted over the window (once per map, search and window; the work goes to
+            // the next scan's LiDAR stage).
+            let w = self.known.prior.seed(&mut self.lidar) + self.search.recount(&self.known.prior, &self.lidar.geom, &self.visual);
+            self.lidar.pending_work = self.lidar.pending_work.saturating_add(w);
+            self.seeded = true;
         }
 
         if let (Some(scan), Some(predicted), false) = (inputs.scan, self.pose, pose_refused) {
@@ -520,7 +566,14 @@ impl Controller {
                     obs.end(Stage::Lidar);
                     self.spent(Stage::Lidar, w);
                     obs.begin(Stage::Visual);
-                    let w = self.visual.integrate(&self.lidar, &pose, self.cfg.camera_fov, self.cfg.camera_range_m);
+                    let w = if self.seeded {
+                        let (search, prior, geom) = (&mut self.search, &self.known.prior, self.lidar.geom);
+                        self.visual.integrate_noting(&self.lidar, &pose, self.cfg.camera_fov, self.cfg.camera_range_m, |x, y| {
+                            search.first_seen(prior, &geom, x, y)
+                        })
+                    } else {
+                        self.visual.integrate(&self.lidar, &pose, self.cfg.camera_fov, self.cfg.camera_range_m)
+                    };
                     obs.end(Stage::Visual);
                     self.spent(Stage::Visual, w);
                     let geom = self.lidar.geom;
@@ -593,6 +646,7 @@ impl Controller {
         }
 
         self.status.mode = Some(self.mode);
+        self.status.search_entropy_bits = self.search.entropy_bits();
         let exploring = self.mode == Mode::Exploring;
         // The goal goes out in the frame the poses come in (the odometry's): the base follows it
         // there. Inside, the controller plans in its map frame (`Controller::goal`).
@@ -703,8 +757,15 @@ impl Controller {
         self.plan_prepared = false;
         obs.begin(Stage::Plan);
         let current = self.goal.as_ref().map(|g| (g.viewpoint.cell, g.viewpoint.heading));
-        let inputs =
-            PlanInputs { cfg: &self.cfg, lidar: &self.lidar, visual: &self.visual, frontiers: &self.frontiers, nonmap: &self.nonmap, pose };
+        let inputs = PlanInputs {
+            cfg: &self.cfg,
+            lidar: &self.lidar,
+            visual: &self.visual,
+            frontiers: &self.frontiers,
+            nonmap: &self.nonmap,
+            pose,
+            now_us,
+        };
         let (best, current_utility) = self.planner.select(inputs, current);
         obs.end(Stage::Plan);
         let work = self.planner.stats.work;
@@ -727,8 +788,12 @@ impl Controller {
                 }
                 let same =
                     self.goal.as_ref().is_some_and(|g| g.viewpoint.cell == b.viewpoint.cell && g.viewpoint.heading == b.viewpoint.heading);
-                self.goal_best_dist = hypot(b.pose.x - pose.x, b.pose.y - pose.y);
-                self.goal_progress_us = now_us;
+                // A route follower re-chooses its waypoint every step: the same goal keeps its
+                // progress clock, or a waypoint the base cannot reach would never time out.
+                if !(same && self.cfg.planner.is_coverage()) {
+                    self.goal_best_dist = hypot(b.pose.x - pose.x, b.pose.y - pose.y);
+                    self.goal_progress_us = now_us;
+                }
                 self.goal = Some(b);
                 if !same {
                     self.status.goals += 1;

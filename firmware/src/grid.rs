@@ -486,6 +486,14 @@ impl LidarGrid {
         }
     }
 
+    /// Gives a cell the LiDAR has never observed the evidence `e` (a prior map's,
+    /// [`crate::knownmap::PriorMap::seed`]); an observed cell keeps its own.
+    pub fn seed(&mut self, x: i32, y: i32, e: Evidence) {
+        if PackedGrid::in_bounds(x, y) && self.evidence.get(x, y).is_none() {
+            self.update(x, y, e);
+        }
+    }
+
     /// Integrates one resampled scan taken at `pose` (see the type's docs). `clear_range` is the
     /// clearing range (the configuration's `lidar_max_range_m`): returns beyond it mark nothing.
     pub fn integrate(&mut self, pose: &Pose2, scan: &BeamScan, clear_range: Meters) -> IntegrateStats {
@@ -654,6 +662,19 @@ impl VisualGrid {
     /// `range`, each stopping at (and including) the first cell the LiDAR map knows is occupied.
     /// Returns cells touched.
     pub fn integrate(&mut self, lidar: &LidarGrid, pose: &Pose2, fov: BinaryAngle, range: Meters) -> u32 {
+        self.integrate_noting(lidar, pose, fov, range, |_, _| {})
+    }
+
+    /// [`VisualGrid::integrate`], calling `first_seen` with each cell the camera sees for the
+    /// first time (LIVE's search map counts them, [`crate::searchmap`]).
+    pub fn integrate_noting(
+        &mut self,
+        lidar: &LidarGrid,
+        pose: &Pose2,
+        fov: BinaryAngle,
+        range: Meters,
+        mut first_seen: impl FnMut(i32, i32),
+    ) -> u32 {
         let (rx, ry) = lidar.geom.cell_of(pose.x, pose.y);
         let rays = camera_rays(fov, GridGeometry::cells(range));
         let start = pose.theta - BinaryAngle((fov.0 as u32 / 2) as i32);
@@ -667,7 +688,11 @@ impl VisualGrid {
                     break;
                 }
                 work += 1;
-                match lidar.get(x, y) {
+                let c = lidar.get(x, y);
+                if c != Cell::Unknown && self.grid.get(x, y) == Cell::Unknown {
+                    first_seen(x, y);
+                }
+                match c {
                     Cell::Occupied => {
                         self.grid.set(x, y, Cell::Occupied);
                         break;

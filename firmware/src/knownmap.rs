@@ -11,7 +11,7 @@
 //!   distance-gate reading of `exp(−‖p − q‖² / Σs) > τ`);
 //! * **DF** (dynamic feature): the other non-LTF points;
 //!
-//! and *map* = LTF, *non-map* = STF ∪ DF, as [`BeamLabel`].
+//! and *map* = LTF, *non-map* = STF, as [`BeamLabel`] (DFs are ignored, as the paper does).
 //!
 //! The prior map ([`PriorMap`]) is a bit per 0.1 m cell over its own fixed 51.2 m window (its
 //! lower-left corner is the map's, not the rolling LiDAR grid's), filled a row segment at a time
@@ -20,11 +20,13 @@
 //! `(STF_HISTORY + 1) × BEAMS` points of history (57 KiB).
 //!
 //! [`crate::Controller`] labels every scan with it once a prior map is loaded
-//! ([`crate::Controller::prior_map_row`]). Not yet: the link's map chunks, seeding the LiDAR grid
-//! from the prior, inspection regions from the STFs (later steps of issue 32).
+//! ([`crate::Controller::prior_map_row`]), seeds its LiDAR grid from the prior's occupied and
+//! free cells ([`PriorMap::seed`]) and keeps LIVE's search map over the prior's free space
+//! ([`crate::searchmap`]). The STF points go to the non-map store, whose filters are LIVE's
+//! inspection-region filters (pooling, removal near LTFs, removal where the camera looked).
 
 use crate::capacity::{BEAMS, CELL_MM, GRID_CELLS};
-use crate::grid::{BitGrid, GridGeometry};
+use crate::grid::{BitGrid, GridGeometry, LidarGrid};
 use crate::nonmap::hit_point;
 use crate::scan::{BeamLabel, BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
 use fixed_point::{Meters, Pose2};
@@ -56,12 +58,15 @@ pub enum Feature {
 }
 
 impl Feature {
-    /// As the planner's label: map = LTF, non-map = STF ∪ DF.
+    /// As the planner's label: map = LTF, non-map = STF; DFs stay unlabelled (ignored, as in
+    /// the paper: they never become inspection regions).
     pub fn label(self) -> BeamLabel {
         match self {
             Feature::None => BeamLabel::Unlabelled,
             Feature::Ltf => BeamLabel::Map,
-            Feature::Stf | Feature::Df => BeamLabel::NonMap,
+            Feature::Stf => BeamLabel::NonMap,
+            // The paper ignores DFs: a point seen once, or moving, is no place to look.
+            Feature::Df => BeamLabel::Unlabelled,
         }
     }
 }
@@ -75,29 +80,49 @@ pub enum PriorError {
     SegmentTooLong,
 }
 
-/// The prior map: occupied cells over a fixed window with its own lower-left corner.
+/// The prior map: occupied and free cells over a fixed window with its own lower-left corner
+/// (a cell that is neither is unknown: outside the building, or never mapped).
 pub struct PriorMap {
     geom: GridGeometry,
     occupied: BitGrid,
+    free: BitGrid,
     rows: u32,
 }
 
 impl PriorMap {
     /// Empty, its window's lower-left corner at the origin.
     pub const fn new() -> Self {
-        PriorMap { geom: GridGeometry { origin_x: Meters::ZERO, origin_y: Meters::ZERO }, occupied: BitGrid::new(), rows: 0 }
+        PriorMap {
+            geom: GridGeometry { origin_x: Meters::ZERO, origin_y: Meters::ZERO },
+            occupied: BitGrid::new(),
+            free: BitGrid::new(),
+            rows: 0,
+        }
     }
 
     /// Forgets the map; the window's lower-left corner becomes `(x, y)`.
     pub fn reset(&mut self, x: Meters, y: Meters) {
         self.geom = GridGeometry { origin_x: x, origin_y: y };
         self.occupied.clear();
+        self.free.clear();
         self.rows = 0;
     }
 
     /// Row `y`'s cells from column `x0` on: bit `i` of `bits` (least significant first) is cell
     /// `x0 + i`, 1 occupied; `n` cells.
     pub fn set_row_bits(&mut self, y: usize, x0: usize, bits: &[u8], n: usize) -> Result<(), PriorError> {
+        Self::put_row(&mut self.occupied, y, x0, bits, n)?;
+        self.rows = self.rows.saturating_add(1);
+        Ok(())
+    }
+
+    /// As [`PriorMap::set_row_bits`] for the free cells (1 free): the known free space, which
+    /// seeds the LiDAR grid and is what the search map covers ([`SearchMap`]).
+    pub fn set_free_row_bits(&mut self, y: usize, x0: usize, bits: &[u8], n: usize) -> Result<(), PriorError> {
+        Self::put_row(&mut self.free, y, x0, bits, n)
+    }
+
+    fn put_row(plane: &mut BitGrid, y: usize, x0: usize, bits: &[u8], n: usize) -> Result<(), PriorError> {
         if y >= GRID_CELLS {
             return Err(PriorError::RowOutside);
         }
@@ -105,10 +130,25 @@ impl PriorMap {
             return Err(PriorError::SegmentTooLong);
         }
         for i in 0..n {
-            self.occupied.put((x0 + i) as i32, y as i32, bits[i / 8] >> (i % 8) & 1 != 0);
+            plane.put((x0 + i) as i32, y as i32, bits[i / 8] >> (i % 8) & 1 != 0);
         }
-        self.rows = self.rows.saturating_add(1);
         Ok(())
+    }
+
+    /// The prior's cell under cell `(x, y)` of a grid at `geom` (both grids have 0.1 m cells).
+    pub fn cell_under(&self, geom: &GridGeometry, x: i32, y: i32) -> (i32, i32) {
+        let (wx, wy) = geom.center_of(x, y);
+        self.geom.cell_of(wx, wy)
+    }
+
+    /// Whether the prior marks cell `(x, y)` of its own window free.
+    pub fn free_cell(&self, x: i32, y: i32) -> bool {
+        self.free.get(x, y)
+    }
+
+    /// Whether the prior marks cell `(x, y)` of its own window occupied.
+    pub fn occupied_cell(&self, x: i32, y: i32) -> bool {
+        self.occupied.get(x, y)
     }
 
     /// Row segments received since the last reset (0: no map).
@@ -141,6 +181,37 @@ impl PriorMap {
             }
         }
         false
+    }
+}
+
+/// The evidence a prior-free cell starts with: two misses' worth, so a scan or two of an object
+/// that stands there now (the target) outweigh the map.
+pub const SEED_FREE: crate::grid::Evidence = 2 * crate::grid::EVIDENCE_MISS;
+/// The evidence a prior-occupied cell starts with: one hit's worth, so a door the map has closed
+/// opens after a few scans through it.
+pub const SEED_OCCUPIED: crate::grid::Evidence = crate::grid::EVIDENCE_HIT;
+
+impl PriorMap {
+    /// Seeds the cells of `lidar` it has never observed with the prior: occupied ones with
+    /// [`SEED_OCCUPIED`], free ones with [`SEED_FREE`] (unknown ones stay unknown). Cells the
+    /// LiDAR has already observed keep their evidence. Returns the cells visited.
+    pub fn seed(&self, lidar: &mut LidarGrid) -> u32 {
+        let geom = lidar.geom;
+        let n = GRID_CELLS as i32;
+        for y in 0..n {
+            for x in 0..n {
+                let (px, py) = self.cell_under(&geom, x, y);
+                let e = if self.occupied.get(px, py) {
+                    SEED_OCCUPIED
+                } else if self.free.get(px, py) {
+                    SEED_FREE
+                } else {
+                    continue;
+                };
+                lidar.seed(x, y, e);
+            }
+        }
+        (n * n) as u32
     }
 }
 
@@ -351,7 +422,7 @@ mod tests {
         let mut s = scan(&[(b, 2_700)]);
         k.classify(&pose, &mut s);
         assert_eq!(k.features[b], Feature::Df);
-        assert_eq!(s.labels[b], BeamLabel::NonMap);
+        assert_eq!(s.labels[b], BeamLabel::Unlabelled, "a DF is ignored");
         // No returns: nothing.
         k.classify(&pose, &mut scan(&[]));
         assert!(k.features.iter().all(|f| *f == Feature::None));

@@ -45,6 +45,7 @@ pub mod rolling;
 pub mod rooms;
 pub mod rrt;
 pub mod scan;
+pub mod searchmap;
 pub mod tour;
 
 pub use config::{Config, PlannerKind};

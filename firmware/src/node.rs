@@ -53,11 +53,13 @@
 
 use crate::config::ConfigError;
 use crate::controller::{Controller, Mode, Outputs, StageObserver, Status};
+use crate::knownmap::PriorError;
 use crate::protocol::frame::CRC;
 use crate::protocol::{
     encode, output_messages, Accepted, Admission, ConfigMsg, CoreDecoder, CoreToHost, ErrorCode, ErrorMsg, Heartbeat, HostToCore, Inbox,
-    LabelsMsg, LinkCounters, Session, StatusMsg, WireCommand, MAX_CORE_TO_HOST_FRAME,
+    LabelsMsg, LinkCounters, MapRowMsg, RouteMsg, Session, StatusMsg, WireCommand, MAP_ROW_BYTES, MAX_CORE_TO_HOST_FRAME,
 };
+use fixed_point::{BinaryAngle, Meters};
 
 /// Who says what time it is (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -324,6 +326,16 @@ impl Node {
                     self.counters.configs_applied = self.counters.configs_applied.wrapping_add(1);
                 }
             }
+            Accepted::MapRow(m) => {
+                if apply_map_row(ctl, &m).is_err() {
+                    self.emit_error(ErrorCode::MapRowRefused { y: m.y }, send);
+                }
+            }
+            Accepted::Route(r) => {
+                if let Err(index) = apply_route(ctl, &r) {
+                    self.emit_error(ErrorCode::RouteRefused { index }, send);
+                }
+            }
             Accepted::Stored => {
                 self.pose_t_us = pose_t.or(self.pose_t_us);
                 self.scan_t_us = scan_t.or(self.scan_t_us);
@@ -487,6 +499,39 @@ impl Node {
         };
         StatusMsg::from_status(self.last_tick_us.unwrap_or(0), &s, self.link_counters())
     }
+}
+
+/// Applies a row of the prior map to `ctl` ([`HostToCore::MapRow`]; the in-process host
+/// loads a map through the same function). A plane shorter than the run is zero beyond its end
+/// (the host trims trailing zero bytes). Refused: a row or run outside the map's window.
+pub fn apply_map_row(ctl: &mut Controller, m: &MapRowMsg) -> Result<(), PriorError> {
+    if m.reset {
+        ctl.prior_map_reset(Meters::from_bits(m.origin_x), Meters::from_bits(m.origin_y));
+    }
+    let (y, x0, n) = (m.y as usize, m.x0 as usize, m.n as usize);
+    let mut plane = [0u8; MAP_ROW_BYTES];
+    let k = m.occupied.len().min(MAP_ROW_BYTES);
+    plane[..k].copy_from_slice(&m.occupied[..k]);
+    ctl.prior_map_row(y, x0, &plane, n)?;
+    plane = [0u8; MAP_ROW_BYTES];
+    let k = m.free.len().min(MAP_ROW_BYTES);
+    plane[..k].copy_from_slice(&m.free[..k]);
+    ctl.prior_map_free_row(y, x0, &plane, n)
+}
+
+/// Applies waypoints of the coverage route to `ctl` ([`HostToCore::Route`]). Refused from the
+/// first waypoint that is out of order or past the route's capacity: its index.
+pub fn apply_route(ctl: &mut Controller, r: &RouteMsg) -> Result<(), u16> {
+    if r.first == 0 {
+        ctl.route_clear();
+    }
+    if r.first as usize != ctl.planner.route.waypoints().len() {
+        return Err(r.first);
+    }
+    for (k, w) in r.waypoints.iter().enumerate() {
+        ctl.route_push(Meters::from_bits(w.x), Meters::from_bits(w.y), BinaryAngle(w.heading)).map_err(|_| r.first + k as u16)?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

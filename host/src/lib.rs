@@ -8,6 +8,7 @@
 pub mod io;
 pub mod learn;
 pub mod link;
+pub mod live;
 pub mod measure;
 pub mod overrides;
 pub mod render;

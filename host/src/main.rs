@@ -116,7 +116,7 @@ fn run(cli: Cli) -> Result<ExitCode, String> {
         Cmd::Params(args) => host::overrides::run_params(&args),
         Cmd::Replay(args) => host::io::replay::run_command(&args),
         Cmd::Mapcheck(args) => host::measure::mapcheck::run_command(&args, |world, scenario, planner, seed| {
-            load_spec(&RunArgs { world: world.to_string(), scenario, planner, seed })
+            load_spec(&RunArgs { world: world.to_string(), scenario, planner, seed, map: None })
         }),
         Cmd::ExportBag(args) => host::io::export_bag::run_command(&args),
         Cmd::Worlds(args) => cli::worlds::run(args),

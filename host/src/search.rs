@@ -40,6 +40,13 @@ pub enum PlannerChoice {
     LivesGreedy,
     /// The structured search without the non-map term (the ablation of `lives`).
     LivesNoNonMap,
+    /// LIVE (known map, `--map`): LiDAR coverage route plus priority waypoints to inspection
+    /// regions.
+    Live,
+    /// LIVE's "heuristic visual coverage" baseline (known map): a camera coverage route.
+    VisualCpp,
+    /// LIVE's "LiDAR coverage" baseline (known map): the LiDAR coverage route alone.
+    LidarCpp,
 }
 
 impl PlannerChoice {
@@ -55,6 +62,10 @@ impl PlannerChoice {
         PlannerChoice::Rrt,
     ];
 
+    /// The planners of a known building (`--map`): LIVE and its two baselines. Not in
+    /// [`PlannerChoice::ALL`], the planners of an unknown building.
+    pub const KNOWN_MAP: [PlannerChoice; 3] = [PlannerChoice::Live, PlannerChoice::VisualCpp, PlannerChoice::LidarCpp];
+
     /// The core's planner kind.
     pub fn kind(self) -> PlannerKind {
         match self {
@@ -65,6 +76,9 @@ impl PlannerChoice {
             PlannerChoice::Nearest => PlannerKind::Nearest,
             PlannerChoice::ExploreLite => PlannerKind::ExploreLite,
             PlannerChoice::Rrt => PlannerKind::Rrt,
+            PlannerChoice::Live => PlannerKind::Live,
+            PlannerChoice::VisualCpp => PlannerKind::VisualCoverage,
+            PlannerChoice::LidarCpp => PlannerKind::LidarCoverage,
         }
     }
 
@@ -88,7 +102,10 @@ impl PlannerChoice {
             | PlannerChoice::Nearest
             | PlannerChoice::ExploreLite
             | PlannerChoice::Rrt
-            | PlannerChoice::LivesNoNonMap => "none",
+            | PlannerChoice::LivesNoNonMap
+            | PlannerChoice::Live
+            | PlannerChoice::VisualCpp
+            | PlannerChoice::LidarCpp => "none",
         }
     }
 }
@@ -104,6 +121,9 @@ impl fmt::Display for PlannerChoice {
             PlannerChoice::Rrt => "rrt",
             PlannerChoice::LivesGreedy => "lives-greedy",
             PlannerChoice::LivesNoNonMap => "lives-no-nonmap",
+            PlannerChoice::Live => "live",
+            PlannerChoice::VisualCpp => "visual-cpp",
+            PlannerChoice::LidarCpp => "lidar-cpp",
         })
     }
 }
@@ -111,10 +131,10 @@ impl fmt::Display for PlannerChoice {
 impl FromStr for PlannerChoice {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        PlannerChoice::ALL
-            .into_iter()
+        let all = || PlannerChoice::ALL.into_iter().chain(PlannerChoice::KNOWN_MAP);
+        all()
             .find(|p| p.to_string() == s)
-            .ok_or_else(|| format!("unknown planner `{s}` (expected {})", PlannerChoice::ALL.map(|p| p.to_string()).join(", ")))
+            .ok_or_else(|| format!("unknown planner `{s}` (expected {})", all().map(|p| p.to_string()).collect::<Vec<_>>().join(", ")))
     }
 }
 
@@ -143,10 +163,11 @@ pub struct SearchSpec {
     /// The int8 classifier blob for `lives` (validated when the search starts). Without one,
     /// `lives` runs on the simulator's ground-truth labels.
     pub model: Option<&'static [u8]>,
-    /// LIVE's known-map mode: the building's map on the controller's grid (occupied cells, row by
-    /// row from the lowest y, `GRID_CELLS` square; `lives search --map`), which then labels the
-    /// scans ([`firmware::knownmap`]).
-    pub prior_map: Option<std::sync::Arc<Vec<bool>>>,
+    /// LIVE's known-map mode: the building's map on the controller's grid (row by row from the
+    /// lowest y, `GRID_CELLS` square; `lives search --map`), which then labels the scans
+    /// ([`firmware::knownmap`]), seeds the LiDAR grid and, for `live`, `visual-cpp` and
+    /// `lidar-cpp`, gives the coverage route ([`crate::live`]).
+    pub prior_map: Option<std::sync::Arc<Vec<crate::io::map_file::Cell3>>>,
 }
 
 impl SearchSpec {
@@ -168,20 +189,14 @@ impl SearchSpec {
         }
     }
 
-    /// Loads [`SearchSpec::prior_map`] into `ctrl`, whose grid it was drawn on.
-    pub fn load_prior(&self, ctrl: &mut Controller) {
-        let Some(cells) = &self.prior_map else { return };
-        let n = firmware::capacity::GRID_CELLS;
-        let cfg = ctrl.config();
-        ctrl.prior_map_reset(cfg.origin_x_m, cfg.origin_y_m);
-        for (y, row) in cells.chunks(n).enumerate().take(n) {
-            let mut bits = vec![0u8; n.div_ceil(8)];
-            for (x, _) in row.iter().enumerate().filter(|(_, &o)| o) {
-                bits[x / 8] |= 1 << (x % 8);
-            }
-            // Rows within the grid and the grid's width: cannot be refused.
-            let _ = ctrl.prior_map_row(y, 0, &bits, row.len());
-        }
+    /// Loads [`SearchSpec::prior_map`] into `ctrl`, whose grid it was drawn on, and, for a
+    /// planner that follows a route, plans the route from the robot's start and gives it.
+    /// Returns what LIVE's central server did (`None` without a map).
+    pub fn load_prior(&self, ctrl: &mut Controller) -> Option<crate::live::LiveSummary> {
+        let cells = self.prior_map.as_ref()?;
+        crate::live::load(ctrl, cells);
+        let start = Sim::new(self.world.clone(), self.sim.clone(), self.seed).pose();
+        Some(crate::live::plan_and_give(ctrl, cells, [start[0], start[1]]))
     }
 
     /// `easy` or `hard`; `file` for a world file (its own scenario).
@@ -330,6 +345,10 @@ pub struct SearchResult {
     /// and turning to face it. Filled in by `lives eval` (absent elsewhere).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub oracle_s: Option<f64>,
+    /// LIVE's known-map search: the route, the waypoint manager and the search map's entropy
+    /// (`--map` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub live: Option<crate::live::LiveSummary>,
 }
 
 /// Everything a picture or a test may want after a run.
@@ -426,8 +445,8 @@ pub fn try_run_observed(
     if let (true, Some(blob)) = (spec.classifier(), spec.model) {
         ctrl.set_model(blob)?;
     }
-    spec.load_prior(&mut ctrl);
-    Ok(run_with(spec, ctrl, progress, observe))
+    let live = spec.load_prior(&mut ctrl);
+    Ok(run_with(spec, ctrl, live, progress, observe))
 }
 
 /// [`try_run`] for specs without a model (ground-truth or no labels): cannot fail.
@@ -435,11 +454,17 @@ pub fn run(spec: &SearchSpec, progress: impl FnMut(f64)) -> SearchRun {
     let spec = SearchSpec { model: None, ..spec.clone() };
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner.kind());
     let mut ctrl = Box::new(Controller::new(cfg));
-    spec.load_prior(&mut ctrl);
-    run_with(&spec, ctrl, progress, |_| {})
+    let live = spec.load_prior(&mut ctrl);
+    run_with(&spec, ctrl, live, progress, |_| {})
 }
 
-fn run_with(spec: &SearchSpec, ctrl: Box<Controller>, mut progress: impl FnMut(f64), mut observe: impl FnMut(&TickView<'_>)) -> SearchRun {
+fn run_with(
+    spec: &SearchSpec,
+    ctrl: Box<Controller>,
+    mut live: Option<crate::live::LiveSummary>,
+    mut progress: impl FnMut(f64),
+    mut observe: impl FnMut(&TickView<'_>),
+) -> SearchRun {
     // The labels the core used are scored against the truth: the classifier's or the map's.
     let classifier = spec.classifier() || spec.prior_map.is_some();
     let mut source = spec.sim_source();
@@ -456,6 +481,16 @@ fn run_with(spec: &SearchSpec, ctrl: Box<Controller>, mut progress: impl FnMut(f
             }
         }
         observe(&TickView { t_us: frame.t_us, inputs: &frame.inputs(answer.command), outputs: out, controller: ctrl });
+        if let Some(l) = live.as_mut() {
+            // The search map's entropy, every few seconds (the first sample once it is counted).
+            let t = frame.t_us as f64 / 1e6;
+            if l.entropy.last().is_none_or(|p| t >= p[0] + crate::live::ENTROPY_EVERY_S) && ctrl.search.cells() > 0 {
+                if l.entropy.is_empty() {
+                    l.entropy_start_bits = ctrl.search.entropy_bits();
+                }
+                l.entropy.push([round3(t), ctrl.search.entropy_bits() as f64]);
+            }
+        }
         if answer.end.is_some() || out.stop {
             return;
         }
@@ -474,7 +509,11 @@ fn run_with(spec: &SearchSpec, ctrl: Box<Controller>, mut progress: impl FnMut(f
     let status = brain.outputs().map(|o| o.status).unwrap_or_default();
     let found_at = (ended.end == End::Found).then_some([source.pose[0], source.pose[1]]);
     let score = classifier.then(|| LabelScore::from_confusion(confusion));
-    let result = SearchResult::simulated(spec, &source, ended, status.goals, status.blacklisted, classifier, score);
+    let mut result = SearchResult::simulated(spec, &source, ended, status.goals, status.blacklisted, classifier, score);
+    if let Some(mut l) = live {
+        crate::live::finish(&mut l, &brain.ctrl);
+        result.live = Some(l);
+    }
     let SimSource { sim, trajectory, start, .. } = source;
     SearchRun { result, controller: brain.ctrl, sim, trajectory, start, found_at, goals }
 }
@@ -546,6 +585,7 @@ impl SearchResult {
             classifier: score,
             sim: SimSettings::changed(&spec.sim),
             oracle_s: None,
+            live: None,
         }
     }
 }

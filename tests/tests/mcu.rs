@@ -34,9 +34,13 @@ use std::time::{Duration, Instant};
 
 const WORKSPACE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 const TRACE_FIXTURE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/golden.trace");
+const LIVE_FIXTURE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/golden-live.trace");
 const BUDGETS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../firmware/mcu-budgets.toml");
 /// Ticks in the fixture (`lives trace record --ticks 150`).
 const TRACE_TICKS: u32 = 150;
+/// Ticks in the known-map fixture (`--ticks 100`: with the map it holds, the most `mcu-trace`'s
+/// flash takes beside the golden trace).
+const LIVE_TRACE_TICKS: u32 = 100;
 /// Guest instructions per SysTick count under `-icount shift=0` (25 MHz, 1 ns per instruction).
 const INSTRUCTIONS_PER_COUNT: u64 = 40;
 /// The stages `mcu-trace` times, in its column order.
@@ -45,6 +49,9 @@ const STAGES: [&str; 7] = ["classify", "lidar", "visual", "nonmap", "plan", "gaz
 const REQUIRED_STAGES: [&str; 5] = ["classify", "lidar", "visual", "nonmap", "plan"];
 const RERECORD: &str =
     "re-record the fixture: lives trace record --world examples/worlds/apartment-easy-hallway-start.toml --seed 2 --ticks 150 --out tests/fixtures/golden.trace";
+const RERECORD_LIVE: &str =
+    "re-record the fixture: lives map export apartment /tmp/apartment.yaml && lives trace record --world apartment \
+     --scenario hard --seed 2 --planner live --map /tmp/apartment.yaml --ticks 100 --out tests/fixtures/golden-live.trace";
 
 fn image_dir() -> PathBuf {
     if let Some(d) = std::env::var_os("LIVES_MCU_DIR") {
@@ -131,22 +138,26 @@ struct McuTrace {
     records: Vec<McuRecord>,
     ticks: u32,
     stack_max: u64,
+    /// The known-map trace's records (`L` lines) and ticks.
+    live: Vec<McuRecord>,
+    live_ticks: u32,
 }
 
 fn parse_trace_output(out: &str) -> McuTrace {
-    let mut records = Vec::new();
-    let (mut ticks, mut stack_max) = (None, None);
+    let (mut records, mut live) = (Vec::new(), Vec::new());
+    let (mut ticks, mut stack_max, mut live_ticks) = (None, None, None);
     for line in out.lines() {
         let f: Vec<&str> = line.split_whitespace().collect();
         match f.first() {
-            Some(&"R") => {
+            Some(&tag @ ("R" | "L")) => {
                 assert_eq!(f.len(), 7 + STAGES.len(), "bad line from mcu-trace: {line}");
                 let n = |i: usize| f[i].parse::<u64>().unwrap_or_else(|_| panic!("bad number in: {line}"));
                 let mut stages = [0; STAGES.len()];
                 for (k, s) in stages.iter_mut().enumerate() {
                     *s = n(7 + k);
                 }
-                records.push(McuRecord {
+                let into = if tag == "R" { &mut records } else { &mut live };
+                into.push(McuRecord {
                     digest: Digest {
                         record: n(1) as u32,
                         t_us: n(2),
@@ -159,6 +170,7 @@ fn parse_trace_output(out: &str) -> McuTrace {
                 });
             }
             Some(&"DONE") => ticks = f.get(1).and_then(|s| s.strip_prefix("ticks=")).and_then(|s| s.parse().ok()),
+            Some(&"LIVE") => live_ticks = f.get(1).and_then(|s| s.strip_prefix("ticks=")).and_then(|s| s.parse().ok()),
             Some(&"STACK") => stack_max = f.get(2).and_then(|s| s.strip_prefix("max=")).and_then(|s| s.parse().ok()),
             _ => {}
         }
@@ -167,6 +179,8 @@ fn parse_trace_output(out: &str) -> McuTrace {
         records,
         ticks: ticks.unwrap_or_else(|| panic!("mcu-trace did not finish:\n{out}")),
         stack_max: stack_max.unwrap_or_else(|| panic!("mcu-trace printed no stack figure:\n{out}")),
+        live,
+        live_ticks: live_ticks.unwrap_or_else(|| panic!("mcu-trace did not replay the known-map trace:\n{out}")),
     }
 }
 
@@ -187,20 +201,28 @@ fn mcu_runs() -> &'static (McuTrace, McuTrace) {
     })
 }
 
-fn host_digests() -> (Vec<Digest>, u32) {
-    let bytes = std::fs::read(TRACE_FIXTURE).expect("tests/fixtures/golden.trace");
-    let t = Trace::parse(&bytes).unwrap_or_else(|e| panic!("the fixture: {e}; {RERECORD}"));
-    let mut ctl = Box::new(Controller::new(Config::DEFAULT));
-    let mut node = Box::new(Node::new(NodeConfig::new(TimeMode::Lockstep)));
-    let mut out = Vec::new();
-    let ticks = t.replay(&mut node, &mut ctl, |d| out.push(*d)).unwrap_or_else(|e| panic!("host replay: {e}"));
-    (out, ticks)
+/// Both fixtures replayed on the host as `mcu-trace` replays them: the golden trace, then the
+/// known-map trace on the same controller and a new node. Digests and ticks of each.
+fn host_digests() -> &'static [(Vec<Digest>, u32); 2] {
+    static HOST: OnceLock<[(Vec<Digest>, u32); 2]> = OnceLock::new();
+    HOST.get_or_init(|| {
+        let mut ctl = Box::new(Controller::new(Config::DEFAULT));
+        [(TRACE_FIXTURE, RERECORD), (LIVE_FIXTURE, RERECORD_LIVE)].map(|(file, rerecord)| {
+            let bytes = std::fs::read(file).unwrap_or_else(|e| panic!("{file}: {e}"));
+            let t = Trace::parse(&bytes).unwrap_or_else(|e| panic!("the fixture {file}: {e}; {rerecord}"));
+            let mut node = Box::new(Node::new(NodeConfig::new(TimeMode::Lockstep)));
+            let mut out = Vec::new();
+            let ticks = t.replay(&mut node, &mut ctl, |d| out.push(*d)).unwrap_or_else(|e| panic!("host replay of {file}: {e}"));
+            (out, ticks)
+        })
+    })
 }
 
 #[test]
 #[ignore = "needs qemu-system-arm and the MCU images (scripts/test.sh)"]
 fn golden_trace_digests_are_identical_on_host_and_mcu_for_every_tick() {
-    let (host, host_ticks) = host_digests();
+    let (host, host_ticks) = &host_digests()[0];
+    let host_ticks = *host_ticks;
     assert_eq!(host_ticks, TRACE_TICKS, "the host replay ran {host_ticks} ticks, not {TRACE_TICKS} (the protocol changed?); {RERECORD}");
     let mcu = &mcu_runs().0;
     assert_eq!(mcu.ticks, host_ticks);
@@ -214,14 +236,47 @@ fn golden_trace_digests_are_identical_on_host_and_mcu_for_every_tick() {
     assert_eq!(distinct.len(), ticked.len(), "every tick's answer is different (time is in it)");
 }
 
+/// LIVE (issue 32): a search of a known building — the map rows and the route over the link,
+/// the known-map classification, the seeded LiDAR grid, the search map (its entropy is in every
+/// `Status`) and the waypoint manager — answers the same on the MCU as on the host, tick by tick.
+#[test]
+#[ignore = "needs qemu-system-arm and the MCU images (scripts/test.sh)"]
+fn known_map_trace_digests_are_identical_on_host_and_mcu_for_every_tick() {
+    let (host, host_ticks) = &host_digests()[1];
+    assert_eq!(*host_ticks, LIVE_TRACE_TICKS, "the host replay ran {host_ticks} ticks; {RERECORD_LIVE}");
+    let mcu = &mcu_runs().0;
+    assert_eq!(mcu.live_ticks, *host_ticks);
+    assert_eq!(mcu.live.len(), host.len(), "records replayed");
+    for (h, m) in host.iter().zip(&mcu.live) {
+        assert_eq!(*h, m.digest, "known-map record {} (t = {} µs): the MCU's answer differs from the host's", h.record, h.t_us);
+    }
+    // The search map works on both: its entropy falls over the trace (it is in the digests).
+    let bytes = std::fs::read(LIVE_FIXTURE).unwrap();
+    let t = Trace::parse(&bytes).unwrap();
+    let mut ctl = Box::new(Controller::new(Config::DEFAULT));
+    let mut node = Box::new(Node::new(NodeConfig::new(TimeMode::Lockstep)));
+    t.replay(&mut node, &mut ctl, |_| {}).unwrap();
+    assert!(ctl.search.cells() > 10_000, "the prior's free space was counted: {}", ctl.search.cells());
+    assert!(ctl.search.entropy_bits() < ctl.search.cells(), "the camera lowered the entropy");
+    let ltf = ctl.known.counts[0];
+    assert!(ltf > 1000, "the known-map classifier labelled LTFs: {:?}", ctl.known.counts);
+    let mcu_stages = stage_table_of(&mcu.live);
+    println!("known-map trace, per stage (ticks, median, worst instructions): {mcu_stages:?}");
+}
+
 /// Per stage: median and worst case over the ticks that ran it, in guest instructions.
 fn stage_table(t: &McuTrace) -> Vec<(&'static str, usize, u64, u64)> {
+    stage_table_of(&t.records)
+}
+
+/// [`stage_table`] of any records.
+fn stage_table_of(records: &[McuRecord]) -> Vec<(&'static str, usize, u64, u64)> {
     STAGES
         .iter()
         .enumerate()
         .map(|(k, name)| {
             let mut v: Vec<u64> =
-                t.records.iter().filter(|r| r.digest.ticks > 0 && r.stages[k] > 0).map(|r| r.stages[k] * INSTRUCTIONS_PER_COUNT).collect();
+                records.iter().filter(|r| r.digest.ticks > 0 && r.stages[k] > 0).map(|r| r.stages[k] * INSTRUCTIONS_PER_COUNT).collect();
             v.sort_unstable();
             let median = v.get(v.len().saturating_sub(1) / 2).copied().unwrap_or(0);
             (*name, v.len(), median, v.last().copied().unwrap_or(0))

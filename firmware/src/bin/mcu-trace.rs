@@ -1,8 +1,10 @@
-//! The golden trace on the MCU (QEMU `mps2-an386`, run with `-icount shift=0`): replays the
-//! recorded host → core stream embedded in flash (`tests/fixtures/golden.trace`) through the
-//! node and the controller exactly as the host does (`firmware::mcu::trace`), and prints per
-//! record the digest of the node's answer and the SysTick counts of each stage (1 count = 40
-//! guest instructions), then the stack high-water mark. Output format in docs/mcu.md.
+//! The golden traces on the MCU (QEMU `mps2-an386`, run with `-icount shift=0`): replays the
+//! recorded host → core streams embedded in flash through the node and the controller exactly as
+//! the host does (`firmware::mcu::trace`), and prints per record the digest of the node's answer
+//! and the SysTick counts of each stage (1 count = 40 guest instructions): first
+//! `tests/fixtures/golden.trace` (lines `R`), then, on the same controller and a new node,
+//! `tests/fixtures/golden-live.trace`, a LIVE search of a known building (lines `L`); then the
+//! stack high-water mark. Output format in docs/mcu.md.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
@@ -16,8 +18,9 @@ mod app {
     use firmware::mcu::{hook, trace::Trace};
     use firmware::node::{Node, NodeConfig, TimeMode};
 
-    /// The fixture, in flash.
+    /// The fixtures, in flash.
     static TRACE: &[u8] = include_bytes!("../../../tests/fixtures/golden.trace");
+    static TRACE_LIVE: &[u8] = include_bytes!("../../../tests/fixtures/golden-live.trace");
 
     const STAGES: usize = 7;
     const PAINT: u32 = 0x5AFE_C0DE;
@@ -90,42 +93,53 @@ mod app {
         let ctl = CONTROLLER.take();
         let node = NODE.init(|s| s.write(Node::new(NodeConfig::new(TimeMode::Lockstep))));
         let init_stack = stack_used(bottom, top);
-        let trace = Trace::parse(TRACE).unwrap_or_else(|e| fault::stop(format_args!("the embedded trace: {}", e)));
-        hprintln!(
-            "TRACE records={} flags={} bytes={} counts_per_instruction=1/{}",
-            trace.len(),
-            trace.flags(),
-            TRACE.len(),
-            clock::INSTRUCTIONS_PER_COUNT
-        );
-        hook::install(on_stage);
-        let mut last = clock::now_counts();
-        let ticks = trace
-            .replay_observed(node, ctl, &mut hook::Hooked, |d| {
-                let now = clock::now_counts();
-                let total = now - last;
-                let s = TIMES.with(|t| core::mem::replace(&mut t.sum, [0; STAGES]));
-                hprintln!(
-                    "R {} {} {} {} {:08x} {} {} {} {} {} {} {} {}",
-                    d.record,
-                    d.t_us,
-                    d.ticks,
-                    d.len,
-                    d.crc,
-                    total,
-                    s[0],
-                    s[1],
-                    s[2],
-                    s[3],
-                    s[4],
-                    s[5],
-                    s[6]
-                );
-                // The printing is not part of the next record's time.
-                last = clock::now_counts();
-            })
-            .unwrap_or_else(|e| fault::stop(format_args!("replay: {}", e)));
-        hook::uninstall();
+        let mut done = [0u32; 2];
+        for (k, (bytes, tag)) in [(TRACE, "R"), (TRACE_LIVE, "L")].into_iter().enumerate() {
+            if k > 0 {
+                // A new link: a new node (the controller stays; the trace resets it).
+                *node = Node::new(NodeConfig::new(TimeMode::Lockstep));
+            }
+            let trace = Trace::parse(bytes).unwrap_or_else(|e| fault::stop(format_args!("the embedded trace {}: {}", tag, e)));
+            hprintln!(
+                "TRACE {} records={} flags={} bytes={} counts_per_instruction=1/{}",
+                tag,
+                trace.len(),
+                trace.flags(),
+                bytes.len(),
+                clock::INSTRUCTIONS_PER_COUNT
+            );
+            hook::install(on_stage);
+            let mut last = clock::now_counts();
+            done[k] = trace
+                .replay_observed(node, ctl, &mut hook::Hooked, |d| {
+                    let now = clock::now_counts();
+                    let total = now - last;
+                    let s = TIMES.with(|t| core::mem::replace(&mut t.sum, [0; STAGES]));
+                    hprintln!(
+                        "{} {} {} {} {} {:08x} {} {} {} {} {} {} {} {}",
+                        tag,
+                        d.record,
+                        d.t_us,
+                        d.ticks,
+                        d.len,
+                        d.crc,
+                        total,
+                        s[0],
+                        s[1],
+                        s[2],
+                        s[3],
+                        s[4],
+                        s[5],
+                        s[6]
+                    );
+                    // The printing is not part of the next record's time.
+                    last = clock::now_counts();
+                })
+                .unwrap_or_else(|e| fault::stop(format_args!("replay {}: {}", tag, e)));
+            hook::uninstall();
+        }
+        let ticks = done[0];
+        hprintln!("LIVE ticks={}", done[1]);
         hprintln!("STACK init={} max={}", init_stack, stack_used(bottom, top));
         hprintln!("DONE ticks={}", ticks);
         common::exit_ok()

@@ -59,11 +59,21 @@ pub enum PlannerKind {
     /// The structured search without the non-map term (no proposals, `w_nonmap = 0`): the
     /// ablation that measures what non-map knowledge adds to it.
     LivesNoNonMap,
+    /// LIVE (known map): LiDAR coverage of the known building plus priority waypoints to look at
+    /// the nearest inspection region, at most once per `live_priority_interval_us`
+    /// ([`crate::planner::coverage`]; the route comes from the host, [`crate::Controller::route_push`]).
+    Live,
+    /// LIVE's baseline "heuristic visual coverage": a route whose camera views cover the known
+    /// free space, followed waypoint by waypoint, no priority waypoints.
+    VisualCoverage,
+    /// LIVE's baseline "LiDAR coverage": a route covering the known building with the LiDAR's
+    /// footprint, followed waypoint by waypoint, no priority waypoints.
+    LidarCoverage,
 }
 
 impl PlannerKind {
     /// Every kind, in wire order.
-    pub const ALL: [PlannerKind; 7] = [
+    pub const ALL: [PlannerKind; 10] = [
         PlannerKind::Lives,
         PlannerKind::Multisensor,
         PlannerKind::Nearest,
@@ -71,7 +81,15 @@ impl PlannerKind {
         PlannerKind::Rrt,
         PlannerKind::LivesGreedy,
         PlannerKind::LivesNoNonMap,
+        PlannerKind::Live,
+        PlannerKind::VisualCoverage,
+        PlannerKind::LidarCoverage,
     ];
+
+    /// LIVE and its baselines: a route over a known building, followed by the waypoint manager.
+    pub const fn is_coverage(self) -> bool {
+        matches!(self, PlannerKind::Live | PlannerKind::VisualCoverage | PlannerKind::LidarCoverage)
+    }
 
     /// The structured search (tasks, rooms, a tour): `lives` and its ablation.
     pub const fn is_structured(self) -> bool {
@@ -164,6 +182,9 @@ impl Config {
         let base = Config { planner: kind, ..self };
         match kind {
             PlannerKind::ExploreLite => Config { min_frontier_cells: 5, goal_timeout_us: 30_000_000, switch_margin: Weight::ZERO, ..base },
+            // A route follower faces where it walks (the paper's robots follow their paths with a
+            // carrot planner and move_base); the camera looks where the route turns it.
+            k if k.is_coverage() => Config { gaze: false, ..base },
             _ => base,
         }
     }
@@ -182,9 +203,14 @@ impl Config {
     pub fn effective_w_nonmap(&self) -> Weight {
         match self.planner {
             PlannerKind::Lives | PlannerKind::LivesGreedy => self.w_nonmap_per_point,
-            PlannerKind::Multisensor | PlannerKind::Nearest | PlannerKind::ExploreLite | PlannerKind::Rrt | PlannerKind::LivesNoNonMap => {
-                Weight::ZERO
-            }
+            PlannerKind::Multisensor
+            | PlannerKind::Nearest
+            | PlannerKind::ExploreLite
+            | PlannerKind::Rrt
+            | PlannerKind::LivesNoNonMap
+            | PlannerKind::Live
+            | PlannerKind::VisualCoverage
+            | PlannerKind::LidarCoverage => Weight::ZERO,
         }
     }
 }
@@ -244,8 +270,10 @@ mod tests {
             assert_eq!(c.validate(), Ok(()), "{planner:?}");
             if planner == PlannerKind::ExploreLite {
                 assert_eq!((c.min_frontier_cells, c.goal_timeout_us, c.switch_margin), (5, 30_000_000, Weight::ZERO));
+            } else if planner.is_coverage() {
+                assert_eq!(c, Config { planner, gaze: false, ..Config::DEFAULT }, "{planner:?}: a route follower faces its way");
             } else {
-                assert_eq!(c, Config { planner, ..Config::DEFAULT }, "{planner:?}: only explore-lite differs");
+                assert_eq!(c, Config { planner, ..Config::DEFAULT }, "{planner:?}: only explore-lite and the route followers differ");
             }
         }
     }

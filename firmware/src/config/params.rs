@@ -183,6 +183,11 @@ macro_rules! config_params {
             /// true: with the simulator's default odometry drift (2 %/m), a 300 s search in `office
             /// hard` keeps 38 % of the walls without it and 98 % with it (`lives mapcheck`, docs/mapcheck.md).
             scan_matching: bool = true, Flag, "correct odometry drift by matching each scan against the LiDAR grid", set "scan_matching";
+            /// LIVE's waypoint manager (`live`): a priority waypoint to look at the nearest inspection
+            /// region is inserted at most once per this interval (the paper's "maximum rate of
+            /// occurrence of priority waypoints", a tunable it does not give). Default 10 s, fixed
+            /// before `live` was measured (docs/live.md).
+            live_priority_interval_us: u64 = 10_000_000, Seconds, "LIVE: least time between two priority waypoints", set "live_priority_interval_s";
         }
     };
 }

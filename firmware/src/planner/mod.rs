@@ -18,11 +18,14 @@
 //!   frontier, the LIVES utility ([`view`]), the argmax;
 //! - [`nearest`]: Yamauchi's nearest frontier;
 //! - [`explore_lite`]: after ROS `explore_lite`;
-//! - [`rrt_points`]: frontier points of random trees ([`crate::rrt`]).
+//! - [`rrt_points`]: frontier points of random trees ([`crate::rrt`]);
+//! - [`coverage`]: LIVE's waypoint manager over a known building (`live`, `visual-cpp`,
+//!   `lidar-cpp`): the host's coverage route, and priority waypoints to inspection regions.
 //!
 //! Whatever the rule, the goal is a viewpoint pose and a path of at most [`MAX_PATH_WAYPOINTS`]
 //! waypoints down the distance field ([`Planner::goal_for`]).
 
+pub mod coverage;
 pub mod explore_lite;
 pub mod greedy;
 pub mod nearest;
@@ -80,6 +83,10 @@ pub enum Site {
     Current,
     /// A room the camera has not seen, looked into from its most open cell (the tour).
     Room,
+    /// A waypoint of a coverage route (LIVE and its baselines).
+    Route,
+    /// A priority waypoint looking at an inspection region (LIVE).
+    Inspection,
 }
 
 impl Site {
@@ -203,6 +210,8 @@ pub struct Planner {
     last_goal_room: Option<u8>,
     /// Counters of the last structured step.
     pub sched: schedule::ScheduleStats,
+    /// LIVE's waypoint manager: the coverage route and where along it the robot is.
+    pub route: coverage::Route,
 }
 
 /// Candidate tasks of one structured step before the [`MAX_TASKS`] best are kept: every
@@ -225,6 +234,8 @@ pub struct PlanInputs<'a> {
     pub nonmap: &'a NonMapStore,
     /// The robot's pose now (its heading decides which views it already has).
     pub pose: &'a Pose2,
+    /// The controller's clock now (LIVE's priority interval).
+    pub now_us: u64,
 }
 
 /// What a selection rule reads in one planning step.
@@ -290,6 +301,7 @@ impl Planner {
                 kept: false,
                 pursued: false,
             },
+            route: coverage::Route::new(),
         }
     }
 
@@ -304,6 +316,8 @@ impl Planner {
         self.last_tour.clear();
         self.last_goal = None;
         self.sched = schedule::ScheduleStats::default();
+        // The route is an input, like the prior map: a new search follows it from its start.
+        self.route.restart();
     }
 
     /// Moves the window by `(sx, sy)` cells ([`crate::rolling::shift`]): the distance field and
@@ -380,8 +394,9 @@ impl Planner {
         }
     }
 
-    /// One planning step. `current` is the goal being pursued (cell and heading), re-scored with
-    /// the same terms so the caller can apply hysteresis; returns `(best, current_utility)`.
+    /// One planning step at time `now_us`. `current` is the goal being pursued (cell and
+    /// heading), re-scored with the same terms so the caller can apply hysteresis; returns
+    /// `(best, current_utility)`.
     #[allow(clippy::too_many_arguments)]
     pub fn plan(
         &mut self,
@@ -392,9 +407,10 @@ impl Planner {
         nonmap: &NonMapStore,
         pose: &Pose2,
         current: Option<((i32, i32), BinaryAngle)>,
+        now_us: u64,
     ) -> (Option<Goal>, Option<i64>) {
         let work = self.prepare(cfg, lidar, pose);
-        let (goal, current_utility) = self.select(PlanInputs { cfg, lidar, visual, frontiers, nonmap, pose }, current);
+        let (goal, current_utility) = self.select(PlanInputs { cfg, lidar, visual, frontiers, nonmap, pose, now_us }, current);
         self.stats.work += work;
         (goal, current_utility)
     }
@@ -425,6 +441,11 @@ impl Planner {
         let score = match cfg.planner {
             PlannerKind::Lives | PlannerKind::LivesNoNonMap => {
                 let (best, w) = self.schedule(&step, current);
+                self.stats.work = work + w;
+                return (best.map(|vp| self.goal_for(lidar, vp)), None);
+            }
+            PlannerKind::Live | PlannerKind::VisualCoverage | PlannerKind::LidarCoverage => {
+                let (best, w) = self.follow_route(&step);
                 self.stats.work = work + w;
                 return (best.map(|vp| self.goal_for(lidar, vp)), None);
             }

@@ -338,6 +338,7 @@ mod tests {
             heap_overflows: u32::MAX,
             link,
             gaze: Some(i32::MIN),
+            search_entropy_bits: u32::MAX,
         };
         let mut buf = [0u8; MAX_FRAME_LEN];
         let goal = CoreToHost::Goal(goal);

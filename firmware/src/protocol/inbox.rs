@@ -16,7 +16,7 @@
 //! field, the [`ScanMsg`] the segments were cut from.
 
 use crate::controller::{Command, Detection, Inputs};
-use crate::protocol::message::{ConfigMsg, Heartbeat, HostToCore, ScanMsg, ScanSegmentMsg, MAX_WIRE_BEAMS};
+use crate::protocol::message::{ConfigMsg, Heartbeat, HostToCore, MapRowMsg, RouteMsg, ScanMsg, ScanSegmentMsg, MAX_WIRE_BEAMS};
 use crate::scan::{BeamLabel, RANGE_INVALID};
 use fixed_point::Pose2;
 
@@ -24,12 +24,16 @@ use fixed_point::Pose2;
 pub const MAX_PENDING_COMMANDS: usize = 4;
 
 /// What [`Inbox::accept`] did with a message.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Accepted {
     /// Stored for the next tick (or a heartbeat noted).
     Stored,
     /// A configuration: the caller applies it (the inbox keeps nothing).
     Config(ConfigMsg),
+    /// A row of the prior map: the caller applies it ([`crate::node::apply_map_row`]).
+    MapRow(MapRowMsg),
+    /// Waypoints of the coverage route: the caller applies them ([`crate::node::apply_route`]).
+    Route(RouteMsg),
     /// A `Hello`, which belongs to the [`crate::protocol::Session`]; ignored here.
     NotForInbox,
     /// A scan segment that cannot be part of a scan ([`ScanSegmentMsg::check`]): dropped and
@@ -115,6 +119,8 @@ impl Inbox {
                 }
             }
             HostToCore::Config(c) => return Accepted::Config(c),
+            HostToCore::MapRow(m) => return Accepted::MapRow(m),
+            HostToCore::Route(r) => return Accepted::Route(r),
             HostToCore::BaseStatus(b) => self.base_blocked = b.blocked,
         }
         Accepted::Stored

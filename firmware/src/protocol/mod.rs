@@ -48,7 +48,8 @@ pub use frame::{
 pub use inbox::{Accepted, Inbox};
 pub use message::{
     output_messages, AckReason, BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, ErrorCode, ErrorMsg, GoalMsg, Heartbeat, Hello, HelloAck,
-    HostToCore, IncompatiblePeer, LabelsMsg, LinkCounters, PoseMsg, Role, ScanMsg, ScanSegmentMsg, SegmentError, StatusMsg, StopMsg,
-    WireCommand, WireError, WireMode, MAX_SEGMENT_BEAMS, MAX_WIRE_BEAMS, PROTOCOL_VERSION,
+    HostToCore, IncompatiblePeer, LabelsMsg, LinkCounters, MapRowMsg, PoseMsg, Role, RouteMsg, ScanMsg, ScanSegmentMsg, SegmentError,
+    StatusMsg, StopMsg, WireCommand, WireError, WireMode, WireWaypoint, MAP_ROW_BYTES, MAX_ROUTE_CHUNK, MAX_SEGMENT_BEAMS, MAX_WIRE_BEAMS,
+    PROTOCOL_VERSION,
 };
 pub use session::{Admission, Session, SessionState};

@@ -140,12 +140,12 @@ mod tests {
 
     #[test]
     fn the_host_names_both_versions_when_the_core_is_older() {
-        // A core of version 7 answers our Hello.
-        let ack = HelloAck { version: 7, accepted: false, reason: AckReason::VersionMismatch };
+        // A core of version 6 answers our Hello.
+        let ack = HelloAck { version: 6, accepted: false, reason: AckReason::VersionMismatch };
         let err = ack.check().unwrap_err();
-        assert_eq!((err.ours, err.theirs), (PROTOCOL_VERSION, 7));
+        assert_eq!((err.ours, err.theirs), (PROTOCOL_VERSION, 6));
         let mut text = heapless::String::<160>::new();
         core::fmt::write(&mut text, format_args!("{err}")).unwrap();
-        assert!(text.contains("v7") && text.contains("incompatible"), "{text}");
+        assert!(text.contains("v6") && text.contains("incompatible"), "{text}");
     }
 }

@@ -29,12 +29,19 @@ pub struct RunArgs {
     /// scenario, so it takes none.
     #[arg(long)]
     pub scenario: Option<Scenario>,
-    /// lives, lives-gt, multisensor, nearest, explore-lite or rrt.
+    /// lives, lives-gt, lives-no-nonmap, lives-greedy, multisensor, nearest, explore-lite, rrt;
+    /// with --map also live, visual-cpp, lidar-cpp.
     #[arg(long, default_value = "lives")]
     pub planner: PlannerChoice,
     /// Seed: start jitter, target placement, people, sensor noise (and the random world).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// LIVE's known-map mode: the building's map (ROS map_server `.yaml`, docs/map-files.md; e.g.
+    /// from `lives map export`) labels the scans in the core (LTF map, STF non-map) instead of
+    /// the classifier, seeds the LiDAR grid, and gives `live`, `visual-cpp` and `lidar-cpp` their
+    /// coverage route (docs/live.md).
+    #[arg(long, value_name = "FILE.yaml")]
+    pub map: Option<std::path::PathBuf>,
 }
 
 /// `--set` and `--sim`: changes to the controller and to the simulated robot (`search`, `eval`,
@@ -114,6 +121,16 @@ pub fn load_spec(run: &RunArgs) -> Result<SearchSpec, String> {
     }
     let mut spec = SearchSpec::new(&name, w, scenario, run.planner, run.seed);
     spec.scenario = loaded_in;
+    if spec.planner.kind().is_coverage() && run.map.is_none() {
+        return Err(format!("`{}` searches a known building: give its map with --map FILE.yaml (`lives map export WORLD FILE.yaml` writes a built-in world's)", spec.planner));
+    }
+    if let Some(path) = &run.map {
+        let prior = host::io::map_file::PriorMap::load(path).map_err(|e| e.to_string())?;
+        let cfg = host::run::controller_config(&spec.controller, &spec.world, spec.planner.kind());
+        let origin = [cfg.origin_x_m.to_num::<f64>(), cfg.origin_y_m.to_num::<f64>()];
+        let cells = prior.to_controller_grid(origin).map_err(|e| e.to_string())?;
+        spec.prior_map = Some(std::sync::Arc::new(cells));
+    }
     Ok(spec)
 }
 

@@ -43,11 +43,23 @@ pub struct EvalArgs {
     /// `heldout easy` and `heldout hard`. 0 runs none.
     #[arg(long, default_value_t = 100)]
     heldout: u64,
+    /// LIVE's setting: every search is given its world's true map (walls and furniture; not the
+    /// targets, clutter or people), and the planners default to `live`, `visual-cpp` and
+    /// `lidar-cpp` (docs/live.md). The held-out worlds get theirs too.
+    #[arg(long)]
+    known_map: bool,
 }
 
 pub fn run(args: EvalArgs) -> Result<ExitCode, String> {
-    let EvalArgs { trials, worlds, scenarios, planners, threads, out, no_pictures, robot: robot_args, heldout } = args;
-    let planners = if planners.is_empty() { PlannerChoice::ALL.into_iter().rev().collect() } else { planners };
+    let EvalArgs { trials, worlds, scenarios, planners, threads, out, no_pictures, robot: robot_args, heldout, known_map } = args;
+    let planners = match (planners.is_empty(), known_map) {
+        (false, _) => planners,
+        (true, false) => PlannerChoice::ALL.into_iter().rev().collect(),
+        (true, true) => PlannerChoice::KNOWN_MAP.into_iter().collect(),
+    };
+    if let Some(p) = planners.iter().find(|p| PlannerChoice::KNOWN_MAP.contains(p) && !known_map) {
+        return Err(format!("`{p}` searches a known building: add --known-map"));
+    }
     let robot = robot_args.robot;
     if trials == 0 {
         return Err("--trials must be at least 1".into());
@@ -55,6 +67,9 @@ pub fn run(args: EvalArgs) -> Result<ExitCode, String> {
     let configure = |spec: &mut SearchSpec| robot_args.configure(spec);
     let mut specs = eval::eval_specs(&worlds, &scenarios, &planners, trials, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?;
     specs.extend(eval::heldout_specs(heldout, &planners, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?);
+    if known_map {
+        host::live::give_true_maps(&mut specs)?;
+    }
     let pb = count_bar();
     pb.set_length(specs.len() as u64);
     let t0 = Instant::now();

@@ -30,11 +30,6 @@ pub struct SearchArgs {
     model: Option<PathBuf>,
     #[command(flatten)]
     robot: RobotArgs,
-    /// LIVE's known-map mode: the building's map (ROS map_server `.yaml`, docs/map-files.md; e.g.
-    /// from `lives map export`) labels the scans in the core (LTF map, STF/DF non-map) instead of
-    /// the classifier.
-    #[arg(long, value_name = "FILE.yaml")]
-    map: Option<PathBuf>,
     /// Record the run (scans, pose, both grids, frontiers, candidates, goals, detection) to an
     /// MCAP file that Foxglove opens (docs/recording.md).
     #[arg(long, value_name = "FILE.mcap")]
@@ -42,7 +37,7 @@ pub struct SearchArgs {
 }
 
 pub fn run(args: SearchArgs) -> Result<ExitCode, String> {
-    let SearchArgs { run, png, json, trace, trace_candidates, model, robot, record, map } = args;
+    let SearchArgs { run, png, json, trace, trace_candidates, model, robot, record } = args;
     let mut spec = load_spec(&run)?;
     spec.trace = trace || trace_candidates.is_some();
     spec.trace_candidates = trace_candidates.unwrap_or(0);
@@ -55,13 +50,6 @@ pub fn run(args: SearchArgs) -> Result<ExitCode, String> {
         return Err(format!("--model is the classifier `lives` runs; `{}` runs none", spec.planner));
     }
     spec.model = host::learn::model::model_option(model.as_deref(), false)?;
-    if let Some(path) = &map {
-        let prior = host::io::map_file::PriorMap::load(path).map_err(|e| e.to_string())?;
-        let cfg = host::run::controller_config(&spec.controller, &spec.world, spec.planner.kind());
-        let origin = [cfg.origin_x_m.to_num::<f64>(), cfg.origin_y_m.to_num::<f64>()];
-        let cells = prior.to_controller_grid(origin).map_err(|e| e.to_string())?;
-        spec.prior_map = Some(std::sync::Arc::new(cells.iter().map(|c| *c == host::io::map_file::Cell3::Occupied).collect()));
-    }
     let mut recorder =
         record.as_ref().map(|p| host::io::record::Recorder::create(p, Default::default())).transpose().map_err(|e| e.to_string())?;
     let (run, recorded) = host::io::record::record_search(&spec, recorder.as_mut(), |t| pb.set_position(t as u64)).map_err(|e| {

@@ -574,9 +574,10 @@ impl<'l, B: Base> Bridge<'l, B> {
         Ok(true)
     }
 
-    /// Opens the session, sends the configuration, measures the link. `Err` if the node refuses
-    /// the configuration as out of range.
-    pub(super) fn setup(&mut self, config: &ConfigMsg) -> Result<(), BridgeError> {
+    /// Opens the session, sends the configuration and then `known` (a known building's map rows
+    /// and route, `crate::live`; each copy resets what the last one gave), measures the link.
+    /// `Err` if the node refuses the configuration as out of range.
+    pub(super) fn setup(&mut self, config: &ConfigMsg, known: &[HostToCore]) -> Result<(), BridgeError> {
         if !self.await_session()? {
             return Err(BridgeError::NoSession);
         }
@@ -584,6 +585,9 @@ impl<'l, B: Base> Bridge<'l, B> {
         // again, whatever it ran before), then the configuration (refused unless idle).
         let mut cfg = self.frame(&HostToCore::Command(WireCommand::Reset));
         cfg.extend(self.frame(&HostToCore::Config(*config)));
+        for m in known {
+            cfg.extend(self.frame(m));
+        }
         for i in 0..self.opts.setup_probes.max(3) {
             let mut bytes = if i < 3 { cfg.clone() } else { Vec::new() };
             let (seq, hb) = self.probe(0, true);

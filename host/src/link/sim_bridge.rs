@@ -290,7 +290,15 @@ pub fn run_sim(link: &mut dyn Link, spec: SearchSpec, opts: &BridgeOptions, stop
     let base = QueuedBase { time_s: source.sim.time_s(), pose: source.sim.pose(), acts: Vec::new() };
     let mut b = Bridge::new(link, opts, stop, base);
     let config_msg = ConfigMsg::from_config(&cfg);
-    b.setup(&config_msg)?;
+    // A known building: its map and the route, sent with the configuration (`crate::live`).
+    let known = spec.prior_map.as_ref().map_or_else(Vec::new, |cells| {
+        let start = source.sim.pose();
+        let (_, route) = crate::live::plan_route(&cfg, cells, [start[0], start[1]]);
+        let mut m = crate::live::map_messages(cells, &cfg);
+        m.extend(route.as_ref().map(crate::live::route_messages).unwrap_or_default());
+        m
+    });
+    b.setup(&config_msg, &known)?;
     if opts.mode == TimeMode::RealTime {
         source = source.with_clock(Clock::SimTime, opts.period.as_secs_f64());
     }

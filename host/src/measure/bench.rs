@@ -66,7 +66,7 @@ pub fn run(reps: usize, explore_s: f64, searches: bool) {
     let c = &mut **ctrl;
     let t_plan = time(reps, || {
         plan_work = c.frontiers.compute(&c.lidar, &c.visual, cfg.min_frontier_cells);
-        let _ = c.planner.plan(&cfg, &c.lidar, &c.visual, &c.frontiers, &c.nonmap, &pose, current);
+        let _ = c.planner.plan(&cfg, &c.lidar, &c.visual, &c.frontiers, &c.nonmap, &pose, current, 0);
         plan_work += c.planner.stats.work;
         candidates = c.planner.stats.candidates;
     });

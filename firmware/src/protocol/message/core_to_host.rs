@@ -182,6 +182,8 @@ pub struct StatusMsg {
     /// [`Status::gaze`] (v2): which way the camera should face while walking, binary angle
     /// (`None`: the direction of travel, or the goal's heading near the goal).
     pub gaze: Option<i32>,
+    /// [`Status::search_entropy_bits`] (v7).
+    pub search_entropy_bits: u32,
 }
 
 impl StatusMsg {
@@ -205,6 +207,7 @@ impl StatusMsg {
             heap_overflows: s.heap_overflows,
             link,
             gaze: s.gaze.map(|h| h.0),
+            search_entropy_bits: s.search_entropy_bits,
         }
     }
 }
@@ -248,6 +251,16 @@ pub enum ErrorCode {
     ConfigInvalid {
         /// The field: its index in [`ConfigMsg::FIELDS`] (wire order).
         field: u8,
+    },
+    /// A map row was refused: outside the map's window, or planes shorter than its cells (v7).
+    MapRowRefused {
+        /// The row.
+        y: u16,
+    },
+    /// Route waypoints were refused: out of order, or past the route's capacity (v7).
+    RouteRefused {
+        /// The first waypoint refused.
+        index: u16,
     },
 }
 

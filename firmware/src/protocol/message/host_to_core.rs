@@ -266,6 +266,61 @@ pub struct BaseStatus {
     pub blocked: bool,
 }
 
+/// Bytes of one plane of a map row: a whole grid row, a bit per cell.
+pub const MAP_ROW_BYTES: usize = crate::capacity::GRID_CELLS / 8;
+
+/// A run of cells of one row of the building's prior map (v7, LIVE's known-map mode,
+/// [`crate::knownmap`]): cells `x0 .. x0 + n` of row `y` of the map's window, bit `i` (least
+/// significant first) of each plane cell `x0 + i`. A cell neither occupied nor free is unknown.
+/// The host sends a map as one message per row, before `Start`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct MapRowMsg {
+    /// Forget the map held before this row (the first row of a new map).
+    pub reset: bool,
+    /// The map window's lower-left corner, metres as Q16.16 bits (read when `reset`).
+    pub origin_x: i32,
+    /// See `origin_x`.
+    pub origin_y: i32,
+    /// Row, from the window's lowest.
+    pub y: u16,
+    /// First cell.
+    pub x0: u16,
+    /// Cells.
+    pub n: u16,
+    /// 1: occupied.
+    #[serde(with = "ser::vec")]
+    pub occupied: heapless::Vec<u8, MAP_ROW_BYTES>,
+    /// 1: free.
+    #[serde(with = "ser::vec")]
+    pub free: heapless::Vec<u8, MAP_ROW_BYTES>,
+}
+
+/// Route waypoints per [`RouteMsg`].
+pub const MAX_ROUTE_CHUNK: usize = 32;
+
+/// One waypoint of a coverage route: x, y (metres as Q16.16 bits), heading (binary angle).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct WireWaypoint {
+    /// x.
+    pub x: i32,
+    /// y.
+    pub y: i32,
+    /// Heading.
+    pub heading: i32,
+}
+
+/// A run of waypoints of the coverage route (v7, LIVE's waypoint manager,
+/// [`crate::planner::coverage`]): waypoints `first ..` of the route. `first == 0` starts a new
+/// route; otherwise `first` must be the number the core holds (a chunk out of order is refused).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RouteMsg {
+    /// Index of the first waypoint.
+    pub first: u16,
+    /// The waypoints.
+    #[serde(with = "ser::vec")]
+    pub waypoints: heapless::Vec<WireWaypoint, MAX_ROUTE_CHUNK>,
+}
+
 /// The planner kind on the wire: [`PlannerKind`] itself (its variant order is the wire's).
 pub type WirePlanner = PlannerKind;
 
@@ -292,4 +347,8 @@ pub enum HostToCore {
     BaseStatus(BaseStatus),
     /// Tag 8 (v2): a run of beams of a LiDAR scan; the core assembles the scan.
     ScanSegment(ScanSegmentMsg),
+    /// Tag 9 (v7): a row of the building's prior map.
+    MapRow(MapRowMsg),
+    /// Tag 10 (v7): waypoints of the coverage route.
+    Route(RouteMsg),
 }

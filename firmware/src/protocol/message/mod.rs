@@ -41,7 +41,7 @@ pub use host_to_core::*;
 ///   a reading at or beyond `range_max` is "no return" and clears no farther than it);
 ///   `WireScanError::BadRangeLimits`. The configuration carries
 ///   `scan_matching` (after `budgets`).
-pub const PROTOCOL_VERSION: u16 = 6;
+pub const PROTOCOL_VERSION: u16 = 7;
 
 /// Most beams one scan carries, whole ([`ScanMsg`]) or in segments ([`ScanSegmentMsg`]): a 360°
 /// scan at 0.33° (1091 beams) fits. Larger scans are refused ([`WireError::TooManyBeams`]).

@@ -19,6 +19,8 @@ pub(super) fn site_name(s: Site) -> &'static str {
         Site::Here => "here",
         Site::Current => "current",
         Site::Room => "room",
+        Site::Route => "route",
+        Site::Inspection => "inspection",
     }
 }
 

@@ -1,0 +1,298 @@
+//! LIVE's waypoint manager (issue 32; METHOD.md §2, the paper's §II-C): a finite-state machine
+//! that follows a global coverage route over a known building and, under `live`, inserts a
+//! **priority waypoint** to look at the nearest inspection region at most once per
+//! `live_priority_interval_us`, then resumes the route.
+//!
+//! The route is the central server's (the host's coverage planner, `host::live`): a list of
+//! waypoints in the map's frame, each a place to stand and a heading, given with
+//! [`crate::Controller::route_push`] (at most [`MAX_ROUTE_WAYPOINTS`]). The states:
+//!
+//! * **Route**: the goal is the first waypoint of the route not yet done that has a reachable
+//!   cell within `viewpoint_snap_radius_m` (one without waits: the robot may reach it later). A
+//!   waypoint the robot stands at (within `goal_tolerance_m`, facing its heading within
+//!   `goal_heading_tolerance`) is done; one near a blacklisted goal (the controller blacklists a
+//!   goal without progress) is skipped, done and counted.
+//! * **Priority** (`live` only): the manager sends a new waypoint when the robot has reached
+//!   one; then, if the interval has passed since the last priority waypoint ended (the route
+//!   gets at least that long; the first may come at once) and an inspection region exists, the goal becomes a viewpoint on the line from the region to
+//!   the robot at `λ·min(camera range, distance)` from it (as an object proposal's,
+//!   [`super::proposals`]), facing it; the nearest such viewpoint by path wins. It is done when
+//!   the robot stands there, when the camera has seen the region (the non-map store then drops
+//!   it), or when it is blacklisted; then the route resumes where it was left.
+//! * **Done**: the route is finished; `live` still visits the regions left, nearest first, one
+//!   after another; then the planner has nothing ([`crate::Mode::Exhausted`]).
+//!
+//! Inspection regions are the non-map store's points ([`crate::nonmap`]): with a prior map, the
+//! known-map classifier's STFs ([`crate::knownmap`]), pooled within `nonmap_pool_radius_m`,
+//! removed within `nonmap_wall_clearance_m` of LTF points and where the camera has looked — the
+//! paper's three filters.
+
+use super::proposals::PROPOSAL_LAMBDA_PER_MILLE;
+use super::{Planner, Site, Step, Viewpoint, UNREACHABLE};
+use crate::capacity::MAX_ROUTE_WAYPOINTS;
+use crate::config::PlannerKind;
+use crate::grid::GridGeometry;
+use fixed_point::{atan2, BinaryAngle, Meters};
+
+/// One waypoint of the route: where to stand and which way to face, in the map's frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RouteWaypoint {
+    /// x, metres.
+    pub x: Meters,
+    /// y, metres.
+    pub y: Meters,
+    /// Heading.
+    pub heading: BinaryAngle,
+}
+
+/// The route was full: the waypoint was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RouteFull;
+
+/// What the waypoint manager has done since the route was given or the search restarted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RouteStats {
+    /// Route waypoints reached.
+    pub reached: u32,
+    /// Route waypoints skipped (blacklisted, or no reachable cell near them).
+    pub skipped: u32,
+    /// Priority waypoints inserted.
+    pub priorities: u32,
+    /// Priority waypoints ended because the camera saw their region before the robot got there.
+    pub regions_seen: u32,
+}
+
+/// A priority waypoint being pursued: the region looked at and where from, in the map's frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Priority {
+    region: (Meters, Meters),
+    stand: (Meters, Meters),
+    heading: BinaryAngle,
+}
+
+/// The waypoint manager's state.
+pub struct Route {
+    waypoints: heapless::Vec<RouteWaypoint, MAX_ROUTE_WAYPOINTS>,
+    /// One bit per waypoint: done (reached or skipped).
+    done: [u32; MAX_ROUTE_WAYPOINTS / 32],
+    /// The route has been started (the first step may insert a priority waypoint).
+    started: bool,
+    priority: Option<Priority>,
+    /// When the last priority waypoint ended.
+    last_priority_us: Option<u64>,
+    /// Counters.
+    pub stats: RouteStats,
+}
+
+impl Route {
+    /// No route.
+    pub const fn new() -> Self {
+        Route {
+            waypoints: heapless::Vec::new(),
+            done: [0; MAX_ROUTE_WAYPOINTS / 32],
+            started: false,
+            priority: None,
+            last_priority_us: None,
+            stats: RouteStats { reached: 0, skipped: 0, priorities: 0, regions_seen: 0 },
+        }
+    }
+
+    /// Forgets the route.
+    pub fn clear(&mut self) {
+        self.waypoints.clear();
+        self.restart();
+    }
+
+    /// Keeps the route but starts it over (a new search).
+    pub fn restart(&mut self) {
+        self.done = [0; MAX_ROUTE_WAYPOINTS / 32];
+        self.started = false;
+        self.priority = None;
+        self.last_priority_us = None;
+        self.stats = RouteStats::default();
+    }
+
+    /// Appends a waypoint.
+    pub fn push(&mut self, w: RouteWaypoint) -> Result<(), RouteFull> {
+        self.waypoints.push(w).map_err(|_| RouteFull)
+    }
+
+    /// The whole route.
+    pub fn waypoints(&self) -> &[RouteWaypoint] {
+        &self.waypoints
+    }
+
+    /// Whether waypoint `i` is done (reached or skipped).
+    pub fn is_done(&self, i: usize) -> bool {
+        self.done.get(i / 32).is_some_and(|w| w >> (i % 32) & 1 != 0)
+    }
+
+    fn mark_done(&mut self, i: usize) {
+        if let Some(w) = self.done.get_mut(i / 32) {
+            *w |= 1 << (i % 32);
+        }
+    }
+
+    /// Waypoints done.
+    pub fn done_count(&self) -> usize {
+        (0..self.waypoints.len()).filter(|&i| self.is_done(i)).count()
+    }
+
+    /// Whether a priority waypoint is being pursued.
+    pub fn in_priority(&self) -> bool {
+        self.priority.is_some()
+    }
+}
+
+impl Default for Route {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Planner {
+    /// One step of the waypoint manager (see the module's docs): the viewpoint to pursue, and
+    /// the work.
+    pub(super) fn follow_route(&mut self, step: &Step) -> (Option<Viewpoint>, u32) {
+        let cfg = step.inputs.cfg;
+        let geom = step.inputs.lidar.geom;
+        let pose = step.inputs.pose;
+        let tol2 = {
+            let t = GridGeometry::cells(cfg.goal_tolerance_m) as i64;
+            t * t
+        };
+        let robot = self.robot_cell;
+        let at = |c: (i32, i32), h: BinaryAngle| {
+            let (dx, dy) = ((c.0 - robot.0) as i64, (c.1 - robot.1) as i64);
+            dx * dx + dy * dy <= tol2 && (h - pose.theta).unsigned_abs() <= cfg.goal_heading_tolerance.unsigned_abs()
+        };
+        let bl = GridGeometry::cells(cfg.blacklist_radius_m);
+        let mut work = 0;
+
+        // Priority: the one being pursued, until it is done.
+        if let Some(p) = self.route.priority {
+            let region = geom.cell_of(p.region.0, p.region.1);
+            let stand = geom.cell_of(p.stand.0, p.stand.1);
+            let seen = step.inputs.visual.seen(region.0, region.1);
+            if seen {
+                self.route.stats.regions_seen += 1;
+            }
+            let there = at(stand, p.heading);
+            if seen || there || self.is_blacklisted(stand, bl) || self.distance(stand.0, stand.1) == UNREACHABLE {
+                self.route.priority = None;
+                // The interval runs from here: the route gets at least that long before the
+                // next priority waypoint.
+                self.route.last_priority_us = Some(step.inputs.now_us);
+                if there && !seen {
+                    // Looked from there and still not seen (occluded): not from there again.
+                    self.blacklist(stand);
+                }
+            } else {
+                return (Some(self.route_viewpoint(stand, p.heading, Site::Inspection)), work);
+            }
+        }
+
+        // The route: its first waypoint not done that the robot can reach now.
+        let mut target = None;
+        let mut reached_one = !self.route.started;
+        self.route.started = true;
+        for i in 0..self.route.waypoints.len() {
+            if self.route.is_done(i) {
+                continue;
+            }
+            let w = self.route.waypoints[i];
+            let c = geom.cell_of(w.x, w.y);
+            work += 1;
+            if self.is_blacklisted(c, bl) {
+                self.route.stats.skipped += 1;
+                self.route.mark_done(i);
+                continue;
+            }
+            work += ((2 * step.snap + 1) * (2 * step.snap + 1)) as u32;
+            let Some(s) = self.reachable_near(c, step.snap) else { continue };
+            // Reached where it was snapped to (a waypoint close to a wall is stood at from
+            // the nearest cell the robot can stand on).
+            if at(s, w.heading) || at(c, w.heading) {
+                self.route.stats.reached += 1;
+                self.route.mark_done(i);
+                reached_one = true;
+                continue;
+            }
+            target = Some((s, w.heading));
+            break;
+        }
+
+        // LIVE: a priority waypoint, at most once per interval (and, the route done, whenever
+        // a region is left).
+        if cfg.planner == PlannerKind::Live {
+            let now = step.inputs.now_us;
+            let due = target.is_none()
+                || (reached_one && self.route.last_priority_us.is_none_or(|t| now.saturating_sub(t) >= cfg.live_priority_interval_us));
+            if due {
+                let (found, w) = self.nearest_region(step, bl);
+                work += w;
+                if let Some((region, stand, heading)) = found {
+                    self.route.stats.priorities += 1;
+                    self.route.priority =
+                        Some(Priority { region: geom.center_of(region.0, region.1), stand: geom.center_of(stand.0, stand.1), heading });
+                    return (Some(self.route_viewpoint(stand, heading, Site::Inspection)), work);
+                }
+            }
+        }
+        (target.map(|(c, h)| self.route_viewpoint(c, h, Site::Route)), work)
+    }
+
+    /// The inspection region whose viewpoint is nearest by path: (region cell, viewpoint cell,
+    /// heading), and the work.
+    fn nearest_region(&self, step: &Step, bl: i32) -> (Option<((i32, i32), (i32, i32), BinaryAngle)>, u32) {
+        let geom = step.inputs.lidar.geom;
+        let robot = self.robot_cell;
+        let r_cells = GridGeometry::cells(step.inputs.cfg.camera_range_m) as i64;
+        let mut best: Option<(u16, (i32, i32), (i32, i32), BinaryAngle)> = None;
+        let mut work = 0;
+        for p in step.inputs.nonmap.points() {
+            let c = geom.cell_of(p.x, p.y);
+            work += 1;
+            if step.inputs.visual.seen(c.0, c.1) {
+                continue;
+            }
+            let v = stand_off(robot, c, r_cells);
+            work += ((2 * step.snap + 1) * (2 * step.snap + 1)) as u32;
+            let Some(v) = self.reachable_near(v, step.snap) else { continue };
+            if v == c || self.is_blacklisted(v, bl) {
+                continue;
+            }
+            let d = self.distance(v.0, v.1);
+            if best.is_none_or(|b| d < b.0) {
+                best = Some((d, c, v, atan2(c.1 - v.1, c.0 - v.0)));
+            }
+        }
+        (best.map(|(_, c, v, h)| (c, v, h)), work)
+    }
+
+    fn route_viewpoint(&self, cell: (i32, i32), heading: BinaryAngle, source: Site) -> Viewpoint {
+        Viewpoint {
+            cell,
+            heading,
+            source,
+            utility: 0,
+            path_units: self.distance(cell.0, cell.1),
+            unseen: 0,
+            surface: 0,
+            frontier_near_path: 0,
+            nonmap: 0,
+        }
+    }
+}
+
+/// Where to look at `target` from, seen from `robot` (cells): on the line between them at
+/// `λ·min(camera range, distance)` from the target (Gao et al.'s proposal viewpoint).
+pub(super) fn stand_off(robot: (i32, i32), target: (i32, i32), range_cells: i64) -> (i32, i32) {
+    let (dx, dy) = ((robot.0 - target.0) as i64, (robot.1 - target.1) as i64);
+    let d = fixed_point::isqrt_u64((dx * dx + dy * dy) as u64) as i64;
+    if d == 0 {
+        return robot;
+    }
+    let stand = PROPOSAL_LAMBDA_PER_MILLE * d.min(range_cells) / 1000;
+    ((target.0 as i64 + dx * stand / d) as i32, (target.1 as i64 + dy * stand / d) as i32)
+}

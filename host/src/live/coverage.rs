@@ -1,0 +1,403 @@
+//! Coverage routes over a known building: LIVE's central server (issue 32; the paper's §II and
+//! Fig. 1a: "global path plans are generated for Lidar CPP").
+//!
+//! A route is a list of waypoints (a place to stand and a heading) that together cover every
+//! coverable free cell of the prior map with a sensor's footprint, ordered as a short open tour
+//! from the robot's start:
+//!
+//! 1. **Where the robot can stand**: free cells farther than the robot's radius from every
+//!    occupied cell, connected to the start (8-connected).
+//! 2. **Candidates**: those cells on a lattice of [`LATTICE_CELLS`] (0.5 m); for the camera,
+//!    each with [`CAMERA_HEADINGS`] headings.
+//! 3. **What each sees**: rays from the cell over the footprint, stopped by occupied and
+//!    unknown cells — the camera's cone (its range and field of view: the controller's camera),
+//!    or the LiDAR's: all round, out to its range (the controller's clearing range,
+//!    `lidar_max_range_m`). The paper says only that the LiDAR's field of view is far wider than
+//!    the camera's; a first reading, a 6 m × 6 m square (the rolling local costmap of the ROS
+//!    navigation tutorials), made LiDAR routes longer than camera routes (174–317 m in the
+//!    built-in worlds), the opposite of the paper's Table I (docs/live.md).
+//! 4. **Greedy set cover** (lazy): the candidate that sees the most cells not yet covered, until
+//!    none adds [`MIN_GAIN_CELLS`].
+//! 5. **Order**: path lengths between the chosen waypoints (Dijkstra over where the robot can
+//!    stand, steps 5 and 7 for 0.1 m and its diagonal, as the core's), nearest neighbour from
+//!    the start, then 2-opt on the open path.
+//!
+//! LiDAR waypoints face the way the route arrives at them (a route follower walks on); camera
+//! waypoints face their cone. Everything is deterministic: ties go to the lower index.
+
+use crate::io::map_file::Cell3;
+use std::collections::BinaryHeap;
+
+/// Candidate spacing, cells (0.5 m).
+pub const LATTICE_CELLS: usize = 5;
+/// Camera headings tried per candidate.
+pub const CAMERA_HEADINGS: usize = 8;
+/// The least a waypoint must add to the coverage, cells (0.25 m²).
+pub const MIN_GAIN_CELLS: usize = 25;
+
+const CELL_M: f64 = 0.1;
+
+/// A sensor's footprint.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Footprint {
+    /// The camera: a cone of `range_m` and `fov_rad`, looking along the waypoint's heading.
+    Camera { range_m: f64, fov_rad: f64 },
+    /// The LiDAR: all round, out to `range_m`.
+    Lidar { range_m: f64 },
+}
+
+/// A known building on the controller's grid.
+#[derive(Clone, Debug)]
+pub struct KnownGrid<'a> {
+    /// Cells, row by row from the lowest y, `side` a side.
+    pub cells: &'a [Cell3],
+    /// Cells per side.
+    pub side: usize,
+    /// World coordinates of the lower-left corner.
+    pub origin: [f64; 2],
+}
+
+/// One waypoint of a route, world coordinates.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Waypoint {
+    pub x: f64,
+    pub y: f64,
+    /// Heading, radians.
+    pub heading: f64,
+    /// Cells it was chosen for (new coverage).
+    pub gain: usize,
+}
+
+/// A route and what it covers.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Route {
+    pub waypoints: Vec<Waypoint>,
+    /// Free cells any candidate sees.
+    pub coverable: usize,
+    /// Of those, covered by the route.
+    pub covered: usize,
+    /// Free cells of the map.
+    pub free: usize,
+    /// Path length of the route from the start, metres.
+    pub length_m: f64,
+}
+
+/// Why no route.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum RouteError {
+    /// The start is outside the grid or not near any cell the robot can stand on.
+    StartOutside,
+}
+
+impl std::fmt::Display for RouteError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RouteError::StartOutside => f.write_str("the robot's start is not on the map's free space (within 1 m)"),
+        }
+    }
+}
+
+impl KnownGrid<'_> {
+    fn at(&self, x: i64, y: i64) -> Cell3 {
+        if x < 0 || y < 0 || x >= self.side as i64 || y >= self.side as i64 {
+            return Cell3::Unknown;
+        }
+        self.cells[y as usize * self.side + x as usize]
+    }
+
+    fn cell_of(&self, p: [f64; 2]) -> (i64, i64) {
+        (((p[0] - self.origin[0]) / CELL_M).floor() as i64, ((p[1] - self.origin[1]) / CELL_M).floor() as i64)
+    }
+
+    fn centre(&self, i: usize) -> [f64; 2] {
+        let (x, y) = (i % self.side, i / self.side);
+        [self.origin[0] + (x as f64 + 0.5) * CELL_M, self.origin[1] + (y as f64 + 0.5) * CELL_M]
+    }
+
+    /// Free cells farther than `radius_m` from every occupied cell.
+    fn standable(&self, radius_m: f64) -> Vec<bool> {
+        let n = self.side;
+        let mut ok: Vec<bool> = self.cells.iter().map(|c| *c == Cell3::Free).collect();
+        let r = (radius_m / CELL_M).round() as i64;
+        for i in 0..n * n {
+            if self.cells[i] != Cell3::Occupied {
+                continue;
+            }
+            let (x, y) = ((i % n) as i64, (i / n) as i64);
+            for dy in -r..=r {
+                for dx in -r..=r {
+                    let (qx, qy) = (x + dx, y + dy);
+                    if dx * dx + dy * dy <= r * r && qx >= 0 && qy >= 0 && qx < n as i64 && qy < n as i64 {
+                        ok[qy as usize * n + qx as usize] = false;
+                    }
+                }
+            }
+        }
+        ok
+    }
+
+    /// Path distance (steps 5 straight, 7 diagonal, no corner cutting) from `from` to every
+    /// cell of `ok`.
+    fn dijkstra(&self, ok: &[bool], from: usize) -> Vec<u32> {
+        let n = self.side as i64;
+        let mut dist = vec![u32::MAX; ok.len()];
+        let mut heap = BinaryHeap::new();
+        dist[from] = 0;
+        heap.push(std::cmp::Reverse((0u32, from)));
+        while let Some(std::cmp::Reverse((d, i))) = heap.pop() {
+            if d > dist[i] {
+                continue;
+            }
+            let (x, y) = (i as i64 % n, i as i64 / n);
+            for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)] {
+                let (qx, qy) = (x + dx, y + dy);
+                if qx < 0 || qy < 0 || qx >= n || qy >= n {
+                    continue;
+                }
+                let q = (qy * n + qx) as usize;
+                let diagonal = dx != 0 && dy != 0;
+                if !ok[q] || (diagonal && (!ok[(y * n + qx) as usize] || !ok[(qy * n + x) as usize])) {
+                    continue;
+                }
+                let nd = d + if diagonal { 7 } else { 5 };
+                if nd < dist[q] {
+                    dist[q] = nd;
+                    heap.push(std::cmp::Reverse((nd, q)));
+                }
+            }
+        }
+        dist
+    }
+
+    /// The free cells seen from cell `c` facing `heading` (radians) with `fp`, sorted.
+    fn seen_from(&self, c: usize, heading: f64, fp: Footprint) -> Vec<u32> {
+        let n = self.side as i64;
+        let (x0, y0) = ((c as i64) % n, (c as i64) / n);
+        let mut ends = Vec::new();
+        match fp {
+            Footprint::Camera { range_m, fov_rad } => {
+                let r = range_m / CELL_M;
+                let rays = ((fov_rad * r).ceil() as usize + 1).max(2);
+                for k in 0..rays {
+                    let a = heading - fov_rad / 2.0 + fov_rad * k as f64 / (rays - 1) as f64;
+                    ends.push((x0 + (r * a.cos()).round() as i64, y0 + (r * a.sin()).round() as i64));
+                }
+            }
+            Footprint::Lidar { range_m } => {
+                let r = range_m / CELL_M;
+                let rays = (std::f64::consts::TAU * r).ceil() as usize;
+                for k in 0..rays {
+                    let a = std::f64::consts::TAU * k as f64 / rays as f64;
+                    ends.push((x0 + (r * a.cos()).round() as i64, y0 + (r * a.sin()).round() as i64));
+                }
+            }
+        }
+        let mut seen = Vec::new();
+        for (ex, ey) in ends {
+            for (x, y) in line((x0, y0), (ex, ey)) {
+                match self.at(x, y) {
+                    Cell3::Free => seen.push((y * n + x) as u32),
+                    Cell3::Occupied | Cell3::Unknown => break,
+                }
+            }
+        }
+        seen.sort_unstable();
+        seen.dedup();
+        seen
+    }
+}
+
+/// Bresenham's line from `a` to `b`, both ends included.
+fn line(a: (i64, i64), b: (i64, i64)) -> impl Iterator<Item = (i64, i64)> {
+    let (dx, dy) = ((b.0 - a.0).abs(), -(b.1 - a.1).abs());
+    let (sx, sy) = ((b.0 - a.0).signum(), (b.1 - a.1).signum());
+    let (mut x, mut y, mut err, mut done) = (a.0, a.1, dx + dy, false);
+    std::iter::from_fn(move || {
+        if done {
+            return None;
+        }
+        let p = (x, y);
+        if p == b {
+            done = true;
+        }
+        let e2 = 2 * err;
+        if e2 >= dy {
+            err += dy;
+            x += sx;
+        }
+        if e2 <= dx {
+            err += dx;
+            y += sy;
+        }
+        Some(p)
+    })
+}
+
+/// The coverage route of `map` for a robot of `radius_m` starting at `start` (world x, y) with
+/// footprint `fp`.
+pub fn plan(map: &KnownGrid, radius_m: f64, start: [f64; 2], fp: Footprint) -> Result<Route, RouteError> {
+    let n = map.side;
+    let ok = map.standable(radius_m);
+    let (sx, sy) = map.cell_of(start);
+    // The start, or the nearest cell the robot can stand on within 1 m (it may start close to
+    // a wall).
+    let start_cell = (0..=10i64)
+        .flat_map(|r| (-r..=r).flat_map(move |dy| (-r..=r).map(move |dx| (dx, dy))))
+        .map(|(dx, dy)| (sx + dx, sy + dy))
+        .find(|&(x, y)| x >= 0 && y >= 0 && x < n as i64 && y < n as i64 && ok[y as usize * n + x as usize])
+        .map(|(x, y)| y as usize * n + x as usize)
+        .ok_or(RouteError::StartOutside)?;
+    let from_start = map.dijkstra(&ok, start_cell);
+
+    // Candidates: reachable lattice cells (and headings).
+    let headings: Vec<f64> = match fp {
+        Footprint::Camera { .. } => (0..CAMERA_HEADINGS).map(|k| k as f64 * std::f64::consts::TAU / CAMERA_HEADINGS as f64).collect(),
+        Footprint::Lidar { .. } => vec![0.0],
+    };
+    let mut cands: Vec<(usize, f64, Vec<u32>)> = Vec::new();
+    for y in (0..n).step_by(LATTICE_CELLS) {
+        for x in (0..n).step_by(LATTICE_CELLS) {
+            let c = y * n + x;
+            if !ok[c] || from_start[c] == u32::MAX {
+                continue;
+            }
+            for &h in &headings {
+                cands.push((c, h, map.seen_from(c, h, fp)));
+            }
+        }
+    }
+    let free = map.cells.iter().filter(|c| **c == Cell3::Free).count();
+    let mut coverable = vec![false; n * n];
+    for (_, _, s) in &cands {
+        for &i in s {
+            coverable[i as usize] = true;
+        }
+    }
+    let coverable_n = coverable.iter().filter(|b| **b).count();
+
+    // Lazy greedy set cover: a candidate's stored gain only falls as cells get covered.
+    let mut covered = vec![false; n * n];
+    let mut heap: BinaryHeap<(usize, std::cmp::Reverse<usize>)> =
+        cands.iter().enumerate().map(|(k, (_, _, s))| (s.len(), std::cmp::Reverse(k))).collect();
+    let mut chosen: Vec<(usize, usize)> = Vec::new();
+    while let Some((g, std::cmp::Reverse(k))) = heap.pop() {
+        if g < MIN_GAIN_CELLS {
+            break;
+        }
+        let fresh = cands[k].2.iter().filter(|&&i| !covered[i as usize]).count();
+        if fresh < g {
+            heap.push((fresh, std::cmp::Reverse(k)));
+            continue;
+        }
+        for &i in &cands[k].2 {
+            covered[i as usize] = true;
+        }
+        chosen.push((k, fresh));
+    }
+    let covered_n = covered.iter().filter(|b| **b).count();
+
+    // Order: nearest neighbour from the start, then 2-opt on the open path.
+    let m = chosen.len();
+    let fields: Vec<Vec<u32>> = chosen.iter().map(|&(k, _)| map.dijkstra(&ok, cands[k].0)).collect();
+    let cost = |a: Option<usize>, b: usize| -> u64 {
+        let cell = cands[chosen[b].0].0;
+        let d = match a {
+            None => from_start[cell],
+            Some(a) => fields[a][cell],
+        };
+        if d == u32::MAX {
+            u64::MAX / 4
+        } else {
+            d as u64
+        }
+    };
+    let mut order: Vec<usize> = Vec::with_capacity(m);
+    let mut left: Vec<bool> = vec![true; m];
+    let mut at = None;
+    for _ in 0..m {
+        let next = (0..m).filter(|&b| left[b]).min_by_key(|&b| (cost(at, b), b)).expect("one left");
+        left[next] = false;
+        order.push(next);
+        at = Some(next);
+    }
+    // 2-opt: reversing order[i..=j] replaces the legs into i and out of j (path lengths are
+    // symmetric: the grid's steps are).
+    let leg = |o: &[usize], a: usize, b: usize| cost(if a == usize::MAX { None } else { Some(o[a]) }, o[b]);
+    let mut rounds = 0;
+    let mut improved = true;
+    while improved && rounds < 100 {
+        improved = false;
+        rounds += 1;
+        for i in 0..m {
+            for j in i + 1..m {
+                let before = leg(&order, i.wrapping_sub(1), i) + if j + 1 < m { leg(&order, j, j + 1) } else { 0 };
+                let into_j = cost(if i == 0 { None } else { Some(order[i - 1]) }, order[j]);
+                let out_of_i = if j + 1 < m { cost(Some(order[i]), order[j + 1]) } else { 0 };
+                if into_j + out_of_i < before {
+                    order[i..=j].reverse();
+                    improved = true;
+                }
+            }
+        }
+    }
+    let best: u64 = (0..m).map(|b| leg(&order, b.wrapping_sub(1), b)).sum();
+
+    let mut waypoints = Vec::with_capacity(m);
+    let mut prev = start;
+    for &b in &order {
+        let (k, gain) = chosen[b];
+        let p = map.centre(cands[k].0);
+        let heading = match fp {
+            Footprint::Camera { .. } => cands[k].1,
+            Footprint::Lidar { .. } if (p[0] - prev[0]).hypot(p[1] - prev[1]) > 1e-9 => (p[1] - prev[1]).atan2(p[0] - prev[0]),
+            Footprint::Lidar { .. } => 0.0,
+        };
+        waypoints.push(Waypoint { x: p[0], y: p[1], heading, gain });
+        prev = p;
+    }
+    Ok(Route { waypoints, coverable: coverable_n, covered: covered_n, free, length_m: best as f64 * CELL_M / 5.0 })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two 8 × 8 m rooms side by side joined by a 1 m door, walled all round, on a 200-cell grid.
+    fn two_rooms() -> Vec<Cell3> {
+        let n = 200;
+        let mut c = vec![Cell3::Unknown; n * n];
+        for y in 10..=90 {
+            for x in 10..=170 {
+                let wall = y == 10 || y == 90 || x == 10 || x == 170 || (x == 90 && !(45..55).contains(&y));
+                c[y * n + x] = if wall { Cell3::Occupied } else { Cell3::Free };
+            }
+        }
+        c
+    }
+
+    #[test]
+    fn a_route_covers_both_rooms_and_the_camera_needs_more_waypoints_than_the_lidar() {
+        let cells = two_rooms();
+        let map = KnownGrid { cells: &cells, side: 200, origin: [0.0, 0.0] };
+        let cam = plan(&map, 0.35, [2.0, 2.0], Footprint::Camera { range_m: 4.0, fov_rad: 90f64.to_radians() }).unwrap();
+        let lidar = plan(&map, 0.35, [2.0, 2.0], Footprint::Lidar { range_m: 30.0 }).unwrap();
+        for r in [&cam, &lidar] {
+            assert!(r.covered as f64 >= 0.97 * r.coverable as f64, "{} of {}", r.covered, r.coverable);
+            assert!(r.coverable as f64 >= 0.95 * r.free as f64, "{} of {}", r.coverable, r.free);
+            // Both rooms are visited: waypoints on each side of the wall at x = 9 m.
+            assert!(r.waypoints.iter().any(|w| w.x < 9.0) && r.waypoints.iter().any(|w| w.x > 9.1));
+        }
+        assert!(cam.waypoints.len() > lidar.waypoints.len(), "{} vs {}", cam.waypoints.len(), lidar.waypoints.len());
+        // The tour starts near the start: the first waypoint is in the first room.
+        assert!(cam.waypoints[0].x < 9.0 && lidar.waypoints[0].x < 9.0);
+        // Deterministic.
+        assert_eq!(plan(&map, 0.35, [2.0, 2.0], Footprint::Lidar { range_m: 30.0 }).unwrap(), lidar);
+    }
+
+    #[test]
+    fn a_start_off_the_map_is_an_error() {
+        let cells = two_rooms();
+        let map = KnownGrid { cells: &cells, side: 200, origin: [0.0, 0.0] };
+        assert_eq!(plan(&map, 0.35, [-5.0, 2.0], Footprint::Lidar { range_m: 30.0 }), Err(RouteError::StartOutside));
+    }
+}
