@@ -13,267 +13,129 @@ nav_msgs Odometry, Path, MapMetaData, OccupancyGrid; tf2_msgs TFMessage; visuali
 UVCoordinate, MeshFile, Marker, MarkerArray; vision_msgs Point2D, Pose2D, BoundingBox2D,
 ObjectHypothesis, ObjectHypothesisWithPose, Detection2D, Detection2DArray.
 """
+import types
+import typing
 from dataclasses import dataclass, field
 
 from cyclonedds.idl import IdlStruct
 from cyclonedds.idl.types import array, float32, float64, int8, int32, sequence, uint8, uint32
 
 
-def _t(pkg, name):
-    return f"{pkg}::msg::dds_::{name}_"
+def _default(t):
+    """The default of a field of IDL type ``t``, as a ``.msg`` field without one starts: zero,
+    false, empty, a default message, or a fixed-size array of zeros."""
+    if isinstance(t, type) and issubclass(t, IdlStruct):
+        return field(default_factory=t)
+    if t is str:
+        return ""
+    if t is bool:
+        return False
+    base, holder = typing.get_args(t)
+    if isinstance(holder, array):
+        zero = _default(holder.subtype)
+        return field(default_factory=lambda: [zero] * holder.length)
+    if isinstance(holder, sequence):
+        return field(default_factory=list)
+    return base()  # int or float: 0 or 0.0
+
+
+def _msg(pkg, name, **fields):
+    """The dataclass of ROS 2 message ``pkg/msg/name`` with DDS type name ``pkg::msg::dds_::name_``,
+    its fields in ``.msg`` order as ``field=type`` (or ``field=(type, default)``)."""
+
+    def body(ns):
+        ns["__module__"] = __name__
+        for key, spec in fields.items():
+            t, default = spec if isinstance(spec, tuple) else (spec, _default(spec))
+            ns["__annotations__"][key] = t
+            ns[key] = default
+
+    kwds = {"typename": f"{pkg}::msg::dds_::{name}_"}
+    return dataclass(types.new_class(name, (IdlStruct,), kwds, body))
 
 
 # builtin_interfaces
-@dataclass
-class Time(IdlStruct, typename=_t("builtin_interfaces", "Time")):
-    sec: int32 = 0
-    nanosec: uint32 = 0
-
-
-@dataclass
-class Duration(IdlStruct, typename=_t("builtin_interfaces", "Duration")):
-    sec: int32 = 0
-    nanosec: uint32 = 0
-
+Time = _msg("builtin_interfaces", "Time", sec=int32, nanosec=uint32)
+Duration = _msg("builtin_interfaces", "Duration", sec=int32, nanosec=uint32)
 
 # std_msgs
-@dataclass
-class Header(IdlStruct, typename=_t("std_msgs", "Header")):
-    stamp: Time = field(default_factory=Time)
-    frame_id: str = ""
-
-
-@dataclass
-class ColorRGBA(IdlStruct, typename=_t("std_msgs", "ColorRGBA")):
-    r: float32 = 0.0
-    g: float32 = 0.0
-    b: float32 = 0.0
-    a: float32 = 0.0
-
-
-@dataclass
-class Bool(IdlStruct, typename=_t("std_msgs", "Bool")):
-    data: bool = False
-
-
-@dataclass
-class String(IdlStruct, typename=_t("std_msgs", "String")):
-    data: str = ""
-
+Header = _msg("std_msgs", "Header", stamp=Time, frame_id=str)
+ColorRGBA = _msg("std_msgs", "ColorRGBA", r=float32, g=float32, b=float32, a=float32)
+Bool = _msg("std_msgs", "Bool", data=bool)
+String = _msg("std_msgs", "String", data=str)
 
 # geometry_msgs
-@dataclass
-class Point(IdlStruct, typename=_t("geometry_msgs", "Point")):
-    x: float64 = 0.0
-    y: float64 = 0.0
-    z: float64 = 0.0
-
-
-@dataclass
-class Vector3(IdlStruct, typename=_t("geometry_msgs", "Vector3")):
-    x: float64 = 0.0
-    y: float64 = 0.0
-    z: float64 = 0.0
-
-
-@dataclass
-class Quaternion(IdlStruct, typename=_t("geometry_msgs", "Quaternion")):
-    x: float64 = 0.0
-    y: float64 = 0.0
-    z: float64 = 0.0
-    w: float64 = 1.0
-
-
-@dataclass
-class Pose(IdlStruct, typename=_t("geometry_msgs", "Pose")):
-    position: Point = field(default_factory=Point)
-    orientation: Quaternion = field(default_factory=Quaternion)
-
-
-@dataclass
-class PointStamped(IdlStruct, typename=_t("geometry_msgs", "PointStamped")):
-    header: Header = field(default_factory=Header)
-    point: Point = field(default_factory=Point)
-
-
-@dataclass
-class PoseStamped(IdlStruct, typename=_t("geometry_msgs", "PoseStamped")):
-    header: Header = field(default_factory=Header)
-    pose: Pose = field(default_factory=Pose)
-
-
-@dataclass
-class PoseWithCovariance(IdlStruct, typename=_t("geometry_msgs", "PoseWithCovariance")):
-    pose: Pose = field(default_factory=Pose)
-    covariance: array[float64, 36] = field(default_factory=lambda: [0.0] * 36)
-
-
-@dataclass
-class Twist(IdlStruct, typename=_t("geometry_msgs", "Twist")):
-    linear: Vector3 = field(default_factory=Vector3)
-    angular: Vector3 = field(default_factory=Vector3)
-
-
-@dataclass
-class TwistWithCovariance(IdlStruct, typename=_t("geometry_msgs", "TwistWithCovariance")):
-    twist: Twist = field(default_factory=Twist)
-    covariance: array[float64, 36] = field(default_factory=lambda: [0.0] * 36)
-
-
-@dataclass
-class Transform(IdlStruct, typename=_t("geometry_msgs", "Transform")):
-    translation: Vector3 = field(default_factory=Vector3)
-    rotation: Quaternion = field(default_factory=Quaternion)
-
-
-@dataclass
-class TransformStamped(IdlStruct, typename=_t("geometry_msgs", "TransformStamped")):
-    header: Header = field(default_factory=Header)
-    child_frame_id: str = ""
-    transform: Transform = field(default_factory=Transform)
-
+Point = _msg("geometry_msgs", "Point", x=float64, y=float64, z=float64)
+Vector3 = _msg("geometry_msgs", "Vector3", x=float64, y=float64, z=float64)
+Quaternion = _msg("geometry_msgs", "Quaternion", x=float64, y=float64, z=float64, w=(float64, 1.0))
+Pose = _msg("geometry_msgs", "Pose", position=Point, orientation=Quaternion)
+PointStamped = _msg("geometry_msgs", "PointStamped", header=Header, point=Point)
+PoseStamped = _msg("geometry_msgs", "PoseStamped", header=Header, pose=Pose)
+_COVARIANCE = array[float64, 36]
+PoseWithCovariance = _msg("geometry_msgs", "PoseWithCovariance", pose=Pose, covariance=_COVARIANCE)
+Twist = _msg("geometry_msgs", "Twist", linear=Vector3, angular=Vector3)
+TwistWithCovariance = _msg(
+    "geometry_msgs", "TwistWithCovariance", twist=Twist, covariance=_COVARIANCE
+)
+Transform = _msg("geometry_msgs", "Transform", translation=Vector3, rotation=Quaternion)
+TransformStamped = _msg(
+    "geometry_msgs", "TransformStamped", header=Header, child_frame_id=str, transform=Transform
+)
 
 # sensor_msgs
-@dataclass
-class LaserScan(IdlStruct, typename=_t("sensor_msgs", "LaserScan")):
-    header: Header = field(default_factory=Header)
-    angle_min: float32 = 0.0
-    angle_max: float32 = 0.0
-    angle_increment: float32 = 0.0
-    time_increment: float32 = 0.0
-    scan_time: float32 = 0.0
-    range_min: float32 = 0.0
-    range_max: float32 = 0.0
-    ranges: sequence[float32] = field(default_factory=list)
-    intensities: sequence[float32] = field(default_factory=list)
-
-
-@dataclass
-class CompressedImage(IdlStruct, typename=_t("sensor_msgs", "CompressedImage")):
-    header: Header = field(default_factory=Header)
-    format: str = ""
-    data: sequence[uint8] = field(default_factory=list)
-
+LaserScan = _msg(
+    "sensor_msgs", "LaserScan", header=Header,
+    angle_min=float32, angle_max=float32, angle_increment=float32,
+    time_increment=float32, scan_time=float32,
+    range_min=float32, range_max=float32,
+    ranges=sequence[float32], intensities=sequence[float32],
+)  # fmt: skip
+CompressedImage = _msg(
+    "sensor_msgs", "CompressedImage", header=Header, format=str, data=sequence[uint8]
+)
 
 # nav_msgs
-@dataclass
-class Odometry(IdlStruct, typename=_t("nav_msgs", "Odometry")):
-    header: Header = field(default_factory=Header)
-    child_frame_id: str = ""
-    pose: PoseWithCovariance = field(default_factory=PoseWithCovariance)
-    twist: TwistWithCovariance = field(default_factory=TwistWithCovariance)
-
-
-@dataclass
-class Path(IdlStruct, typename=_t("nav_msgs", "Path")):
-    header: Header = field(default_factory=Header)
-    poses: sequence[PoseStamped] = field(default_factory=list)
-
-
-@dataclass
-class MapMetaData(IdlStruct, typename=_t("nav_msgs", "MapMetaData")):
-    map_load_time: Time = field(default_factory=Time)
-    resolution: float32 = 0.0
-    width: uint32 = 0
-    height: uint32 = 0
-    origin: Pose = field(default_factory=Pose)
-
-
-@dataclass
-class OccupancyGrid(IdlStruct, typename=_t("nav_msgs", "OccupancyGrid")):
-    header: Header = field(default_factory=Header)
-    info: MapMetaData = field(default_factory=MapMetaData)
-    data: sequence[int8] = field(default_factory=list)
-
+Odometry = _msg(
+    "nav_msgs", "Odometry",
+    header=Header, child_frame_id=str, pose=PoseWithCovariance, twist=TwistWithCovariance,
+)  # fmt: skip
+Path = _msg("nav_msgs", "Path", header=Header, poses=sequence[PoseStamped])
+MapMetaData = _msg(
+    "nav_msgs", "MapMetaData",
+    map_load_time=Time, resolution=float32, width=uint32, height=uint32, origin=Pose,
+)  # fmt: skip
+OccupancyGrid = _msg(
+    "nav_msgs", "OccupancyGrid", header=Header, info=MapMetaData, data=sequence[int8]
+)
 
 # tf2_msgs
-@dataclass
-class TFMessage(IdlStruct, typename=_t("tf2_msgs", "TFMessage")):
-    transforms: sequence[TransformStamped] = field(default_factory=list)
-
+TFMessage = _msg("tf2_msgs", "TFMessage", transforms=sequence[TransformStamped])
 
 # visualization_msgs (Jazzy: textures and embedded meshes)
-@dataclass
-class UVCoordinate(IdlStruct, typename=_t("visualization_msgs", "UVCoordinate")):
-    u: float32 = 0.0
-    v: float32 = 0.0
-
-
-@dataclass
-class MeshFile(IdlStruct, typename=_t("visualization_msgs", "MeshFile")):
-    filename: str = ""
-    data: sequence[uint8] = field(default_factory=list)
-
-
-@dataclass
-class Marker(IdlStruct, typename=_t("visualization_msgs", "Marker")):
-    header: Header = field(default_factory=Header)
-    ns: str = ""
-    id: int32 = 0
-    type: int32 = 0
-    action: int32 = 0
-    pose: Pose = field(default_factory=Pose)
-    scale: Vector3 = field(default_factory=Vector3)
-    color: ColorRGBA = field(default_factory=ColorRGBA)
-    lifetime: Duration = field(default_factory=Duration)
-    frame_locked: bool = False
-    points: sequence[Point] = field(default_factory=list)
-    colors: sequence[ColorRGBA] = field(default_factory=list)
-    texture_resource: str = ""
-    texture: CompressedImage = field(default_factory=CompressedImage)
-    uv_coordinates: sequence[UVCoordinate] = field(default_factory=list)
-    text: str = ""
-    mesh_resource: str = ""
-    mesh_file: MeshFile = field(default_factory=MeshFile)
-    mesh_use_embedded_materials: bool = False
-
-
-@dataclass
-class MarkerArray(IdlStruct, typename=_t("visualization_msgs", "MarkerArray")):
-    markers: sequence[Marker] = field(default_factory=list)
-
+UVCoordinate = _msg("visualization_msgs", "UVCoordinate", u=float32, v=float32)
+MeshFile = _msg("visualization_msgs", "MeshFile", filename=str, data=sequence[uint8])
+Marker = _msg(
+    "visualization_msgs", "Marker", header=Header,
+    ns=str, id=int32, type=int32, action=int32,
+    pose=Pose, scale=Vector3, color=ColorRGBA, lifetime=Duration, frame_locked=bool,
+    points=sequence[Point], colors=sequence[ColorRGBA],
+    texture_resource=str, texture=CompressedImage, uv_coordinates=sequence[UVCoordinate],
+    text=str, mesh_resource=str, mesh_file=MeshFile, mesh_use_embedded_materials=bool,
+)  # fmt: skip
+MarkerArray = _msg("visualization_msgs", "MarkerArray", markers=sequence[Marker])
 
 # vision_msgs 4.x
-@dataclass
-class Point2D(IdlStruct, typename=_t("vision_msgs", "Point2D")):
-    x: float64 = 0.0
-    y: float64 = 0.0
-
-
-@dataclass
-class Pose2D(IdlStruct, typename=_t("vision_msgs", "Pose2D")):
-    position: Point2D = field(default_factory=Point2D)
-    theta: float64 = 0.0
-
-
-@dataclass
-class BoundingBox2D(IdlStruct, typename=_t("vision_msgs", "BoundingBox2D")):
-    center: Pose2D = field(default_factory=Pose2D)
-    size_x: float64 = 0.0
-    size_y: float64 = 0.0
-
-
-@dataclass
-class ObjectHypothesis(IdlStruct, typename=_t("vision_msgs", "ObjectHypothesis")):
-    class_id: str = ""
-    score: float64 = 0.0
-
-
-@dataclass
-class ObjectHypothesisWithPose(IdlStruct, typename=_t("vision_msgs", "ObjectHypothesisWithPose")):
-    hypothesis: ObjectHypothesis = field(default_factory=ObjectHypothesis)
-    pose: PoseWithCovariance = field(default_factory=PoseWithCovariance)
-
-
-@dataclass
-class Detection2D(IdlStruct, typename=_t("vision_msgs", "Detection2D")):
-    header: Header = field(default_factory=Header)
-    results: sequence[ObjectHypothesisWithPose] = field(default_factory=list)
-    bbox: BoundingBox2D = field(default_factory=BoundingBox2D)
-    id: str = ""
-
-
-@dataclass
-class Detection2DArray(IdlStruct, typename=_t("vision_msgs", "Detection2DArray")):
-    header: Header = field(default_factory=Header)
-    detections: sequence[Detection2D] = field(default_factory=list)
+Point2D = _msg("vision_msgs", "Point2D", x=float64, y=float64)
+Pose2D = _msg("vision_msgs", "Pose2D", position=Point2D, theta=float64)
+BoundingBox2D = _msg("vision_msgs", "BoundingBox2D", center=Pose2D, size_x=float64, size_y=float64)
+ObjectHypothesis = _msg("vision_msgs", "ObjectHypothesis", class_id=str, score=float64)
+ObjectHypothesisWithPose = _msg(
+    "vision_msgs", "ObjectHypothesisWithPose", hypothesis=ObjectHypothesis, pose=PoseWithCovariance
+)
+Detection2D = _msg(
+    "vision_msgs", "Detection2D",
+    header=Header, results=sequence[ObjectHypothesisWithPose], bbox=BoundingBox2D, id=str,
+)  # fmt: skip
+Detection2DArray = _msg(
+    "vision_msgs", "Detection2DArray", header=Header, detections=sequence[Detection2D]
+)

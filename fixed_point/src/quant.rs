@@ -144,6 +144,21 @@ pub const fn rounding_divide_by_pot(x: i32, exponent: i32) -> i32 {
     (x >> exponent) + (remainder > threshold) as i32
 }
 
+/// `$x`, of the wider integer type `$wide`, saturated into the narrower `$t` (its `MIN` or `MAX`
+/// when out of range). A macro so that each use compares in its own wide type, in a `const fn`.
+macro_rules! saturate {
+    ($x:ident: $wide:ty => $t:ty) => {{
+        let x: $wide = $x;
+        if x > <$t>::MAX as $wide {
+            <$t>::MAX
+        } else if x < <$t>::MIN as $wide {
+            <$t>::MIN
+        } else {
+            x as $t
+        }
+    }};
+}
+
 /// TFLite's `MultiplyByQuantizedMultiplier`: `acc · M` in the pipeline's one rounding mode (see the
 /// module docs). The left shift for `shift > 0` saturates instead of overflowing.
 #[inline]
@@ -151,13 +166,7 @@ pub const fn requantize(acc: i32, m: QuantizedMultiplier) -> i32 {
     let shift = m.shift as i32;
     let x = if shift > 0 {
         let wide = (acc as i64) << if shift > 32 { 32 } else { shift };
-        if wide > i32::MAX as i64 {
-            i32::MAX
-        } else if wide < i32::MIN as i64 {
-            i32::MIN
-        } else {
-            wide as i32
-        }
+        saturate!(wide: i64 => i32)
     } else {
         acc
     };
@@ -167,13 +176,7 @@ pub const fn requantize(acc: i32, m: QuantizedMultiplier) -> i32 {
 /// Clamps an `i32` into `i8` (TFLite's activation clamp to [−128, 127]).
 #[inline]
 pub const fn saturate_i8(x: i32) -> i8 {
-    if x > i8::MAX as i32 {
-        i8::MAX
-    } else if x < i8::MIN as i32 {
-        i8::MIN
-    } else {
-        x as i8
-    }
+    saturate!(x: i32 => i8)
 }
 
 /// [`requantize`] followed by [`saturate_i8`]: an int8 activation from an `i32` accumulator.

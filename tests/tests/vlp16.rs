@@ -8,7 +8,8 @@
 
 use host::io::sensors::pcap::CaptureError;
 use host::io::sensors::vlp16::{
-    self, PacketError, PcapScans, PlanarScan, RejectReason, Skipped, Vlp16Config, Vlp16Error, Vlp16Packet, Vlp16Udp, DATA_PORT, PACKET_LEN,
+    self, CaptureFormat, PacketError, PcapScans, PlanarScan, RejectReason, Skipped, Vlp16Config, Vlp16Error, Vlp16Packet, Vlp16Udp,
+    DATA_PORT, PACKET_LEN,
 };
 use host::measure::fuzz::Mutator;
 use std::path::{Path, PathBuf};
@@ -75,7 +76,7 @@ fn pcap_packet_fields_match_the_bytes() {
 
 #[test]
 fn pcap_decodes_into_one_rotation_and_a_partial_one() {
-    let r = vlp16::read_pcap(&pcap(), &Vlp16Config::default()).unwrap();
+    let r = CaptureFormat::Pcap.read(&pcap(), &Vlp16Config::default()).unwrap();
     assert!(r.error.is_none(), "{:?}", r.error);
     // 84 data packets (port 2368) and 16 position packets (port 8308) in the file.
     assert_eq!((r.counts.data, r.counts.rejected, r.counts.other), (84, 0, 16));
@@ -113,7 +114,7 @@ fn pcap_decodes_into_one_rotation_and_a_partial_one() {
 
 #[test]
 fn einride_recording_decodes_into_13_rotations() {
-    let r = vlp16::read_raw(&einride(), &Vlp16Config::default()).unwrap();
+    let r = CaptureFormat::Raw.read(&einride(), &Vlp16Config::default()).unwrap();
     assert!(r.error.is_none(), "{:?}", r.error);
     assert_eq!((r.counts.data, r.counts.rejected, r.counts.other), (1000, 0, 0));
     // 12 000 blocks whose azimuth wraps 13 times: 13 scans end at a wrap, the 14th is open.
@@ -141,9 +142,9 @@ fn einride_recording_decodes_into_13_rotations() {
 #[test]
 fn elevation_band_selects_lasers() {
     let all = Vlp16Config { elevation_min_deg: -15.0, elevation_max_deg: 15.0, ..Vlp16Config::default() };
-    let r = vlp16::read_raw(&einride(), &all).unwrap();
+    let r = CaptureFormat::Raw.read(&einride(), &all).unwrap();
     assert_eq!(r.lasers.len(), 16);
-    let two = vlp16::read_raw(&einride(), &Vlp16Config::default()).unwrap();
+    let two = CaptureFormat::Raw.read(&einride(), &Vlp16Config::default()).unwrap();
     // More lasers can only bring a beam's nearest range closer.
     for (a, b) in r.scans[3].ranges_m.iter().zip(&two.scans[3].ranges_m) {
         if b.is_finite() {
@@ -153,12 +154,12 @@ fn elevation_band_selects_lasers() {
     // Only the −1° laser (channel 14): the hand-checked beam 513 of scan 7 is then min(1119 (ch 30),
     // 1117 (ch 14)) = 1117.
     let minus1 = Vlp16Config { elevation_min_deg: -1.0, elevation_max_deg: -1.0, ..Vlp16Config::default() };
-    let m = vlp16::read_raw(&einride(), &minus1).unwrap();
+    let m = CaptureFormat::Raw.read(&einride(), &minus1).unwrap();
     assert_eq!(m.lasers, vec![14]);
     assert_eq!(m.scans[6].ranges_m[513], cos1(1117));
     // A band with no laser is refused.
     let none = Vlp16Config { elevation_min_deg: 1.5, elevation_max_deg: 2.5, ..Vlp16Config::default() };
-    assert!(matches!(vlp16::read_raw(&einride(), &none), Err(Vlp16Error::Config(_))));
+    assert!(matches!(CaptureFormat::Raw.read(&einride(), &none), Err(Vlp16Error::Config(_))));
 }
 
 #[test]
@@ -168,11 +169,11 @@ fn truncated_pcap_keeps_the_scans_before_the_cut() {
     let path = dir.join("cut.pcap");
     // Cut 100 bytes into data packet 40's record (record header at 54574).
     std::fs::write(&path, &bytes[..54_574 + 100]).unwrap();
-    let r = vlp16::read_pcap(&path, &Vlp16Config::default()).unwrap();
+    let r = CaptureFormat::Pcap.read(&path, &Vlp16Config::default()).unwrap();
     // Data packets 0..=39 were read (the wrap in packet 23 completed a scan), then the damage.
     assert_eq!(r.counts.data, 40);
     assert_eq!(r.scans.len(), 1);
-    let full = vlp16::read_pcap(&pcap(), &Vlp16Config::default()).unwrap();
+    let full = CaptureFormat::Pcap.read(&pcap(), &Vlp16Config::default()).unwrap();
     assert_eq!(bits(&r.scans[0]), bits(&full.scans[0]));
     assert!(r.partial.is_some());
     match &r.error {
@@ -192,7 +193,7 @@ fn corrupt_block_flag_is_counted_and_skipped() {
     // Block 3 of data packet 40 starts at 54932 with FF EE.
     assert_eq!(&bytes[54_932..54_934], &[0xFF, 0xEE]);
     bytes[54_933] = 0xEF;
-    let r = vlp16::decode_pcap_bytes(Path::new("flag.pcap"), &bytes, &Vlp16Config::default()).unwrap();
+    let r = CaptureFormat::Pcap.decode_bytes(Path::new("flag.pcap"), &bytes, &Vlp16Config::default()).unwrap();
     assert!(r.error.is_none());
     assert_eq!((r.counts.data, r.counts.rejected, r.counts.other), (83, 1, 16));
     assert_eq!(r.rejects.len(), 1);
@@ -210,7 +211,7 @@ fn corrupt_record_length_ends_the_read_with_its_offset() {
     let recs = data_records(&bytes);
     let (rec, _) = recs[50];
     bytes[rec + 8..rec + 12].copy_from_slice(&0x7FFF_FFFFu32.to_le_bytes());
-    let r = vlp16::decode_pcap_bytes(Path::new("len.pcap"), &bytes, &Vlp16Config::default()).unwrap();
+    let r = CaptureFormat::Pcap.decode_bytes(Path::new("len.pcap"), &bytes, &Vlp16Config::default()).unwrap();
     assert_eq!(r.counts.data, 50);
     assert_eq!(r.scans.len(), 1);
     let e = r.error.expect("an error");
@@ -220,16 +221,16 @@ fn corrupt_record_length_ends_the_read_with_its_offset() {
 
 #[test]
 fn not_a_pcap_and_missing_files_are_errors() {
-    let e = vlp16::read_pcap(&einride(), &Vlp16Config::default()).unwrap_err();
+    let e = CaptureFormat::Pcap.read(&einride(), &Vlp16Config::default()).unwrap_err();
     assert!(matches!(e, Vlp16Error::Capture(CaptureError::NotPcap { .. })), "{e:?}");
     assert!(e.to_string().contains("einride_vlp16_recording.bin: byte 0: magic 0xFFEE"), "{e}");
-    let e = vlp16::read_raw(&data("no-such-file.bin"), &Vlp16Config::default()).unwrap_err();
+    let e = CaptureFormat::Raw.read(&data("no-such-file.bin"), &Vlp16Config::default()).unwrap_err();
     assert!(matches!(e, Vlp16Error::Io { .. }));
     // `read_capture` tells the two formats apart by the magic number.
     let (f, r) = vlp16::read_capture(&einride(), &Vlp16Config::default()).unwrap();
-    assert_eq!((f, r.scans.len()), (vlp16::CaptureFormat::Raw, 13));
+    assert_eq!((f, r.scans.len()), (CaptureFormat::Raw, 13));
     let (f, r) = vlp16::read_capture(&pcap(), &Vlp16Config::default()).unwrap();
-    assert_eq!((f, r.scans.len()), (vlp16::CaptureFormat::Pcap, 1));
+    assert_eq!((f, r.scans.len()), (CaptureFormat::Pcap, 1));
 }
 
 #[test]
@@ -237,12 +238,12 @@ fn truncated_raw_recording_keeps_the_scans_before_the_cut() {
     let bytes = std::fs::read(einride()).unwrap();
     // 600 whole packets and 500 bytes of the 601st.
     let cut = &bytes[..600 * PACKET_LEN + 500];
-    let r = vlp16::decode_raw_bytes(Path::new("cut.bin"), cut, &Vlp16Config::default()).unwrap();
+    let r = CaptureFormat::Raw.decode_bytes(Path::new("cut.bin"), cut, &Vlp16Config::default()).unwrap();
     assert_eq!(r.counts.data, 600);
     // Blocks 0..7200 hold the first 7 wraps (645, …, 6070; the 8th is at 6974 < 7200): 8 scans.
     assert_eq!(r.scans.len(), 8);
     assert!(matches!(r.error, Some(Vlp16Error::TruncatedPayload { offset: 723_600, len: 500, .. })), "{:?}", r.error);
-    let full = vlp16::read_raw(&einride(), &Vlp16Config::default()).unwrap();
+    let full = CaptureFormat::Raw.read(&einride(), &Vlp16Config::default()).unwrap();
     for (a, b) in r.scans.iter().zip(&full.scans) {
         assert_eq!(bits(a), bits(b));
     }
@@ -266,13 +267,13 @@ fn differing_scans(r: &PcapScans, full: &PcapScans) -> Vec<usize> {
 fn raw_recording_with_bytes_inserted_or_lost_resynchronises() {
     let bytes = std::fs::read(einride()).unwrap();
     let cfg = Vlp16Config::default();
-    let full = vlp16::read_raw(&einride(), &cfg).unwrap();
+    let full = CaptureFormat::Raw.read(&einride(), &cfg).unwrap();
     // Before: one byte inserted into packet 500 put every later packet out of step, and all 500 were
     // rejected (6 scans of 13). Now packet 500 and the byte are skipped (1207 bytes) and the other
     // 999 packets decode: only the scan packet 500 was in (the 7th) differs.
     let mut ins = bytes.clone();
     ins.insert(500 * PACKET_LEN + 321, 0);
-    let r = vlp16::decode_raw_bytes(Path::new("ins.bin"), &ins, &cfg).unwrap();
+    let r = CaptureFormat::Raw.decode_bytes(Path::new("ins.bin"), &ins, &cfg).unwrap();
     assert!(r.error.is_none(), "{:?}", r.error);
     assert_eq!((r.counts.data, r.counts.rejected), (999, 0));
     assert_eq!((r.skipped_bytes, r.skips.clone()), (1_207, vec![Skipped { offset: 603_000, len: 1_207 }]));
@@ -280,7 +281,7 @@ fn raw_recording_with_bytes_inserted_or_lost_resynchronises() {
     // One byte lost from packet 500: the 1205 left of it are skipped.
     let mut del = bytes.clone();
     del.remove(500 * PACKET_LEN + 321);
-    let r = vlp16::decode_raw_bytes(Path::new("del.bin"), &del, &cfg).unwrap();
+    let r = CaptureFormat::Raw.decode_bytes(Path::new("del.bin"), &del, &cfg).unwrap();
     assert_eq!((r.counts.data, r.skipped_bytes), (999, 1_205));
     assert_eq!(differing_scans(&r, &full), vec![6]);
     // 5000 bytes of garbage between packets 300 and 301, and a byte inserted at the first read chunk's
@@ -288,7 +289,7 @@ fn raw_recording_with_bytes_inserted_or_lost_resynchronises() {
     let mut junk = bytes.clone();
     junk.splice(300 * PACKET_LEN..300 * PACKET_LEN, (0..5_000).map(|i| (i % 251) as u8));
     junk.insert(262_144, 0xFF);
-    let r = vlp16::decode_raw_bytes(Path::new("junk.bin"), &junk, &cfg).unwrap();
+    let r = CaptureFormat::Raw.decode_bytes(Path::new("junk.bin"), &junk, &cfg).unwrap();
     assert_eq!((r.counts.data, r.counts.rejected, r.skipped_bytes), (999, 0, 1_207 + 5_000));
     assert_eq!(r.skips, vec![Skipped { offset: 217 * 1_206, len: 1_207 }, Skipped { offset: 300 * 1_206 + 1, len: 5_000 }]);
     assert_eq!(differing_scans(&r, &full).len(), 1);
@@ -310,13 +311,13 @@ fn pcap_with_one_payload_damaged_skips_that_packet() {
         }
     }
     bytes.insert(payload + 321, 0);
-    let r = vlp16::decode_pcap_bytes(Path::new("ins.pcap"), &bytes, &Vlp16Config::default()).unwrap();
+    let r = CaptureFormat::Pcap.decode_bytes(Path::new("ins.pcap"), &bytes, &Vlp16Config::default()).unwrap();
     assert!(r.error.is_none(), "{:?}", r.error);
     assert_eq!((r.counts.data, r.counts.rejected, r.counts.other), (83, 1, 16));
     assert_eq!(r.rejects[0].offset, payload as u64);
     assert_eq!(r.rejects[0].reason, RejectReason::Packet(PacketError::Length { len: 1_207 }));
     // Packet 40 is in the open rotation: the finished scan is untouched.
-    let full = vlp16::read_pcap(&pcap(), &Vlp16Config::default()).unwrap();
+    let full = CaptureFormat::Pcap.read(&pcap(), &Vlp16Config::default()).unwrap();
     assert_eq!(bits(&r.scans[0]), bits(&full.scans[0]));
 }
 
@@ -330,10 +331,10 @@ fn a_pcap_with_a_broken_magic_number_decodes_as_raw_payloads() {
     let path = dir.join("magic.pcap");
     std::fs::write(&path, &bytes).unwrap();
     let (f, r) = vlp16::read_capture(&path, &Vlp16Config::default()).unwrap();
-    assert_eq!(f, vlp16::CaptureFormat::Raw);
+    assert_eq!(f, CaptureFormat::Raw);
     assert_eq!((r.counts.data, r.counts.rejected), (84, 0));
     assert_eq!(r.skipped_bytes, (bytes.len() - 84 * PACKET_LEN) as u64);
-    let full = vlp16::read_pcap(&pcap(), &Vlp16Config::default()).unwrap();
+    let full = CaptureFormat::Pcap.read(&pcap(), &Vlp16Config::default()).unwrap();
     assert_eq!(bits(&r.scans[0]), bits(&full.scans[0]));
     assert_eq!(bits(r.partial.as_ref().unwrap()), bits(full.partial.as_ref().unwrap()));
     std::fs::remove_dir_all(dir).unwrap();
@@ -342,7 +343,7 @@ fn a_pcap_with_a_broken_magic_number_decodes_as_raw_payloads() {
 #[test]
 fn live_udp_on_loopback_gives_the_same_scans_as_the_file() {
     let bytes = std::fs::read(einride()).unwrap();
-    let file = vlp16::read_raw(&einride(), &Vlp16Config::default()).unwrap();
+    let file = CaptureFormat::Raw.read(&einride(), &Vlp16Config::default()).unwrap();
     let mut udp = Vlp16Udp::bind("127.0.0.1:0".parse().unwrap(), Vlp16Config::default()).unwrap();
     let to = udp.local_addr().unwrap();
     let sender = std::thread::spawn(move || {
@@ -391,7 +392,7 @@ fn mutated_captures_never_panic_and_every_packet_is_accounted_for() {
             raw[i] = rng.next_u64() as u8;
         }
         // Every byte is decoded, rejected with its packet, or skipped.
-        let r = vlp16::decode_raw_bytes(Path::new("m.bin"), &raw, &cfg).unwrap();
+        let r = CaptureFormat::Raw.decode_bytes(Path::new("m.bin"), &raw, &cfg).unwrap();
         assert_eq!((r.counts.data + r.counts.rejected) * PACKET_LEN as u64 + r.skipped_bytes, raw.len() as u64);
         assert!(r.counts.data + r.counts.rejected >= 1000 - 32, "{:?}", r.counts);
         assert!(r.error.is_none());
@@ -406,7 +407,7 @@ fn mutated_captures_never_panic_and_every_packet_is_accounted_for() {
                 raw.remove(i);
             }
         }
-        let r = vlp16::decode_raw_bytes(Path::new("e.bin"), &raw, &cfg).unwrap();
+        let r = CaptureFormat::Raw.decode_bytes(Path::new("e.bin"), &raw, &cfg).unwrap();
         let cut = match r.error {
             None => 0,
             Some(Vlp16Error::TruncatedPayload { len, .. }) => len,
@@ -423,7 +424,7 @@ fn mutated_captures_never_panic_and_every_packet_is_accounted_for() {
         if rng.below(2) == 0 {
             p.truncate(24 + rng.below(p.len() - 24));
         }
-        let r = vlp16::decode_pcap_bytes(Path::new("m.pcap"), &p, &cfg).unwrap();
+        let r = CaptureFormat::Pcap.decode_bytes(Path::new("m.pcap"), &p, &cfg).unwrap();
         assert!(r.counts.data + r.counts.rejected + r.counts.other <= 100);
         assert!(r.scans.len() <= 3, "{}", r.scans.len());
         damaged += r.error.is_some() as usize;

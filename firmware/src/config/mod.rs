@@ -25,6 +25,7 @@ mod table;
 
 pub(crate) use params::config_params;
 pub use params::{Config, PARAMS};
+pub(crate) use table::config_rows;
 pub use table::{ParamInfo, ParamValue, Unit};
 
 /// A utility weight: Q16.16, "utility points per unit of the term".

@@ -18,10 +18,11 @@
 use super::table::{define_config, positive, within, ParamInfo, ParamValue, Unit};
 use super::*;
 
-/// Calls `$gen! { rows }` with the table: each generator turns the rows into its items.
+/// Calls `$gen!` with the table's rows, as [`super::table::config_rows`] reads them: each generator
+/// turns the rows into its items.
 macro_rules! config_params {
     ($gen:ident) => {
-        $gen! {
+        $crate::config::config_rows! { $gen;
             /// Viewpoint-selection rule. Default [`PlannerKind::Lives`].
             planner: PlannerKind = PlannerKind::Lives, Planner, "viewpoint-selection rule";
             /// World coordinates of the grids' lower-left corner (the search area, given at start).

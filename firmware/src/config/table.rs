@@ -201,15 +201,27 @@ macro_rules! some {
 }
 pub(super) use some;
 
-/// Generates [`Config`], [`Config::DEFAULT`], [`Config::validate`] and [`PARAMS`] from the rows of
-/// [`super::params`].
-macro_rules! define_config {
-    ($(
+/// Reads the rows of [`super::params`] (their grammar is written here, once) and calls `$gen!`
+/// with each row as `field: Type => { [docs] default, Unit, "summary", [check => "allowed"],
+/// ["set name"] }`, so that a generator matches the parts it uses and passes over the rest.
+macro_rules! config_rows {
+    ($gen:ident; $(
         $(#[$doc:meta])*
         $field:ident : $ty:ty = $default:expr, $unit:ident, $summary:literal
         $(, check $ok:expr => $allowed:literal)?
         $(, set $set:literal)?;
     )*) => {
+        $gen! { $($field: $ty => { [$(#[$doc])*] $default, $unit, $summary, [$($ok => $allowed)?], [$($set)?] })* }
+    };
+}
+pub(crate) use config_rows;
+
+/// Generates [`Config`], [`Config::DEFAULT`], [`Config::validate`] and [`PARAMS`] from the rows of
+/// [`super::params`] (as [`config_rows`] gives them).
+macro_rules! define_config {
+    ($($field:ident : $ty:ty => {
+        [$(#[$doc:meta])*] $default:expr, $unit:ident, $summary:literal, [$($ok:expr => $allowed:literal)?], [$($set:literal)?]
+    })*) => {
         /// The controller's configuration. Distances in metres ([`Meters`], Q16.16), angles as
         /// [`BinaryAngle`], times in microseconds. Written once, in the table of
         /// `firmware/src/config/params.rs`.

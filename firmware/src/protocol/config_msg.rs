@@ -13,14 +13,10 @@ use serde::{Deserialize, Serialize};
 /// Per-stage work budgets on the wire: [`StageBudgets`] itself, five `u32`s in its field order.
 pub type BudgetsMsg = StageBudgets;
 
-/// Generates [`ConfigMsg`] and its conversions from the rows of the parameter table.
+/// Generates [`ConfigMsg`] and its conversions from the rows of the parameter table: each field's
+/// name and type (the rest of the row is not on the wire).
 macro_rules! define_config_msg {
-    ($(
-        $(#[$doc:meta])*
-        $field:ident : $ty:ty = $default:expr, $unit:ident, $summary:literal
-        $(, check $ok:expr => $allowed:literal)?
-        $(, set $set:literal)?;
-    )*) => {
+    ($($field:ident : $ty:ty => $rest:tt)*) => {
         /// The controller's whole configuration (mirrors [`Config`] field by field, in its order).
         /// Metres and weights as Q16.16 bits, angles as binary angles, times in microseconds.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]

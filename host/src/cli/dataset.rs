@@ -45,8 +45,8 @@ pub fn run(args: DatasetArgs) -> Result<ExitCode, String> {
     let last = seed.saturating_add(u64::from(worlds.max(1)) - 1);
     refuse_heldout(seed, last, &format!("worlds from seed {seed}"), "pick other seeds")?;
     let mut spec = DatasetSpec::new(&out, seed, worlds, episodes_per_world);
-    spec.episode_min_s = min_episode_s;
-    spec.episode_max_s = max_episode_s;
+    spec.plan.episode_min_s = min_episode_s;
+    spec.plan.episode_max_s = max_episode_s;
     spec.threads = threads;
     spec.density = match furniture_density[..] {
         [d] => [d, d],

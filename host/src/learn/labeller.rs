@@ -691,18 +691,8 @@ mod tests {
 
     /// A closed 10 × 6 m room named `name` (read from `file`), the robot starting at `start`,
     /// and `things` in it (TOML tables).
-    fn room(name: &str, file: &str, [x, y]: [f64; 2], things: &str) -> World {
-        let text = format!(
-            r#"name = "{name}"
-time_limit_s = 60
-[start]
-position = [{x:?}, {y:?}]
-[[walls]]
-points = [[0, 0], [10, 0], [10, 6], [0, 6]]
-closed = true
-{things}"#
-        );
-        World::from_toml_str(&text, file).unwrap()
+    fn room(name: &str, file: &str, start: [f64; 2], things: &str) -> World {
+        World::closed_room(name, file, [10, 6], start, things)
     }
 
     /// A 10 × 6 m room, a 0.6 m box in it and optionally a fast person walking back and forth.

@@ -19,8 +19,8 @@
 //! | `frames_to_host` | `HostDecoder` | the same |
 //! | `world` | `World::from_toml_str` | an error has a line within the file and no internal type name (`RawRect`, `i128`, `f64`, `struct`) |
 //! | `carmen` | `carmen::parse_line` per line | — |
-//! | `vlp16` | `ScanAssembler::push_bytes` per 1206-byte packet, `decode_raw_bytes` | every scan has the configured beam count |
-//! | `pcap` | `decode_pcap_bytes` | the same |
+//! | `vlp16` | `ScanAssembler::push_bytes` per 1206-byte packet, `CaptureFormat::Raw.decode_bytes` | every scan has the configured beam count |
+//! | `pcap` | `CaptureFormat::Pcap.decode_bytes` | the same |
 //! | `mcap` | `rosbag::read_mcap` | every offset it reports is within the file |
 //! | `sqlite` | `rosbag::read_db3` on the bytes as a file | — |
 //! | `ros1bag` | `rosbag::read_bag1` | every offset it reports is within the file |
@@ -210,7 +210,7 @@ pub fn vlp16_packets(data: &[u8]) {
     if let Some(scan) = asm.finish() {
         assert_eq!(scan.ranges_m.len(), beams);
     }
-    if let Ok(scans) = vlp16::decode_raw_bytes(Path::new("fuzz.bin"), data, &cfg) {
+    if let Ok(scans) = vlp16::CaptureFormat::Raw.decode_bytes(Path::new("fuzz.bin"), data, &cfg) {
         check_scans(&scans, beams);
     }
 }
@@ -218,7 +218,7 @@ pub fn vlp16_packets(data: &[u8]) {
 /// A pcap file of VLP-16 datagrams.
 pub fn pcap(data: &[u8]) {
     let cfg = vlp16::Vlp16Config::default();
-    if let Ok(scans) = vlp16::decode_pcap_bytes(Path::new("fuzz.pcap"), data, &cfg) {
+    if let Ok(scans) = vlp16::CaptureFormat::Pcap.decode_bytes(Path::new("fuzz.pcap"), data, &cfg) {
         check_scans(&scans, cfg.beams);
     }
 }

@@ -67,9 +67,28 @@ pub struct SimParam {
     pub follow: Option<Follow>,
 }
 
-/// The defaults of a row: a number as it is, nothing else to set.
-const NUMBER: SimParam =
-    SimParam { name: "", unit: "", range: None, summary: "", value: SimValue::Lidar, scale: Scale::Same, follow: None };
+impl SimParam {
+    /// A number of [`SimConfig`]: its name, unit, accepted values `(lo, hi, lo_open)` and field;
+    /// written as it is, nothing else set. [`SimParam::about`] says what it does.
+    const fn number(name: &'static str, unit: &'static str, range: (f64, f64, bool), field: fn(&mut SimConfig) -> &mut f64) -> SimParam {
+        SimParam { name, unit, range: Some(range), summary: "", value: SimValue::Number(field), scale: Scale::Same, follow: None }
+    }
+
+    /// Written in `scale` against its field.
+    const fn scaled(self, scale: Scale) -> SimParam {
+        SimParam { scale, ..self }
+    }
+
+    /// The line that says what it does.
+    const fn about(self, summary: &'static str) -> SimParam {
+        SimParam { summary, ..self }
+    }
+
+    /// Also sets the controller's model of the robot ([`SimParam::follow`]).
+    const fn follows(self, follow: Follow) -> SimParam {
+        SimParam { follow: Some(follow), ..self }
+    }
+}
 
 /// Settings `--sim` accepts: the simulated base, LiDAR and camera. The defaults are
 /// [`crate::search::SearchSpec::new`]'s (`lives params` prints them).
@@ -77,167 +96,67 @@ pub const SIM_PARAMS: &[SimParam] = &[
     SimParam {
         name: "lidar",
         unit: "profile",
+        range: None,
         summary: "LiDAR profile (docs/sim-sensors.md); sets beams, field of view, range, noise, no-returns; give it before other LiDAR settings",
-        ..NUMBER
+        value: SimValue::Lidar,
+        scale: Scale::Same,
+        follow: None,
     },
-    SimParam {
-        name: "white_range_m",
-        unit: "m",
-        range: Some((0.0, 200.0, false)),
-        summary: "no-return model: range at which a white target at normal incidence returns half the time (0: every surface returns, glass included)",
-        value: SimValue::Number(|s| &mut s.white_range_m),
-        ..NUMBER
-    },
-    SimParam {
-        name: "angular_jitter_deg",
-        unit: "°",
-        range: Some((0.0, 1.0, false)),
-        summary: "standard deviation of each firing's direction around its nominal one",
-        value: SimValue::Number(|s| &mut s.angular_jitter_rad),
-        scale: Scale::Degrees,
-        ..NUMBER
-    },
-    SimParam {
-        name: "beam_divergence_mrad",
-        unit: "mrad",
-        range: Some((0.0, 50.0, false)),
-        summary: "full beam divergence for mixed pixels at depth edges (0: none)",
-        value: SimValue::Number(|s| &mut s.beam_divergence_rad),
-        scale: Scale::Milli,
-        ..NUMBER
-    },
-    SimParam {
-        name: "mount_x_m",
-        unit: "m",
-        range: Some((-1.0, 1.0, false)),
-        summary: "the laser's position on the base, ahead of its centre",
-        value: SimValue::Number(|s| &mut s.mount[0]),
-        ..NUMBER
-    },
-    SimParam {
-        name: "mount_y_m",
-        unit: "m",
-        range: Some((-1.0, 1.0, false)),
-        summary: "the laser's position on the base, left of its centre",
-        value: SimValue::Number(|s| &mut s.mount[1]),
-        ..NUMBER
-    },
-    SimParam {
-        name: "mount_yaw_deg",
-        unit: "°",
-        range: Some((-180.0, 180.0, false)),
-        summary: "the laser's rotation on the base",
-        value: SimValue::Number(|s| &mut s.mount[2]),
-        scale: Scale::Degrees,
-        ..NUMBER
-    },
-    SimParam {
-        name: "odom_slip_per_m",
-        unit: "m/m",
-        range: Some((0.0, 0.5, false)),
-        summary: "odometry's scale error per metre driven; the seed picks sign and size within ±50 %",
-        value: SimValue::Number(|s| &mut s.odom_slip_per_m),
-        ..NUMBER
-    },
-    SimParam {
-        name: "odom_heading_drift_per_rad",
-        unit: "rad/rad",
-        range: Some((0.0, 0.5, false)),
-        summary: "odometry's heading error per radian turned; the seed picks sign and size within ±50 %",
-        value: SimValue::Number(|s| &mut s.odom_heading_drift_per_rad),
-        ..NUMBER
-    },
-    SimParam {
-        name: "speed_mps",
-        unit: "m/s",
-        range: Some((0.0, 5.0, true)),
-        summary: "the base's top speed",
-        value: SimValue::Number(|s| &mut s.speed_mps),
-        ..NUMBER
-    },
-    SimParam {
-        name: "turn_rate_rps",
-        unit: "rad/s",
-        range: Some((0.0, 10.0, true)),
-        summary: "the base's top turn rate",
-        value: SimValue::Number(|s| &mut s.turn_rate_rps),
-        ..NUMBER
-    },
-    SimParam {
-        name: "range_noise_std_m",
-        unit: "m",
-        range: Some((0.0, 1.0, false)),
-        summary: "standard deviation of the LiDAR's Gaussian range noise",
-        value: SimValue::Number(|s| &mut s.range_noise_std_m),
-        ..NUMBER
-    },
-    SimParam {
-        name: "dropout_prob",
-        unit: "fraction",
-        range: Some((0.0, 1.0, false)),
-        summary: "probability that a LiDAR beam returns nothing",
-        value: SimValue::Number(|s| &mut s.dropout_prob),
-        ..NUMBER
-    },
-    SimParam {
-        name: "lidar_max_range_m",
-        unit: "m",
-        range: Some((1.0, 100.0, false)),
-        summary: "LiDAR range; the controller's LiDAR model follows",
-        value: SimValue::Number(|s| &mut s.lidar_max_range_m),
-        follow: Some(|cfg, name, x| {
+    SimParam::number("white_range_m", "m", (0.0, 200.0, false), |s| &mut s.white_range_m)
+        .about("no-return model: range at which a white target at normal incidence returns half the time (0: every surface returns, glass included)"),
+    SimParam::number("angular_jitter_deg", "°", (0.0, 1.0, false), |s| &mut s.angular_jitter_rad)
+        .scaled(Scale::Degrees)
+        .about("standard deviation of each firing's direction around its nominal one"),
+    SimParam::number("beam_divergence_mrad", "mrad", (0.0, 50.0, false), |s| &mut s.beam_divergence_rad)
+        .scaled(Scale::Milli)
+        .about("full beam divergence for mixed pixels at depth edges (0: none)"),
+    SimParam::number("mount_x_m", "m", (-1.0, 1.0, false), |s| &mut s.mount[0])
+        .about("the laser's position on the base, ahead of its centre"),
+    SimParam::number("mount_y_m", "m", (-1.0, 1.0, false), |s| &mut s.mount[1])
+        .about("the laser's position on the base, left of its centre"),
+    SimParam::number("mount_yaw_deg", "°", (-180.0, 180.0, false), |s| &mut s.mount[2])
+        .scaled(Scale::Degrees)
+        .about("the laser's rotation on the base"),
+    SimParam::number("odom_slip_per_m", "m/m", (0.0, 0.5, false), |s| &mut s.odom_slip_per_m)
+        .about("odometry's scale error per metre driven; the seed picks sign and size within ±50 %"),
+    SimParam::number("odom_heading_drift_per_rad", "rad/rad", (0.0, 0.5, false), |s| &mut s.odom_heading_drift_per_rad)
+        .about("odometry's heading error per radian turned; the seed picks sign and size within ±50 %"),
+    SimParam::number("speed_mps", "m/s", (0.0, 5.0, true), |s| &mut s.speed_mps).about("the base's top speed"),
+    SimParam::number("turn_rate_rps", "rad/s", (0.0, 10.0, true), |s| &mut s.turn_rate_rps).about("the base's top turn rate"),
+    SimParam::number("range_noise_std_m", "m", (0.0, 1.0, false), |s| &mut s.range_noise_std_m)
+        .about("standard deviation of the LiDAR's Gaussian range noise"),
+    SimParam::number("dropout_prob", "fraction", (0.0, 1.0, false), |s| &mut s.dropout_prob)
+        .about("probability that a LiDAR beam returns nothing"),
+    SimParam::number("lidar_max_range_m", "m", (1.0, 100.0, false), |s| &mut s.lidar_max_range_m)
+        .about("LiDAR range; the controller's LiDAR model follows")
+        .follows(|cfg, name, x| {
             cfg.lidar_max_range_m = meters(name, x)?;
             Ok(())
         }),
-        ..NUMBER
-    },
-    SimParam {
-        name: "camera_range_m",
-        unit: "m",
-        range: Some((0.0, 30.0, true)),
-        summary: "how far the detector sees; the controller's camera model follows",
-        value: SimValue::Number(|s| &mut s.camera_range_m),
-        follow: Some(|cfg, name, x| {
+    SimParam::number("camera_range_m", "m", (0.0, 30.0, true), |s| &mut s.camera_range_m)
+        .about("how far the detector sees; the controller's camera model follows")
+        .follows(|cfg, name, x| {
             cfg.camera_range_m = meters(name, x)?;
             Ok(())
         }),
-        ..NUMBER
-    },
-    SimParam {
-        name: "camera_fov_deg",
-        unit: "°",
-        range: Some((1.0, 359.0, false)),
-        summary: "the camera's field of view; the controller's camera model follows",
-        value: SimValue::Number(|s| &mut s.camera_fov_rad),
-        scale: Scale::Degrees,
-        follow: Some(|cfg, name, d| {
+    SimParam::number("camera_fov_deg", "°", (1.0, 359.0, false), |s| &mut s.camera_fov_rad)
+        .scaled(Scale::Degrees)
+        .about("the camera's field of view; the controller's camera model follows")
+        .follows(|cfg, name, d| {
             cfg.camera_fov = BinaryAngle::from_radians(d.to_radians()).ok_or_else(|| format!("`{name}`: {d}° is not an angle"))?;
             Ok(())
         }),
-    },
-    SimParam {
-        name: "detect_min_visible_fraction",
-        unit: "fraction",
-        range: Some((0.0, 1.0, true)),
-        summary: "share of a target's outline that must be in view and unoccluded to detect it",
-        value: SimValue::Number(|s| &mut s.detect_min_visible_fraction),
-        ..NUMBER
-    },
-    SimParam {
-        name: "robot_radius_m",
-        unit: "m",
-        range: Some((0.05, 1.0, false)),
-        summary: "the simulated body's radius for collisions; the controller's clearance follows (0.10 m more)",
-        value: SimValue::Number(|s| &mut s.robot_radius_m),
-        follow: Some(|cfg, name, x| {
+    SimParam::number("detect_min_visible_fraction", "fraction", (0.0, 1.0, true), |s| &mut s.detect_min_visible_fraction)
+        .about("share of a target's outline that must be in view and unoccluded to detect it"),
+    SimParam::number("robot_radius_m", "m", (0.05, 1.0, false), |s| &mut s.robot_radius_m)
+        .about("the simulated body's radius for collisions; the controller's clearance follows (0.10 m more)")
+        .follows(|cfg, name, x| {
             // The controller keeps the same margin around the body as with the defaults
             // (0.35 m of clearance around a 0.25 m body).
             let margin = Config::DEFAULT.robot_radius_m.to_num::<f64>() - crate::robot_model::default_sim().robot_radius_m;
             cfg.robot_radius_m = fixed_point::meters_from_f64(x + margin).ok_or_else(|| format!("`{name}`: {x} m is out of range"))?;
             Ok(())
         }),
-        ..NUMBER
-    },
 ];
 
 impl SimParam {
@@ -317,6 +236,13 @@ pub fn get_sim(sim: &SimConfig, name: &str) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_setting_says_what_it_does() {
+        for p in SIM_PARAMS {
+            assert!(!p.summary.is_empty(), "`{}` has no `about`", p.name);
+        }
+    }
 
     #[test]
     fn degrees_are_the_radians_the_simulator_took_before_the_table() {

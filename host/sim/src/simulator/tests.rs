@@ -5,20 +5,10 @@ use crate::geometry::{dist, wrap_angle};
 use crate::Scenario;
 use crate::{HitKind, Material, Shape, World};
 
-/// A closed `width` × `height` m room (corner at the origin) named `name`, the robot starting at
+/// A closed `width` × `height` m room named `name` (read from `name.toml`), the robot starting at
 /// `start`, plus `extra` (TOML tables).
-fn closed_room(name: &str, [width, height]: [u32; 2], [x, y]: [f64; 2], extra: &str) -> World {
-    let text = format!(
-        r#"name = "{name}"
-time_limit_s = 60
-[start]
-position = [{x:?}, {y:?}]
-[[walls]]
-points = [[0, 0], [{width}, 0], [{width}, {height}], [0, {height}]]
-closed = true
-{extra}"#
-    );
-    World::from_toml_str(&text, &format!("{name}.toml")).unwrap()
+fn closed_room(name: &str, size: [u32; 2], start: [f64; 2], extra: &str) -> World {
+    World::closed_room(name, &format!("{name}.toml"), size, start, extra)
 }
 
 /// A closed 10 × 4 m room, the robot starting at (2, 2), plus `extra` (TOML tables).

@@ -471,6 +471,24 @@ impl World {
         Ok(world)
     }
 
+    /// A closed `width` × `height` m room (corner at the origin) named `name`, read as the world
+    /// file `file_name`: the robot starts at `start`, and `extra` (TOML tables: targets, furniture,
+    /// people …) is in it. For tests, here and in the host; panics if the text does not read.
+    #[doc(hidden)]
+    pub fn closed_room(name: &str, file_name: &str, [width, height]: [u32; 2], [x, y]: [f64; 2], extra: &str) -> World {
+        let text = format!(
+            r#"name = "{name}"
+time_limit_s = 60
+[start]
+position = [{x:?}, {y:?}]
+[[walls]]
+points = [[0, 0], [{width}, 0], [{width}, {height}], [0, {height}]]
+closed = true
+{extra}"#
+        );
+        World::from_toml_str(&text, file_name).unwrap()
+    }
+
     /// Read and parse a world file.
     pub fn load(path: &Path) -> Result<World, WorldError> {
         let file = path.display().to_string();

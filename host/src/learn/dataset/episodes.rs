@@ -203,17 +203,17 @@ pub(super) fn world_output(spec: &DatasetSpec, world_seed: u64, builtins: &[(Str
     if EXCLUDED_WORLDS.contains(&world.name.as_str()) {
         return Err(DatasetError::BuiltinWorld { world_seed, builtin: world.name.clone() });
     }
-    let split = Split::of_world(world_seed, spec.val_modulus);
+    let split = Split::of_world(world_seed, spec.plan.val_modulus);
     let ctx = WorldContext::new(world);
     let mut lab = Labeller::for_world(&ctx.world, spec.labeller.clone());
     let mut out = WorldOutput { world_seed, split, bytes: Vec::new(), records: 0, episodes: Vec::new(), agreement: Agreement::default() };
-    let (lo_t, hi_t) = ((spec.episode_min_s * SCAN_HZ).round() as u32, (spec.episode_max_s * SCAN_HZ).round() as u32);
-    for episode in 0..spec.episodes_per_world {
+    let (lo_t, hi_t) = ((spec.plan.episode_min_s * SCAN_HZ).round() as u32, (spec.plan.episode_max_s * SCAN_HZ).round() as u32);
+    for episode in 0..spec.plan.episodes_per_world {
         let seed = episode_seed(world_seed, episode);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let ticks = rng.gen_range(lo_t.max(1)..=hi_t.max(lo_t.max(1)));
         let world = ctx.with_random_start(&mut rng);
-        let trajectory = Trajectory::for_episode(world_seed, episode, spec.episodes_per_world);
+        let trajectory = Trajectory::for_episode(world_seed, episode, spec.plan.episodes_per_world);
         lab.reset();
         let mut rec = Record {
             world_seed,
@@ -289,7 +289,7 @@ pub fn generate_with(spec: &DatasetSpec, mut progress: impl FnMut(Progress)) -> 
         writers.push((path, w, 0u64, Vec::<u64>::new()));
     }
     let builtins = builtin_walls();
-    let seeds: Vec<u64> = (0..spec.worlds as u64).map(|i| spec.first_world_seed + i).collect();
+    let seeds: Vec<u64> = (0..spec.plan.worlds as u64).map(|i| spec.plan.first_world_seed + i).collect();
     let threads = spec.threads.clamp(1, 64);
     let mut episodes = Vec::new();
     let mut agreement = Agreement::default();
@@ -319,7 +319,7 @@ pub fn generate_with(spec: &DatasetSpec, mut progress: impl FnMut(Progress)) -> 
             episodes.extend(o.episodes);
             done += 1;
         }
-        progress(Progress { worlds_done: done, worlds: spec.worlds, records: total_records });
+        progress(Progress { worlds_done: done, worlds: spec.plan.worlds, records: total_records });
     }
     let mut splits = BTreeMap::new();
     let mut sizes = [0u64; 2];
@@ -407,13 +407,8 @@ pub(super) fn build_meta(
         splits,
         generator: GeneratorMeta {
             command: spec.command.clone(),
-            first_world_seed: spec.first_world_seed,
-            worlds: spec.worlds,
-            episodes_per_world: spec.episodes_per_world,
-            episode_min_s: spec.episode_min_s,
-            episode_max_s: spec.episode_max_s,
-            val_modulus: spec.val_modulus,
-            split_rule: format!("world_seed % {} == 0 -> val, else train (all of a world's episodes in one split)", spec.val_modulus),
+            plan: spec.plan.clone(),
+            split_rule: format!("world_seed % {} == 0 -> val, else train (all of a world's episodes in one split)", spec.plan.val_modulus),
             trajectories: Trajectory::ROTATION.iter().map(|t| t.name()).collect(),
             robot_radius_m: sim.robot_radius_m,
             labeller: spec.labeller.clone(),

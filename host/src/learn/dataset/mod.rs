@@ -160,11 +160,10 @@ impl Trajectory {
     }
 }
 
-/// What to generate.
-#[derive(Clone, Debug)]
-pub struct DatasetSpec {
-    /// Output directory (created; `meta.json`, `train.bin`, `val.bin` in it are replaced).
-    pub out_dir: PathBuf,
+/// Which worlds and episodes a dataset is made of, and how they are split (in [`DatasetSpec`], and
+/// recorded as they are in `meta.json`'s `generator`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EpisodePlan {
     /// World seeds are `first_world_seed .. first_world_seed + worlds`.
     pub first_world_seed: u64,
     /// Number of procedural worlds.
@@ -176,6 +175,15 @@ pub struct DatasetSpec {
     pub episode_max_s: f64,
     /// A world is in `val` when `world_seed % val_modulus == 0` (at least 2).
     pub val_modulus: u64,
+}
+
+/// What to generate.
+#[derive(Clone, Debug)]
+pub struct DatasetSpec {
+    /// Output directory (created; `meta.json`, `train.bin`, `val.bin` in it are replaced).
+    pub out_dir: PathBuf,
+    /// The worlds, their episodes and the split.
+    pub plan: EpisodePlan,
     /// The labeller's parameters.
     pub labeller: LabellerConfig,
     /// Worlds processed at once (1 = no threads). The output does not depend on it.
@@ -194,12 +202,7 @@ impl DatasetSpec {
     pub fn new(out_dir: impl Into<PathBuf>, first_world_seed: u64, worlds: u32, episodes_per_world: u32) -> DatasetSpec {
         DatasetSpec {
             out_dir: out_dir.into(),
-            first_world_seed,
-            worlds,
-            episodes_per_world,
-            episode_min_s: 60.0,
-            episode_max_s: 120.0,
-            val_modulus: 5,
+            plan: EpisodePlan { first_world_seed, worlds, episodes_per_world, episode_min_s: 60.0, episode_max_s: 120.0, val_modulus: 5 },
             labeller: LabellerConfig::default(),
             threads: 1,
             density: [DEFAULT_DENSITY, DEFAULT_DENSITY],
@@ -209,21 +212,21 @@ impl DatasetSpec {
 
     fn validate(&self) -> Result<(), DatasetError> {
         let bad = |m: String| Err(DatasetError::InvalidSpec(m));
-        if self.worlds == 0 {
+        if self.plan.worlds == 0 {
             return bad("at least one world is needed".into());
         }
-        if self.episodes_per_world == 0 {
+        if self.plan.episodes_per_world == 0 {
             return bad("at least one episode per world is needed".into());
         }
-        if self.first_world_seed.checked_add(self.worlds as u64 - 1).is_none() {
-            return bad(format!("world seeds {} + {} overflow u64", self.first_world_seed, self.worlds));
+        if self.plan.first_world_seed.checked_add(self.plan.worlds as u64 - 1).is_none() {
+            return bad(format!("world seeds {} + {} overflow u64", self.plan.first_world_seed, self.plan.worlds));
         }
-        let (lo, hi) = (self.episode_min_s, self.episode_max_s);
+        let (lo, hi) = (self.plan.episode_min_s, self.plan.episode_max_s);
         if !(lo.is_finite() && hi.is_finite() && lo >= 1.0 / SCAN_HZ && lo <= hi && hi <= MAX_EPISODE_S) {
             return bad(format!("episode length {lo}–{hi} s: need 0.2 s ≤ min ≤ max ≤ {MAX_EPISODE_S} s"));
         }
-        if self.val_modulus < 2 {
-            return bad(format!("val_modulus must be at least 2, got {}", self.val_modulus));
+        if self.plan.val_modulus < 2 {
+            return bad(format!("val_modulus must be at least 2, got {}", self.plan.val_modulus));
         }
         let [dlo, dhi] = self.density;
         if !(0.0..=1.0).contains(&dlo) || !(0.0..=1.0).contains(&dhi) || dlo > dhi {
@@ -289,12 +292,8 @@ pub struct NormalisationMeta {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GeneratorMeta {
     pub command: String,
-    pub first_world_seed: u64,
-    pub worlds: u32,
-    pub episodes_per_world: u32,
-    pub episode_min_s: f64,
-    pub episode_max_s: f64,
-    pub val_modulus: u64,
+    #[serde(flatten)]
+    pub plan: EpisodePlan,
     pub split_rule: String,
     pub trajectories: Vec<String>,
     pub robot_radius_m: f64,

@@ -15,8 +15,8 @@ fn tmp_dir(name: &str) -> PathBuf {
 /// Two worlds (seeds 10 → val, 11 → train), two short episodes each.
 fn small_spec(dir: &Path) -> DatasetSpec {
     let mut s = DatasetSpec::new(dir, 10, 2, 2);
-    s.episode_min_s = 3.0;
-    s.episode_max_s = 5.0;
+    s.plan.episode_min_s = 3.0;
+    s.plan.episode_max_s = 5.0;
     s
 }
 
@@ -130,9 +130,9 @@ fn deterministic_and_thread_independent() {
 fn truncated_and_corrupt_files_give_clear_errors() {
     let dir = tmp_dir("trunc");
     let mut spec = small_spec(&dir);
-    spec.worlds = 1;
-    spec.first_world_seed = 11; // train only
-    spec.episodes_per_world = 1;
+    spec.plan.worlds = 1;
+    spec.plan.first_world_seed = 11; // train only
+    spec.plan.episodes_per_world = 1;
     let sum = generate(&spec).unwrap();
     let n = sum.train_records;
     assert!(n >= 3);
@@ -193,12 +193,12 @@ fn bad_specs_are_refused() {
         edit(&mut s);
         matches!(generate(&s), Err(DatasetError::InvalidSpec(_)))
     };
-    assert!(refused(&|s| s.worlds = 0));
+    assert!(refused(&|s| s.plan.worlds = 0));
     assert!(refused(&|s| {
-        s.episode_min_s = 10.0;
-        s.episode_max_s = 5.0;
+        s.plan.episode_min_s = 10.0;
+        s.plan.episode_max_s = 5.0;
     }));
-    assert!(refused(&|s| s.first_world_seed = u64::MAX));
+    assert!(refused(&|s| s.plan.first_world_seed = u64::MAX));
     for bad in [[0.5, 0.2], [-0.1, 1.0], [0.0, 1.5]] {
         assert!(refused(&|s| s.density = bad), "{bad:?}");
     }

@@ -208,31 +208,13 @@ impl Decoder {
     }
 }
 
-/// Reads a classic pcap capture: UDP datagrams to [`DATA_PORT`] are decoded, other traffic
-/// (position packets on 8308, anything else) is counted and ignored, invalid data packets are
-/// counted and skipped. A truncated or corrupt record ends the read with `error` set and the scans
-/// before it kept. `Err` only when nothing could be read (no file, not a pcap, unusable header).
-pub fn read_pcap(path: &Path, cfg: &Vlp16Config) -> Result<PcapScans, Vlp16Error> {
-    collect(|on_scan| stream_pcap(path, open(path)?, cfg, on_scan))
-}
-
-/// [`read_pcap`] on bytes already in memory (`path` names them in errors).
-pub fn decode_pcap_bytes(path: &Path, bytes: &[u8], cfg: &Vlp16Config) -> Result<PcapScans, Vlp16Error> {
-    collect(|on_scan| stream_pcap(path, bytes, cfg, on_scan))
-}
-
-/// [`read_pcap`] without keeping the scans: each completed scan goes to `on_scan` as soon as it is
-/// complete, and the returned `scans` is empty. Reads `reader` a chunk at a time.
-pub fn stream_pcap<R: Read>(
-    path: &Path,
-    reader: R,
-    cfg: &Vlp16Config,
-    on_scan: &mut dyn FnMut(PlanarScan),
-) -> Result<PcapScans, Vlp16Error> {
+/// Classic pcap: UDP datagrams to [`DATA_PORT`] are decoded, other traffic (position packets on
+/// 8308, anything else) is counted and ignored, invalid data packets are counted and skipped. A
+/// truncated or corrupt record ends the read: the error is returned in `Ok` and the scans before it
+/// are kept. `Err` only when nothing could be read (not a pcap, unusable header).
+fn decode_pcap<R: Read>(path: &Path, reader: R, dec: &mut Decoder, on_scan: OnScan) -> Result<Option<Vlp16Error>, Vlp16Error> {
     use crate::io::sensors::pcap::{Frame, PcapStream, Record};
-    let mut dec = Decoder::new(*cfg)?;
     let mut stream = PcapStream::new(path, reader)?;
-    let mut error = None;
     while let Some(rec) = stream.next_record() {
         match rec {
             Ok(Record { offset, frame }) => match frame {
@@ -244,41 +226,22 @@ pub fn stream_pcap<R: Read>(
                 Frame::Udp { .. } | Frame::Other => dec.counts.other += 1,
                 Frame::Bad(msg) => dec.reject(offset, RejectReason::Headers(msg)),
             },
-            Err(e) => {
-                error = Some(Vlp16Error::from(e));
-                break;
-            }
+            Err(e) => return Ok(Some(Vlp16Error::from(e))),
         }
     }
-    Ok(dec.into_scans(path, error))
+    Ok(None)
 }
 
-/// Reads a file of raw 1206-byte payloads back to back (no framing, e.g.
-/// `einride_vlp16_recording.bin`). A packet whose framing is right ([`frames_packet`]) is decoded,
-/// or counted and skipped when a later check fails (an azimuth). After a packet whose framing is
-/// wrong the reader resynchronises: it goes on at the next offset where a packet's framing is
-/// right. If that is exactly one packet on (or the end of the file, after an earlier packet), the
-/// stream is still in step and the packet is counted as rejected; otherwise the bytes up to it
-/// (inserted, lost or garbage) are counted in `skipped_bytes` and `skips`, and reading goes on.
-/// A file that ends inside a packet sets `error` (the scans before it are kept). `Err` when the
-/// file cannot be read, is empty, or frames no packet at any offset ([`Vlp16Error::NoPacket`]).
-pub fn read_raw(path: &Path, cfg: &Vlp16Config) -> Result<PcapScans, Vlp16Error> {
-    collect(|on_scan| stream_raw(path, open(path)?, cfg, on_scan))
-}
-
-/// [`read_raw`] on bytes already in memory.
-pub fn decode_raw_bytes(path: &Path, bytes: &[u8], cfg: &Vlp16Config) -> Result<PcapScans, Vlp16Error> {
-    collect(|on_scan| stream_raw(path, bytes, cfg, on_scan))
-}
-
-/// [`read_raw`] without keeping the scans (see [`stream_pcap`]).
-pub fn stream_raw<R: Read>(
-    path: &Path,
-    reader: R,
-    cfg: &Vlp16Config,
-    on_scan: &mut dyn FnMut(PlanarScan),
-) -> Result<PcapScans, Vlp16Error> {
-    let mut dec = Decoder::new(*cfg)?;
+/// Raw 1206-byte payloads back to back (no framing, e.g. `einride_vlp16_recording.bin`). A packet
+/// whose framing is right ([`frames_packet`]) is decoded, or counted and skipped when a later check
+/// fails (an azimuth). After a packet whose framing is wrong the reader resynchronises: it goes on
+/// at the next offset where a packet's framing is right. If that is exactly one packet on (or the
+/// end of the file, after an earlier packet), the stream is still in step and the packet is counted
+/// as rejected; otherwise the bytes up to it (inserted, lost or garbage) are counted in
+/// `skipped_bytes` and `skips`, and reading goes on. A file that ends inside a packet ends the read
+/// with the error returned in `Ok` (the scans before it are kept). `Err` when the file cannot be
+/// read, is empty, or frames no packet at any offset ([`Vlp16Error::NoPacket`]).
+fn decode_raw<R: Read>(path: &Path, reader: R, dec: &mut Decoder, on_scan: OnScan) -> Result<Option<Vlp16Error>, Vlp16Error> {
     let mut w = RawWindow::new(reader);
     // Whether any offset framed a packet (a whole one or one cut by the end of the file).
     let mut framed = false;
@@ -351,7 +314,7 @@ pub fn stream_raw<R: Read>(
             Vlp16Error::NoPacket { path: path.to_path_buf() }
         });
     }
-    Ok(dec.into_scans(path, error))
+    Ok(error)
 }
 
 /// The first `i` from which `window` frames a packet ([`frames_packet`]). Before the end of the
@@ -427,7 +390,7 @@ pub fn read_capture(path: &Path, cfg: &Vlp16Config) -> Result<(CaptureFormat, Pc
     Ok((format, r))
 }
 
-/// [`read_capture`] without keeping the scans (see [`stream_pcap`]).
+/// [`read_capture`] without keeping the scans (see [`CaptureFormat::stream`]).
 pub fn stream_capture(
     path: &Path,
     cfg: &Vlp16Config,
@@ -438,11 +401,8 @@ pub fn stream_capture(
     let n = crate::io::sensors::pcap::read_full(&mut file, &mut magic)
         .map_err(|source| Vlp16Error::Io { path: Some(path.to_path_buf()), source })?;
     let reader = io::Read::chain(&magic[..n], file);
-    if crate::io::sensors::pcap::looks_like_pcap(&magic[..n]) {
-        Ok((CaptureFormat::Pcap, stream_pcap(path, reader, cfg, on_scan)?))
-    } else {
-        Ok((CaptureFormat::Raw, stream_raw(path, reader, cfg, on_scan)?))
-    }
+    let format = if crate::io::sensors::pcap::looks_like_pcap(&magic[..n]) { CaptureFormat::Pcap } else { CaptureFormat::Raw };
+    Ok((format, format.stream(path, reader, cfg, on_scan)?))
 }
 
 pub(super) fn open(path: &Path) -> Result<std::fs::File, Vlp16Error> {
@@ -457,11 +417,43 @@ pub(super) fn collect(run: impl FnOnce(&mut dyn FnMut(PlanarScan)) -> Result<Pca
     Ok(r)
 }
 
-/// Which reader [`read_capture`] used.
+/// The two capture formats, and the readers of each. [`read_capture`] picks one by the file's magic
+/// number and says which it used.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CaptureFormat {
-    /// Classic pcap.
+    /// Classic pcap (either byte order, µs or ns timestamps; Ethernet, raw IP or Linux cooked).
     Pcap,
     /// Raw 1206-byte payloads back to back.
     Raw,
+}
+
+/// Where a streaming reader hands each scan as soon as it is complete.
+type OnScan<'a> = &'a mut dyn FnMut(PlanarScan);
+
+impl CaptureFormat {
+    /// Reads the file `path` in this format, a chunk at a time, and keeps the scans, with every
+    /// rejected packet and skipped byte counted (see [`Self::stream`] for what ends a read).
+    pub fn read(self, path: &Path, cfg: &Vlp16Config) -> Result<PcapScans, Vlp16Error> {
+        collect(|on_scan| self.stream(path, open(path)?, cfg, on_scan))
+    }
+
+    /// [`Self::read`] on bytes already in memory (`path` names them in errors).
+    pub fn decode_bytes(self, path: &Path, bytes: &[u8], cfg: &Vlp16Config) -> Result<PcapScans, Vlp16Error> {
+        collect(|on_scan| self.stream(path, bytes, cfg, on_scan))
+    }
+
+    /// [`Self::read`] without keeping the scans: each completed scan goes to `on_scan` as soon as
+    /// it is complete, and the returned `scans` is empty. Reads `reader` a chunk at a time.
+    /// Damage (a truncated or corrupt pcap record, a raw file ending inside a packet) ends the read
+    /// with `error` set and the scans before it kept. `Err` only when nothing could be read: not a
+    /// pcap or an unusable pcap header; a raw file that is empty or frames no packet at any offset
+    /// ([`Vlp16Error::NoPacket`]).
+    pub fn stream<R: Read>(self, path: &Path, reader: R, cfg: &Vlp16Config, on_scan: OnScan) -> Result<PcapScans, Vlp16Error> {
+        let mut dec = Decoder::new(*cfg)?;
+        let error = match self {
+            Self::Pcap => decode_pcap(path, reader, &mut dec, on_scan)?,
+            Self::Raw => decode_raw(path, reader, &mut dec, on_scan)?,
+        };
+        Ok(dec.into_scans(path, error))
+    }
 }

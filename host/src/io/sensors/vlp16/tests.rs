@@ -189,7 +189,7 @@ fn hour_clock_counts_on() {
 fn raw_file_cut_mid_packet_keeps_earlier_packets() {
     let mut bytes = golden_packet().to_vec();
     bytes.extend_from_slice(&golden_packet()[..300]);
-    let r = decode_raw_bytes(Path::new("x.bin"), &bytes, &Vlp16Config::default()).unwrap();
+    let r = CaptureFormat::Raw.decode_bytes(Path::new("x.bin"), &bytes, &Vlp16Config::default()).unwrap();
     assert_eq!(r.counts.data, 1);
     assert_eq!(r.scans.len(), 1);
     match r.error {
@@ -227,7 +227,7 @@ fn framing_is_the_twelve_flags_and_the_return_mode() {
 fn raw(packets: usize, edit: impl FnOnce(&mut Vec<u8>)) -> PcapScans {
     let mut bytes: Vec<u8> = (0..packets).flat_map(|_| golden_packet()).collect();
     edit(&mut bytes);
-    decode_raw_bytes(Path::new("r.bin"), &bytes, &Vlp16Config::default()).unwrap()
+    CaptureFormat::Raw.decode_bytes(Path::new("r.bin"), &bytes, &Vlp16Config::default()).unwrap()
 }
 
 fn fates(r: &PcapScans) -> (u64, u64, u64, Vec<Skipped>) {
@@ -295,13 +295,13 @@ fn raw_stream_in_step_rejects_a_damaged_packet_and_skips_a_damaged_run() {
 #[test]
 fn raw_file_without_a_packet_is_an_error() {
     let cfg = Vlp16Config::default();
-    let e = decode_raw_bytes(Path::new("empty.bin"), &[], &cfg).unwrap_err();
+    let e = CaptureFormat::Raw.decode_bytes(Path::new("empty.bin"), &[], &cfg).unwrap_err();
     assert!(matches!(e, Vlp16Error::Empty { .. }), "{e:?}");
     assert_eq!(e.to_string(), "empty.bin is not a VLP-16 capture: the file is empty");
     // Text, and text as long as a few packets: no offset frames a packet.
     let text = "# LIVES\\nA robot looks for things.\\n".repeat(200);
     for bytes in [&b"hi"[..], &text.as_bytes()[..3 * PACKET_LEN], text.as_bytes()] {
-        let e = decode_raw_bytes(Path::new("README.md"), bytes, &cfg).unwrap_err();
+        let e = CaptureFormat::Raw.decode_bytes(Path::new("README.md"), bytes, &cfg).unwrap_err();
         assert_eq!(
             e.to_string(),
             "README.md is not a VLP-16 capture: no packet found (neither pcap nor raw 1206-byte payloads)",
@@ -310,7 +310,7 @@ fn raw_file_without_a_packet_is_an_error() {
         );
     }
     // The first bytes of a packet are one, cut short.
-    let r = decode_raw_bytes(Path::new("cut.bin"), &golden_packet()[..500], &cfg).unwrap();
+    let r = CaptureFormat::Raw.decode_bytes(Path::new("cut.bin"), &golden_packet()[..500], &cfg).unwrap();
     assert!(matches!(r.error, Some(Vlp16Error::TruncatedPayload { offset: 0, len: 500, .. })));
 }
 

@@ -94,7 +94,7 @@ pub fn bench_decode(path: &Path, reps: usize) -> Option<DecodeBench> {
     let mut scans = 0;
     for _ in 0..reps.max(1) {
         let t = Instant::now();
-        let r = decode_raw_bytes(path, &bytes, &Vlp16Config::default()).ok()?;
+        let r = CaptureFormat::Raw.decode_bytes(path, &bytes, &Vlp16Config::default()).ok()?;
         scans = std::hint::black_box(r.scans.len());
         times.push(t.elapsed().as_secs_f64());
     }
