@@ -28,6 +28,10 @@ pub enum PlannerChoice {
     Lives,
     /// LIVES with the simulator's ground-truth labels (the paper's "ground truth" column).
     LivesGt,
+    /// The structured search without the non-map term (the ablation of `lives`).
+    LivesNoNonMap,
+    /// The paper's LIVES: the greedy four-term utility with the classifier's labels.
+    LivesGreedy,
     /// LIVES without the non-map term (the paper's multisensor frontier baseline).
     Multisensor,
     /// Yamauchi's nearest frontier.
@@ -36,10 +40,6 @@ pub enum PlannerChoice {
     ExploreLite,
     /// A sampling-based explorer in the spirit of RRT exploration.
     Rrt,
-    /// The paper's LIVES: the greedy four-term utility with the classifier's labels.
-    LivesGreedy,
-    /// The structured search without the non-map term (the ablation of `lives`).
-    LivesNoNonMap,
     /// LIVE (known map, `--map`): LiDAR coverage route plus priority waypoints to inspection
     /// regions.
     Live,

@@ -296,3 +296,122 @@ pub(super) fn stand_off(robot: (i32, i32), target: (i32, i32), range_cells: i64)
     let stand = PROPOSAL_LAMBDA_PER_MILLE * d.min(range_cells) / 1000;
     ((target.0 as i64 + dx * stand / d) as i32, (target.1 as i64 + dy * stand / d) as i32)
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::frontier::FrontierSet;
+    use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
+    use crate::nonmap::NonMapStore;
+    use crate::Config;
+    use fixed_point::Pose2;
+    use std::boxed::Box;
+
+    /// A 20 × 20 m room (walls on its border) at the origin, as a seeded prior would give.
+    fn room() -> Box<LidarGrid> {
+        let mut g = Box::new(LidarGrid::new(GridGeometry { origin_x: Meters::ZERO, origin_y: Meters::ZERO }));
+        for y in 0..=200 {
+            for x in 0..=200 {
+                let wall = x == 0 || y == 0 || x == 200 || y == 200;
+                g.seed(x, y, if wall { 2 } else { -2 });
+            }
+        }
+        g
+    }
+
+    fn m(v: f64) -> Meters {
+        Meters::from_num(v)
+    }
+
+    struct World {
+        cfg: Config,
+        lidar: Box<LidarGrid>,
+        visual: Box<VisualGrid>,
+        frontiers: Box<FrontierSet>,
+        nonmap: Box<NonMapStore>,
+        planner: Box<Planner>,
+    }
+
+    impl World {
+        fn new(kind: PlannerKind) -> World {
+            let mut planner = Box::new(Planner::new());
+            for (x, y, deg) in [(5.0, 5.0, 0), (15.0, 5.0, 0), (15.0, 15.0, 90)] {
+                planner.route.push(RouteWaypoint { x: m(x), y: m(y), heading: BinaryAngle::from_degrees(deg) }).unwrap();
+            }
+            World {
+                cfg: Config::DEFAULT.with_planner(kind),
+                lidar: room(),
+                visual: Box::new(VisualGrid::new()),
+                frontiers: Box::new(FrontierSet::new()),
+                nonmap: Box::new(NonMapStore::new()),
+                planner,
+            }
+        }
+
+        /// One planning step with the robot at `(x, y, deg)` at `t` seconds: the goal's centre,
+        /// heading and source.
+        fn step(&mut self, x: f64, y: f64, deg: i32, t: u64) -> Option<((f64, f64), i32, Site)> {
+            let pose = Pose2::new(m(x), m(y), BinaryAngle::from_degrees(deg));
+            let (g, _) = self.planner.plan(&self.cfg, &self.lidar, &self.visual, &self.frontiers, &self.nonmap, &pose, None, t * 1_000_000);
+            g.map(|g| {
+                let deg = (g.pose.theta.to_radians().to_degrees().round()) as i32;
+                ((g.pose.x.to_num::<f64>(), g.pose.y.to_num::<f64>()), deg, g.viewpoint.source)
+            })
+        }
+    }
+
+    fn near(p: (f64, f64), q: (f64, f64)) -> bool {
+        (p.0 - q.0).hypot(p.1 - q.1) < 0.2
+    }
+
+    #[test]
+    fn the_manager_follows_the_route_and_inserts_a_priority_waypoint_only_after_a_waypoint_is_reached() {
+        let mut w = World::new(PlannerKind::Live);
+        let (at, _, src) = w.step(2.0, 5.0, 0, 0).unwrap();
+        assert!(near(at, (5.05, 5.05)) && src == Site::Route, "{at:?} {src:?}");
+        // An inspection region appears while the robot walks: no priority before a waypoint.
+        let geom = w.lidar.geom;
+        w.nonmap.insert(&geom, m(8.0), m(12.0), w.cfg.nonmap_pool_radius_m);
+        let (at, _, src) = w.step(3.0, 5.0, 0, 2).unwrap();
+        assert!(near(at, (5.05, 5.05)) && src == Site::Route);
+        // Waypoint 0 reached: the manager sends the priority waypoint, facing the region.
+        let (at, deg, src) = w.step(5.05, 5.05, 0, 4).unwrap();
+        assert_eq!(src, Site::Inspection);
+        assert_eq!(w.planner.route.stats.reached, 1);
+        assert_eq!(w.planner.route.stats.priorities, 1);
+        let bearing = (12.05 - at.1).atan2(8.05 - at.0).to_degrees();
+        assert!((deg as f64 - bearing).abs() < 3.0, "faces the region: {deg} vs {bearing:.1}");
+        // Still pursued on the next step; standing there facing it ends it (the camera looked
+        // elsewhere, so its cell is blacklisted), and the route resumes at waypoint 1.
+        assert_eq!(w.step(6.0, 6.0, 0, 6).map(|g| g.2), Some(Site::Inspection));
+        let (at, _, src) = w.step(at.0, at.1, deg, 8).unwrap();
+        assert!(near(at, (15.05, 5.05)) && src == Site::Route, "{at:?} {src:?}");
+        // Waypoint 1 reached 5 s after the priority ended: not due (10 s), the route goes on.
+        let (at, _, src) = w.step(15.05, 5.05, 0, 13).unwrap();
+        assert!(near(at, (15.05, 15.05)) && src == Site::Route, "{at:?} {src:?}");
+        assert_eq!(w.planner.route.stats.priorities, 1);
+    }
+
+    #[test]
+    fn the_baselines_never_insert_priorities_and_a_blacklisted_waypoint_is_skipped() {
+        let mut w = World::new(PlannerKind::LidarCoverage);
+        let geom = w.lidar.geom;
+        w.nonmap.insert(&geom, m(8.0), m(12.0), w.cfg.nonmap_pool_radius_m);
+        let (at, _, src) = w.step(5.05, 5.05, 0, 30).unwrap();
+        assert!(near(at, (15.05, 5.05)) && src == Site::Route, "{at:?} {src:?}");
+        w.planner.blacklist(geom.cell_of(m(15.0), m(5.0)));
+        let (at, _, _) = w.step(6.0, 5.0, 0, 31).unwrap();
+        assert!(near(at, (15.05, 15.05)), "{at:?}");
+        assert_eq!(w.planner.route.stats.skipped, 1);
+        // The last one reached: the route is done and the baseline has nothing left.
+        assert_eq!(w.step(15.05, 15.05, 90, 40), None);
+        // `live` would still look at the region once the route is done.
+        let mut l = World::new(PlannerKind::Live);
+        l.nonmap.insert(&geom, m(8.0), m(12.0), l.cfg.nonmap_pool_radius_m);
+        for i in 0..3 {
+            l.planner.route.mark_done(i);
+        }
+        assert_eq!(l.step(15.05, 15.05, 90, 50).map(|g| g.2), Some(Site::Inspection));
+    }
+}

@@ -2,8 +2,8 @@
 //! Fig. 1a: "global path plans are generated for Lidar CPP").
 //!
 //! A route is a list of waypoints (a place to stand and a heading) that together cover every
-//! coverable free cell of the prior map with a sensor's footprint, ordered as a short open tour
-//! from the robot's start:
+//! coverable free cell of the prior map with a sensor's footprint, in the order that covers the
+//! most per metre walked from the robot's start:
 //!
 //! 1. **Where the robot can stand**: free cells farther than the robot's radius from every
 //!    occupied cell, connected to the start (8-connected).
@@ -16,11 +16,14 @@
 //!    the camera's; a first reading, a 6 m × 6 m square (the rolling local costmap of the ROS
 //!    navigation tutorials), made LiDAR routes longer than camera routes (174–317 m in the
 //!    built-in worlds), the opposite of the paper's Table I (docs/live.md).
-//! 4. **Greedy set cover** (lazy): the candidate that sees the most cells not yet covered, until
-//!    none adds [`MIN_GAIN_CELLS`].
-//! 5. **Order**: path lengths between the chosen waypoints (Dijkstra over where the robot can
-//!    stand, steps 5 and 7 for 0.1 m and its diagonal, as the core's), nearest neighbour from
-//!    the start, then 2-opt on the open path.
+//! 4. **Greedy coverage per metre**: from the start, then from each waypoint chosen, the
+//!    candidate with the most cells not yet covered per metre of path to it (Dijkstra over where
+//!    the robot can stand, steps 5 and 7 for 0.1 m and its diagonal, as the core's; plus
+//!    [`LEG_OVERHEAD_M`] a leg), until none adds [`MIN_GAIN_CELLS`]. The first form — a greedy
+//!    set cover ordered as the shortest tour (nearest neighbour and 2-opt), coverage path
+//!    planning's usual objective — left the target unseen by the LiDAR in every `apartment hard`
+//!    and `office hard` trial (docs/experiments/live-known-map.md): a search wants the building
+//!    covered early, not the shortest tour.
 //!
 //! LiDAR waypoints face the way the route arrives at them (a route follower walks on); camera
 //! waypoints face their cone. Everything is deterministic: ties go to the lower index.
@@ -34,6 +37,9 @@ pub const LATTICE_CELLS: usize = 5;
 pub const CAMERA_HEADINGS: usize = 8;
 /// The least a waypoint must add to the coverage, cells (0.25 m²).
 pub const MIN_GAIN_CELLS: usize = 25;
+/// Added to every leg's path length when rating a candidate (turning, stopping): a candidate
+/// next to the robot is not worth an infinite rate.
+pub const LEG_OVERHEAD_M: f64 = 2.0;
 
 const CELL_M: f64 = 0.1;
 
@@ -275,77 +281,43 @@ pub fn plan(map: &KnownGrid, radius_m: f64, start: [f64; 2], fp: Footprint) -> R
     }
     let coverable_n = coverable.iter().filter(|b| **b).count();
 
-    // Lazy greedy set cover: a candidate's stored gain only falls as cells get covered.
+    // Greedy by coverage per metre: from where the route is, the candidate that adds the most
+    // cells not yet covered per metre of path to it (plus [`LEG_OVERHEAD_M`]), until none adds
+    // [`MIN_GAIN_CELLS`]. A search wants the building covered early, not the shortest tour.
     let mut covered = vec![false; n * n];
-    let mut heap: BinaryHeap<(usize, std::cmp::Reverse<usize>)> =
-        cands.iter().enumerate().map(|(k, (_, _, s))| (s.len(), std::cmp::Reverse(k))).collect();
     let mut chosen: Vec<(usize, usize)> = Vec::new();
-    while let Some((g, std::cmp::Reverse(k))) = heap.pop() {
-        if g < MIN_GAIN_CELLS {
-            break;
+    let mut field = from_start.clone();
+    let mut length_units: u64 = 0;
+    let overhead = (LEG_OVERHEAD_M / CELL_M * 5.0) as u64;
+    loop {
+        let mut best: Option<(u64, u64, usize, usize)> = None; // (gain·K / cost, cost, index, gain)
+        for (k, (c, _, seen)) in cands.iter().enumerate() {
+            let d = field[*c];
+            if d == u32::MAX {
+                continue;
+            }
+            let gain = seen.iter().filter(|&&i| !covered[i as usize]).count();
+            if gain < MIN_GAIN_CELLS {
+                continue;
+            }
+            let rate = ((gain as u64) << 20) / (d as u64 + overhead);
+            if best.is_none_or(|b| rate > b.0) {
+                best = Some((rate, d as u64, k, gain));
+            }
         }
-        let fresh = cands[k].2.iter().filter(|&&i| !covered[i as usize]).count();
-        if fresh < g {
-            heap.push((fresh, std::cmp::Reverse(k)));
-            continue;
-        }
+        let Some((_, d, k, gain)) = best else { break };
         for &i in &cands[k].2 {
             covered[i as usize] = true;
         }
-        chosen.push((k, fresh));
+        length_units += d;
+        chosen.push((k, gain));
+        field = map.dijkstra(&ok, cands[k].0);
     }
     let covered_n = covered.iter().filter(|b| **b).count();
 
-    // Order: nearest neighbour from the start, then 2-opt on the open path.
-    let m = chosen.len();
-    let fields: Vec<Vec<u32>> = chosen.iter().map(|&(k, _)| map.dijkstra(&ok, cands[k].0)).collect();
-    let cost = |a: Option<usize>, b: usize| -> u64 {
-        let cell = cands[chosen[b].0].0;
-        let d = match a {
-            None => from_start[cell],
-            Some(a) => fields[a][cell],
-        };
-        if d == u32::MAX {
-            u64::MAX / 4
-        } else {
-            d as u64
-        }
-    };
-    let mut order: Vec<usize> = Vec::with_capacity(m);
-    let mut left: Vec<bool> = vec![true; m];
-    let mut at = None;
-    for _ in 0..m {
-        let next = (0..m).filter(|&b| left[b]).min_by_key(|&b| (cost(at, b), b)).expect("one left");
-        left[next] = false;
-        order.push(next);
-        at = Some(next);
-    }
-    // 2-opt: reversing order[i..=j] replaces the legs into i and out of j (path lengths are
-    // symmetric: the grid's steps are).
-    let leg = |o: &[usize], a: usize, b: usize| cost(if a == usize::MAX { None } else { Some(o[a]) }, o[b]);
-    let mut rounds = 0;
-    let mut improved = true;
-    while improved && rounds < 100 {
-        improved = false;
-        rounds += 1;
-        for i in 0..m {
-            for j in i + 1..m {
-                let before = leg(&order, i.wrapping_sub(1), i) + if j + 1 < m { leg(&order, j, j + 1) } else { 0 };
-                let into_j = cost(if i == 0 { None } else { Some(order[i - 1]) }, order[j]);
-                let out_of_i = if j + 1 < m { cost(Some(order[i]), order[j + 1]) } else { 0 };
-                if into_j + out_of_i < before {
-                    order[i..=j].reverse();
-                    improved = true;
-                }
-            }
-        }
-    }
-    let best: u64 = (0..m).map(|b| leg(&order, b.wrapping_sub(1), b)).sum();
-
-    let mut waypoints = Vec::with_capacity(m);
+    let mut waypoints = Vec::with_capacity(chosen.len());
     let mut prev = start;
-    for &b in &order {
-        let (k, gain) = chosen[b];
+    for &(k, gain) in &chosen {
         let p = map.centre(cands[k].0);
         let heading = match fp {
             Footprint::Camera { .. } => cands[k].1,
@@ -355,7 +327,7 @@ pub fn plan(map: &KnownGrid, radius_m: f64, start: [f64; 2], fp: Footprint) -> R
         waypoints.push(Waypoint { x: p[0], y: p[1], heading, gain });
         prev = p;
     }
-    Ok(Route { waypoints, coverable: coverable_n, covered: covered_n, free, length_m: best as f64 * CELL_M / 5.0 })
+    Ok(Route { waypoints, coverable: coverable_n, covered: covered_n, free, length_m: length_units as f64 * CELL_M / 5.0 })
 }
 
 #[cfg(test)]

@@ -643,6 +643,7 @@ mod tests {
             classifier: None,
             sim: None,
             oracle_s: None,
+            live: None,
         }
     }
 
