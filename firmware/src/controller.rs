@@ -17,13 +17,14 @@ use crate::classifier::{Classifier, ClassifierConfig, LabelFeedback, ModelError,
 use crate::config::{Config, ConfigError};
 use crate::frontier::FrontierSet;
 use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
-use crate::knownmap::{KnownMap, PriorError};
+use crate::knownmap::KnownMap;
 use crate::matcher::{ScanMatcher, MATCH_WARMUP_SCANS};
 use crate::nonmap::NonMapStore;
-use crate::planner::coverage::{RouteFull, RouteWaypoint};
 use crate::planner::{Goal, PlanInputs, Planner, Site};
 use crate::scan::{BeamScan, ScanError, ScanInput};
 use crate::searchmap::SearchMap;
+
+mod live;
 use fixed_point::{hypot, BinaryAngle, Meters, Pose2};
 
 /// Operator commands.
@@ -366,40 +367,6 @@ impl Controller {
         self.goal.as_ref()
     }
 
-    /// Forgets the prior map; its window's lower-left corner becomes `(x, y)` (LIVE's known-map
-    /// mode is off until a row arrives).
-    pub fn prior_map_reset(&mut self, x: Meters, y: Meters) {
-        self.known.prior.reset(x, y);
-        self.search = SearchMap::new();
-        self.seeded = false;
-    }
-
-    /// Row `y` of the prior map from column `x0`: `n` cells, bit `i` of `bits` (least
-    /// significant first) cell `x0 + i`, 1 occupied ([`crate::knownmap::PriorMap::set_row_bits`]).
-    pub fn prior_map_row(&mut self, y: usize, x0: usize, bits: &[u8], n: usize) -> Result<(), PriorError> {
-        self.seeded = false;
-        self.known.prior.set_row_bits(y, x0, bits, n)
-    }
-
-    /// The free cells of row `y` of the prior map, as [`Controller::prior_map_row`] (1 free):
-    /// they seed the LiDAR grid's free space (so the planner can plan across the known
-    /// building) and are the cells LIVE's search map covers.
-    pub fn prior_map_free_row(&mut self, y: usize, x0: usize, bits: &[u8], n: usize) -> Result<(), PriorError> {
-        self.seeded = false;
-        self.known.prior.set_free_row_bits(y, x0, bits, n)
-    }
-
-    /// Forgets the coverage route (LIVE's waypoint manager, [`crate::planner::coverage`]).
-    pub fn route_clear(&mut self) {
-        self.planner.route.clear();
-    }
-
-    /// Appends a waypoint to the coverage route: where to stand and which way to face, in the
-    /// map's frame. Refused when the route holds [`crate::capacity::MAX_ROUTE_WAYPOINTS`].
-    pub fn route_push(&mut self, x: Meters, y: Meters, heading: BinaryAngle) -> Result<(), RouteFull> {
-        self.planner.route.push(RouteWaypoint { x, y, heading })
-    }
-
     /// The latest resampled scan, with the labels the core used for it (the upstream labels, or
     /// the classifier's once it labels scans).
     pub fn beams(&self) -> &BeamScan {
@@ -527,14 +494,7 @@ impl Controller {
             }
         }
 
-        if !self.seeded && self.known.prior.rows_received() > 0 {
-            // A known building: its map seeds the LiDAR grid's unobserved cells, and the search
-            // map is counted over the window (once per map, search and window; the work goes to
-            // the next scan's LiDAR stage).
-            let w = self.known.prior.seed(&mut self.lidar) + self.search.recount(&self.known.prior, &self.lidar.geom, &self.visual);
-            self.lidar.pending_work = self.lidar.pending_work.saturating_add(w);
-            self.seeded = true;
-        }
+        self.seed_from_prior();
 
         if let (Some(scan), Some(predicted), false) = (inputs.scan, self.pose, pose_refused) {
             // The robot's own body: readings below the configured minimum are invalid too.
@@ -566,14 +526,7 @@ impl Controller {
                     obs.end(Stage::Lidar);
                     self.spent(Stage::Lidar, w);
                     obs.begin(Stage::Visual);
-                    let w = if self.seeded {
-                        let (search, prior, geom) = (&mut self.search, &self.known.prior, self.lidar.geom);
-                        self.visual.integrate_noting(&self.lidar, &pose, self.cfg.camera_fov, self.cfg.camera_range_m, |x, y| {
-                            search.first_seen(prior, &geom, x, y)
-                        })
-                    } else {
-                        self.visual.integrate(&self.lidar, &pose, self.cfg.camera_fov, self.cfg.camera_range_m)
-                    };
+                    let w = self.integrate_visual(&pose);
                     obs.end(Stage::Visual);
                     self.spent(Stage::Visual, w);
                     let geom = self.lidar.geom;

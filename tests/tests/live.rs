@@ -16,7 +16,7 @@ mod common;
 fn known_spec(planner: PlannerChoice, seed: u64) -> SearchSpec {
     let world = World::builtin("hallway", Scenario::Easy).expect("built-in");
     let mut specs = vec![SearchSpec::new("hallway", world, Scenario::Easy, planner, seed)];
-    host::live::give_true_maps(&mut specs).expect("the true map");
+    host::measure::eval::give_true_maps(&mut specs).expect("the true map");
     specs.remove(0)
 }
 

@@ -68,7 +68,7 @@ pub fn run(args: EvalArgs) -> Result<ExitCode, String> {
     let mut specs = eval::eval_specs(&worlds, &scenarios, &planners, trials, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?;
     specs.extend(eval::heldout_specs(heldout, &planners, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?);
     if known_map {
-        host::live::give_true_maps(&mut specs)?;
+        host::measure::eval::give_true_maps(&mut specs)?;
     }
     let pb = count_bar();
     pb.set_length(specs.len() as u64);

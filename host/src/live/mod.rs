@@ -197,21 +197,3 @@ pub fn true_map_cells(world: &crate::sim::World, cfg: &firmware::Config) -> Resu
     let map = crate::io::map_file::export::true_map(world, "true map");
     map.to_controller_grid([cfg.origin_x_m.to_num::<f64>(), cfg.origin_y_m.to_num::<f64>()]).map_err(|e| e.to_string())
 }
-
-/// Gives every spec its world's true map (computed once per world; `lives eval --known-map`).
-pub fn give_true_maps(specs: &mut [crate::search::SearchSpec]) -> Result<(), String> {
-    let mut cache: Vec<(crate::sim::World, std::sync::Arc<Vec<Cell3>>)> = Vec::new();
-    for spec in specs.iter_mut() {
-        let cells = match cache.iter().find(|(w, _)| *w == spec.world) {
-            Some((_, c)) => c.clone(),
-            None => {
-                let cfg = crate::run::controller_config(&spec.controller, &spec.world, spec.planner.kind());
-                let c = std::sync::Arc::new(true_map_cells(&spec.world, &cfg)?);
-                cache.push((spec.world.clone(), c.clone()));
-                c
-            }
-        };
-        spec.prior_map = Some(cells);
-    }
-    Ok(())
-}

@@ -615,6 +615,24 @@ pub fn tune(
     Ok(scores)
 }
 
+/// Gives every spec its world's true map (computed once per world; `lives eval --known-map`).
+pub fn give_true_maps(specs: &mut [SearchSpec]) -> Result<(), String> {
+    let mut cache: Vec<(World, std::sync::Arc<Vec<crate::io::map_file::Cell3>>)> = Vec::new();
+    for spec in specs.iter_mut() {
+        let cells = match cache.iter().find(|(w, _)| *w == spec.world) {
+            Some((_, c)) => c.clone(),
+            None => {
+                let cfg = crate::run::controller_config(&spec.controller, &spec.world, spec.planner.kind());
+                let c = std::sync::Arc::new(crate::live::true_map_cells(&spec.world, &cfg)?);
+                cache.push((spec.world.clone(), c.clone()));
+                c
+            }
+        };
+        spec.prior_map = Some(cells);
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

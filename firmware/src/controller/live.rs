@@ -1,0 +1,70 @@
+//! LIVE's inputs to the controller (issue 32, `docs/live.md`): the building's prior map
+//! ([`crate::knownmap`]), which seeds the LiDAR grid and the search map ([`crate::searchmap`]),
+//! and the coverage route its waypoint manager follows ([`crate::planner::coverage`]). The link
+//! brings them as `MapRow` and `Route` messages ([`crate::node::apply_map_row`],
+//! [`crate::node::apply_route`]).
+
+use super::Controller;
+use crate::knownmap::PriorError;
+use crate::planner::coverage::{RouteFull, RouteWaypoint};
+use crate::searchmap::SearchMap;
+use fixed_point::{BinaryAngle, Meters, Pose2};
+
+impl Controller {
+    /// Forgets the prior map; its window's lower-left corner becomes `(x, y)` (LIVE's known-map
+    /// mode is off until a row arrives).
+    pub fn prior_map_reset(&mut self, x: Meters, y: Meters) {
+        self.known.prior.reset(x, y);
+        self.search = SearchMap::new();
+        self.seeded = false;
+    }
+
+    /// Row `y` of the prior map from column `x0`: `n` cells, bit `i` of `bits` (least
+    /// significant first) cell `x0 + i`, 1 occupied ([`crate::knownmap::PriorMap::set_row_bits`]).
+    pub fn prior_map_row(&mut self, y: usize, x0: usize, bits: &[u8], n: usize) -> Result<(), PriorError> {
+        self.seeded = false;
+        self.known.prior.set_row_bits(y, x0, bits, n)
+    }
+
+    /// The free cells of row `y` of the prior map, as [`Controller::prior_map_row`] (1 free):
+    /// they seed the LiDAR grid's free space (so the planner can plan across the known
+    /// building) and are the cells LIVE's search map covers.
+    pub fn prior_map_free_row(&mut self, y: usize, x0: usize, bits: &[u8], n: usize) -> Result<(), PriorError> {
+        self.seeded = false;
+        self.known.prior.set_free_row_bits(y, x0, bits, n)
+    }
+
+    /// Forgets the coverage route (LIVE's waypoint manager, [`crate::planner::coverage`]).
+    pub fn route_clear(&mut self) {
+        self.planner.route.clear();
+    }
+
+    /// Appends a waypoint to the coverage route: where to stand and which way to face, in the
+    /// map's frame. Refused when the route holds [`crate::capacity::MAX_ROUTE_WAYPOINTS`].
+    pub fn route_push(&mut self, x: Meters, y: Meters, heading: BinaryAngle) -> Result<(), RouteFull> {
+        self.planner.route.push(RouteWaypoint { x, y, heading })
+    }
+
+    /// A known building whose map is not yet in the LiDAR grid as it is now (a new map, a new
+    /// search, a moved window): seeds the grid's unobserved cells and counts the search map over
+    /// the window. The work goes to the next scan's LiDAR stage.
+    pub(super) fn seed_from_prior(&mut self) {
+        if self.seeded || self.known.prior.rows_received() == 0 {
+            return;
+        }
+        let w = self.known.prior.seed(&mut self.lidar) + self.search.recount(&self.known.prior, &self.lidar.geom, &self.visual);
+        self.lidar.pending_work = self.lidar.pending_work.saturating_add(w);
+        self.seeded = true;
+    }
+
+    /// The camera's view from `pose` into the visual grid; with a known building, each cell seen
+    /// for the first time lowers the search map's entropy. Returns the work.
+    pub(super) fn integrate_visual(&mut self, pose: &Pose2) -> u32 {
+        let (fov, range) = (self.cfg.camera_fov, self.cfg.camera_range_m);
+        if !self.seeded {
+            return self.visual.integrate(&self.lidar, pose, fov, range);
+        }
+        let (search, prior, geom) = (&mut self.search, &self.known.prior, self.lidar.geom);
+        self.visual.integrate_noting(&self.lidar, pose, fov, range, |x, y| search.first_seen(prior, &geom, x, y))
+    }
+}
