@@ -206,7 +206,7 @@ fn score_headings_capped(kind: PlannerKind, with_points: bool, nonmap_view_cap: 
     f.compute(&lidar, &vis, cfg.min_frontier_cells);
     let mut planner = Box::new(Planner::new());
     let robot = pose(6.05, 6.05, 0.0);
-    let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None);
+    let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None, 0);
     assert!(goal.is_some());
     let anchor = f.frontiers().iter().find(|fr| fr.source == FrontierSource::Lidar).unwrap().anchor;
     let mut out = [i64::MIN; 4];
@@ -274,7 +274,7 @@ fn an_unreachable_frontier_is_never_chosen() {
         f.compute(&lidar, &vis, cfg.min_frontier_cells);
         assert!(f.frontiers().iter().any(|fr| fr.source == FrontierSource::Lidar && fr.anchor.0 > 200));
         let mut planner = Box::new(Planner::new());
-        let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None);
+        let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None, 0);
         if let Some(g) = &goal {
             assert!(g.viewpoint.cell.0 <= 100 && g.viewpoint.cell.1 <= 100, "{kind:?} chose {:?}", g.viewpoint);
         }
@@ -292,7 +292,7 @@ fn an_unreachable_frontier_is_never_chosen() {
     }
     f.compute(&lidar2, &vis, cfg.min_frontier_cells);
     let mut planner = Box::new(Planner::new());
-    let (goal, _) = planner.plan(&cfg, &lidar2, &vis, &f, &store, &robot, None);
+    let (goal, _) = planner.plan(&cfg, &lidar2, &vis, &f, &store, &robot, None, 0);
     let g = goal.expect("the doorway frontier is reachable");
     assert!(g.viewpoint.cell.0 <= 100);
     assert!(!g.path.is_empty() && g.path.len() <= firmware::capacity::MAX_PATH_WAYPOINTS);
@@ -327,7 +327,7 @@ fn explore_lite_trades_distance_against_frontier_size_where_nearest_takes_the_cl
         let wide = *f.frontiers().iter().find(|fr| fr.source == FrontierSource::Lidar && fr.anchor.0 > 95).expect("east doorway");
         assert_eq!(wide.cells, 38);
         let mut planner = Box::new(Planner::new());
-        let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None);
+        let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None, 0);
         let g = goal.expect("a goal");
         if kind == PlannerKind::ExploreLite {
             // explore_lite's cost 3·d − cells: about 3·0.9 − 10 for the south doorway, 3·4.2 − 38 for the east one.
@@ -645,7 +645,7 @@ fn a_robot_inside_the_inflation_leaves_it_by_moving_away_not_along_the_obstacle(
         assert!(own < inflation * inflation);
         f.compute(&lidar, &vis, cfg.min_frontier_cells);
         let mut planner = Box::new(Planner::new());
-        let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None);
+        let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None, 0);
         let goal = goal.unwrap_or_else(|| panic!("{kind:?}: the robot can leave"));
         assert!(goal.viewpoint.cell.0 >= 95, "{kind:?} goes to the doorway: {:?}", goal.viewpoint);
         // Walk the path from the robot in 2 cm steps: until it is out of the inflation it never
@@ -689,7 +689,7 @@ fn the_inflation_is_the_robot_radius_exactly_so_a_one_metre_doorway_stays_four_c
     let mut f = Box::new(FrontierSet::new());
     f.compute(&lidar, &vis, cfg.min_frontier_cells);
     let mut planner = Box::new(Planner::new());
-    let _ = planner.plan(&cfg, &lidar, &vis, &f, &store, &pose(7.55, 7.55, 0.0), None);
+    let _ = planner.plan(&cfg, &lidar, &vis, &f, &store, &pose(7.55, 7.55, 0.0), None, 0);
     let open: Vec<i32> = (60..90).filter(|&y| planner.traversable(100, y)).collect();
     assert_eq!(open, vec![73, 74, 75, 76]);
     assert!(planner.distance(105, 75) != firmware::planner::UNREACHABLE, "the robot can walk through");
@@ -735,7 +735,7 @@ fn rrt_falls_back_on_the_grids_frontiers_when_its_trees_hold_none() {
     assert!(f.frontiers().iter().any(|fr| fr.source == FrontierSource::Lidar && far(fr.anchor)), "the corridor's end is a frontier");
     let robot = pose(7.55, 7.55, 0.0);
     let mut planner = Box::new(Planner::new());
-    let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None);
+    let (goal, _) = planner.plan(&cfg, &lidar, &vis, &f, &store, &robot, None, 0);
     assert_eq!(planner.rrt.points().count(), 0, "the trees found a point: this test needs them to have none");
     let g = goal.expect("a goal from the grid's frontiers");
     assert!(far(g.viewpoint.cell), "{:?}", g.viewpoint);

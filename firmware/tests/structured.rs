@@ -52,7 +52,7 @@ fn plan(
     let vis = Box::new(VisualGrid::new());
     let mut f = Box::new(FrontierSet::new());
     f.compute(lidar, &vis, cfg.min_frontier_cells);
-    planner.plan(cfg, lidar, &vis, &f, store, &pose(robot.0, robot.1, robot.2), current).0
+    planner.plan(cfg, lidar, &vis, &f, store, &pose(robot.0, robot.1, robot.2), current, 0).0
 }
 
 #[test]

@@ -62,6 +62,9 @@ pub struct RouteStats {
     pub regions_seen: u32,
 }
 
+/// An inspection region seen from a viewpoint: (region cell, viewpoint cell, heading).
+type RegionView = ((i32, i32), (i32, i32), BinaryAngle);
+
 /// A priority waypoint being pursued: the region looked at and where from, in the map's frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Priority {
@@ -244,11 +247,11 @@ impl Planner {
 
     /// The inspection region whose viewpoint is nearest by path: (region cell, viewpoint cell,
     /// heading), and the work.
-    fn nearest_region(&self, step: &Step, bl: i32) -> (Option<((i32, i32), (i32, i32), BinaryAngle)>, u32) {
+    fn nearest_region(&self, step: &Step, bl: i32) -> (Option<RegionView>, u32) {
         let geom = step.inputs.lidar.geom;
         let robot = self.robot_cell;
         let r_cells = GridGeometry::cells(step.inputs.cfg.camera_range_m) as i64;
-        let mut best: Option<(u16, (i32, i32), (i32, i32), BinaryAngle)> = None;
+        let mut best: Option<(u16, RegionView)> = None;
         let mut work = 0;
         for p in step.inputs.nonmap.points() {
             let c = geom.cell_of(p.x, p.y);
@@ -264,10 +267,10 @@ impl Planner {
             }
             let d = self.distance(v.0, v.1);
             if best.is_none_or(|b| d < b.0) {
-                best = Some((d, c, v, atan2(c.1 - v.1, c.0 - v.0)));
+                best = Some((d, (c, v, atan2(c.1 - v.1, c.0 - v.0))));
             }
         }
-        (best.map(|(_, c, v, h)| (c, v, h)), work)
+        (best.map(|(_, r)| r), work)
     }
 
     fn route_viewpoint(&self, cell: (i32, i32), heading: BinaryAngle, source: Site) -> Viewpoint {

@@ -25,6 +25,7 @@ pub const MAX_PENDING_COMMANDS: usize = 4;
 
 /// What [`Inbox::accept`] did with a message.
 #[derive(Clone, Debug, PartialEq, Eq)]
+#[allow(clippy::large_enum_variant)] // no allocator: a map row is handed over inline.
 pub enum Accepted {
     /// Stored for the next tick (or a heartbeat noted).
     Stored,

@@ -53,7 +53,7 @@ fn enums_map_both_ways() {
         assert_eq!(Mode::from(WireMode::from(m)), m);
     }
     for p in PlannerKind::ALL {
-        assert_eq!(PlannerKind::from(WirePlanner::from(p)), p);
+        assert_eq!(WirePlanner::from(p), p);
     }
     let d = Detection { position: Some((Meters::from_bits(3), Meters::from_bits(-4))) };
     assert_eq!(DetectionMsg::from_detection(1, &d).detection(), d);
