@@ -15,16 +15,17 @@ use crate::scan::{BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
 pub use bits::BitGrid;
 use fixed_point::{cos, sin, BinaryAngle, Meters, Pose2};
 
-/// The state of one cell. In the ROS convention: −1 unknown, 0 free, 100 occupied.
+/// The state of one cell. In the ROS convention: −1 unknown, 0 free, 100 occupied. Its two
+/// bits in a packed grid are its discriminant: 0, 1, 2 in declaration order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(u8)]
 pub enum Cell {
     /// Never observed (for the visual grid: never seen by the camera).
-    Unknown = 0,
+    Unknown,
     /// Observed free (visual grid: seen by the camera, and free).
-    Free = 1,
+    Free,
     /// Observed occupied (visual grid: an occupied cell the camera has looked at).
-    Occupied = 2,
+    Occupied,
 }
 
 impl Cell {

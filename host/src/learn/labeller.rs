@@ -63,18 +63,19 @@ use std::fmt;
 use crate::sim::geometry::{point_segment_distance, Scene, SceneBuilder};
 use crate::sim::{HitKind, Scan, Shape, World, P2};
 
-/// A beam's ground-truth label. The `u8` values are the dataset's on-disk codes.
+/// A beam's ground-truth label. The `u8` values (0–3 in declaration order) are the dataset's
+/// on-disk codes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(u8)]
 pub enum GtLabel {
     /// No return (`+inf`) or an invalid reading (NaN).
-    None = 0,
+    None,
     /// Long-term feature: on the map (a wall).
-    Ltf = 1,
+    Ltf,
     /// Short-term feature: static, not on the map.
-    Stf = 2,
+    Stf,
     /// Dynamic feature: moved since the earlier scans (or seen for the first time).
-    Df = 3,
+    Df,
 }
 
 impl GtLabel {

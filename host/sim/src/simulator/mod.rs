@@ -80,13 +80,17 @@ pub const PERSON_PATIENCE_S: f64 = 2.0;
 /// Outline sample points per target for the detector.
 pub const DETECT_SAMPLES: usize = 32;
 
-/// RNG streams derived from the user's seed.
-const STREAM_START: u64 = 1;
-const STREAM_TARGETS: u64 = 2;
-const STREAM_PEOPLE: u64 = 3;
-const STREAM_SENSOR: u64 = 4;
-const STREAM_ODOM: u64 = 5;
-const STREAM_BEAMS: u64 = 6;
+/// RNG streams derived from the user's seed, numbered from 1 in this order (`Stream::Start as
+/// u64` is 1): the numbers choose the draws, so a new stream goes last.
+#[derive(Clone, Copy)]
+enum Stream {
+    Start = 1,
+    Targets,
+    People,
+    Sensor,
+    Odom,
+    Beams,
+}
 
 fn rng_for(seed: u64, stream: u64) -> ChaCha8Rng {
     let mut r = ChaCha8Rng::seed_from_u64(seed);
@@ -214,7 +218,7 @@ impl Sim {
     /// people's phases and the sensor noise stream.
     pub fn new(world: World, config: SimConfig, seed: u64) -> Sim {
         // Targets.
-        let mut trng = rng_for(seed, STREAM_TARGETS);
+        let mut trng = rng_for(seed, Stream::Targets as u64);
         let mut target_shapes = Vec::new();
         let mut target_positions = Vec::new();
         for t in &world.targets {
@@ -237,7 +241,7 @@ impl Sim {
         let r = if config.robot_radius_m.is_finite() { config.robot_radius_m.max(0.0) } else { 0.0 };
 
         // Start: jitter, rejecting poses that touch anything.
-        let mut srng = rng_for(seed, STREAM_START);
+        let mut srng = rng_for(seed, Stream::Start as u64);
         let s = world.start.pose;
         let mut pose = s;
         for _ in 0..100 {
@@ -252,7 +256,7 @@ impl Sim {
         }
 
         // People: a random phase each, away from the robot.
-        let mut prng = rng_for(seed, STREAM_PEOPLE);
+        let mut prng = rng_for(seed, Stream::People as u64);
         let mut walkers = Vec::new();
         for p in &world.people {
             let mut w = Walker::new(&p.path, p.speed_mps, p.radius_m);
@@ -269,7 +273,7 @@ impl Sim {
         let odom = config.drifts().then(|| {
             // This run's errors: the configured sizes, each scaled by a factor in
             // [0.5, 1.5] and given a sign, from the seed.
-            let mut r = rng_for(seed, STREAM_ODOM);
+            let mut r = rng_for(seed, Stream::Odom as u64);
             let mut draw = |size: f64| {
                 let sign = if r.gen::<bool>() { 1.0 } else { -1.0 };
                 sign * size * r.gen_range(0.5..=1.5)
@@ -292,8 +296,8 @@ impl Sim {
             gaze: None,
             status: BaseStatus::Idle,
             driven_m: 0.0,
-            sensor_rng: rng_for(seed, STREAM_SENSOR),
-            beam_rng: rng_for(seed, STREAM_BEAMS),
+            sensor_rng: rng_for(seed, Stream::Sensor as u64),
+            beam_rng: rng_for(seed, Stream::Beams as u64),
             odom,
             goal: None,
         }

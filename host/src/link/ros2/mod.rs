@@ -142,12 +142,16 @@ const TARGET: usize = 4;
 const DETECTIONS: usize = 5;
 const BLOCKED: usize = 6;
 
-const GOAL: usize = 0;
-const PLAN: usize = 1;
-const STATUS: usize = 2;
-const LIDAR_MAP: usize = 3;
-const CAMERA_MAP: usize = 4;
-const MARKERS: usize = 5;
+/// The published topics, in `PUBLISHED`'s order.
+#[derive(Clone, Copy)]
+enum Out {
+    Goal,
+    Plan,
+    Status,
+    LidarMap,
+    CameraMap,
+    Markers,
+}
 
 /// Frames the tree holds at most (a publisher inventing frame names cannot grow it for ever).
 pub const MAX_FRAMES: usize = 256;
@@ -311,10 +315,11 @@ impl Ros2Source {
             eprintln!("lives ros2: rejected ({name}, {n} so far): {detail}");
         }
         let msg = json!({ "kind": "rejection", "name": name, "detail": detail, "stamp_ns": t_ns, "rejected": *self.rejected.borrow() });
-        self.write(STATUS, wire::encode_string(&msg.to_string()));
+        self.write(Out::Status, wire::encode_string(&msg.to_string()));
     }
 
-    fn write(&self, w: usize, data: Vec<u8>) {
+    fn write(&self, out: Out, data: Vec<u8>) {
+        let w = out as usize;
         if let Err(e) = self.writers[w].write(Raw(data), None) {
             eprintln!("lives ros2: publishing on {} failed: {e:?}", self.topics[SUBSCRIBED.len() + w]);
         }

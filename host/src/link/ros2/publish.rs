@@ -2,7 +2,7 @@
 //! period the grids and markers.
 
 use super::wire::{self, marker, Marker};
-use super::{Ros2Source, CAMERA_MAP, GOAL, LIDAR_MAP, MARKERS, PLAN, STATUS};
+use super::{Out, Ros2Source};
 use crate::io::record::convert::cell_centre;
 use crate::io::replay::cdr::{self, Transform};
 use crate::run::{Act, Answer, End, Frame, InProcess};
@@ -17,9 +17,9 @@ impl Ros2Source {
     pub(super) fn publish_stop(&self, t_ns: u64, why: &str) {
         let root = self.root.borrow().clone();
         let h = wire::header_at(t_ns, &root);
-        self.write(PLAN, wire::encode_path(&h, &[]));
+        self.write(Out::Plan, wire::encode_path(&h, &[]));
         if let Some((p, _)) = self.pose.get() {
-            self.write(GOAL, wire::encode_pose_stamped(&h, &Transform::planar(p[0], p[1], p[2])));
+            self.write(Out::Goal, wire::encode_pose_stamped(&h, &Transform::planar(p[0], p[1], p[2])));
         }
         if self.driving.replace(false) {
             eprintln!("lives ros2: base stopped: {why}");
@@ -32,7 +32,7 @@ impl Ros2Source {
         let t_ns = self.pose.get().map_or(0, |(_, t)| t);
         self.publish_stop(t_ns, detail);
         let msg = json!({ "kind": "stop", "reason": reason, "detail": detail });
-        self.write(STATUS, wire::encode_string(&msg.to_string()));
+        self.write(Out::Status, wire::encode_string(&msg.to_string()));
     }
 
     /// What the controller answered to `frame`, on the graph: the plan and goal, the status, and
@@ -48,9 +48,9 @@ impl Ros2Source {
             match a {
                 Act::Path(path, yaw) if answer.end.is_none() => {
                     let poses = path_poses(path, *yaw);
-                    self.write(PLAN, wire::encode_path(&h, &poses));
+                    self.write(Out::Plan, wire::encode_path(&h, &poses));
                     if let (Some(last), Some(p)) = (poses.last(), path.last()) {
-                        self.write(GOAL, wire::encode_pose_stamped(&h, last));
+                        self.write(Out::Goal, wire::encode_pose_stamped(&h, last));
                         self.goals.borrow_mut().push([p[0], p[1], yaw.unwrap_or(0.0)]);
                     }
                     self.driving.set(true);
@@ -91,7 +91,7 @@ impl Ros2Source {
             "received": *self.received.borrow(),
             "rejected": *self.rejected.borrow(),
         });
-        self.write(STATUS, wire::encode_string(&status.to_string()));
+        self.write(Out::Status, wire::encode_string(&status.to_string()));
         if let Some(t) = self.arrived.get() {
             self.answer_us.borrow_mut().push(t.elapsed().as_secs_f64() * 1e6);
         }
@@ -107,7 +107,7 @@ impl Ros2Source {
         let geom = ctrl.lidar.geom;
         let n = GRID_CELLS as u32;
         let origin = [geom.origin_x.to_num::<f64>(), geom.origin_y.to_num::<f64>()];
-        for (w, grid) in [(LIDAR_MAP, &ctrl.lidar.grid), (CAMERA_MAP, &ctrl.visual.grid)] {
+        for (w, grid) in [(Out::LidarMap, &ctrl.lidar.grid), (Out::CameraMap, &ctrl.visual.grid)] {
             let mut data = Vec::with_capacity((n * n) as usize);
             for y in 0..n as i32 {
                 for x in 0..n as i32 {
@@ -186,7 +186,7 @@ impl Ros2Source {
                 ..Marker::default()
             });
         }
-        self.write(MARKERS, wire::encode_marker_array(h, &markers));
+        self.write(Out::Markers, wire::encode_marker_array(h, &markers));
     }
 }
 
