@@ -323,8 +323,14 @@ mod tests {
         g
     }
 
-    fn m(v: f64) -> Meters {
-        Meters::from_num(v)
+    /// Metres from millimetres.
+    fn m(mm: i32) -> Meters {
+        Config::mm(mm)
+    }
+
+    /// Millimetres of a length.
+    fn mm(v: Meters) -> i64 {
+        (v.to_bits() as i64 * 1000) >> 16
     }
 
     struct World {
@@ -336,10 +342,13 @@ mod tests {
         planner: Box<Planner>,
     }
 
+    /// A goal: its centre (mm), its heading and its source.
+    type Chosen = ((i64, i64), BinaryAngle, Site);
+
     impl World {
         fn new(kind: PlannerKind) -> World {
             let mut planner = Box::new(Planner::new());
-            for (x, y, deg) in [(5.0, 5.0, 0), (15.0, 5.0, 0), (15.0, 15.0, 90)] {
+            for (x, y, deg) in [(5_000, 5_000, 0), (15_000, 5_000, 0), (15_000, 15_000, 90)] {
                 planner.route.push(RouteWaypoint { x: m(x), y: m(y), heading: BinaryAngle::from_degrees(deg) }).unwrap();
             }
             World {
@@ -352,69 +361,73 @@ mod tests {
             }
         }
 
-        /// One planning step with the robot at `(x, y, deg)` at `t` seconds: the goal's centre,
-        /// heading and source.
-        fn step(&mut self, x: f64, y: f64, deg: i32, t: u64) -> Option<((f64, f64), i32, Site)> {
-            let pose = Pose2::new(m(x), m(y), BinaryAngle::from_degrees(deg));
+        /// One planning step with the robot at `(x, y)` (mm) facing `heading`, at `t` seconds.
+        fn step(&mut self, x: i64, y: i64, heading: BinaryAngle, t: u64) -> Option<Chosen> {
+            let pose = Pose2::new(m(x as i32), m(y as i32), heading);
             let (g, _) = self.planner.plan(&self.cfg, &self.lidar, &self.visual, &self.frontiers, &self.nonmap, &pose, None, t * 1_000_000);
-            g.map(|g| {
-                let deg = (g.pose.theta.to_radians().to_degrees().round()) as i32;
-                ((g.pose.x.to_num::<f64>(), g.pose.y.to_num::<f64>()), deg, g.viewpoint.source)
-            })
+            g.map(|g| ((mm(g.pose.x), mm(g.pose.y)), g.pose.theta, g.viewpoint.source))
+        }
+
+        fn region(&mut self, x: i32, y: i32) {
+            let geom = self.lidar.geom;
+            self.nonmap.insert(&geom, m(x), m(y), self.cfg.nonmap_pool_radius_m);
         }
     }
 
-    fn near(p: (f64, f64), q: (f64, f64)) -> bool {
-        (p.0 - q.0).hypot(p.1 - q.1) < 0.2
+    /// Within 0.2 m.
+    fn near(p: (i64, i64), q: (i64, i64)) -> bool {
+        (p.0 - q.0).pow(2) + (p.1 - q.1).pow(2) < 200 * 200
     }
+
+    const EAST: BinaryAngle = BinaryAngle::ZERO;
+    const NORTH: BinaryAngle = BinaryAngle::QUARTER;
 
     #[test]
     fn the_manager_follows_the_route_and_inserts_a_priority_waypoint_only_after_a_waypoint_is_reached() {
         let mut w = World::new(PlannerKind::Live);
-        let (at, _, src) = w.step(2.0, 5.0, 0, 0).unwrap();
-        assert!(near(at, (5.05, 5.05)) && src == Site::Route, "{at:?} {src:?}");
+        let (at, _, src) = w.step(2_000, 5_000, EAST, 0).unwrap();
+        assert!(near(at, (5_050, 5_050)) && src == Site::Route, "{at:?} {src:?}");
         // An inspection region appears while the robot walks: no priority before a waypoint.
-        let geom = w.lidar.geom;
-        w.nonmap.insert(&geom, m(8.0), m(12.0), w.cfg.nonmap_pool_radius_m);
-        let (at, _, src) = w.step(3.0, 5.0, 0, 2).unwrap();
-        assert!(near(at, (5.05, 5.05)) && src == Site::Route);
+        w.region(8_000, 12_000);
+        let (at, _, src) = w.step(3_000, 5_000, EAST, 2).unwrap();
+        assert!(near(at, (5_050, 5_050)) && src == Site::Route);
         // Waypoint 0 reached: the manager sends the priority waypoint, facing the region.
-        let (at, deg, src) = w.step(5.05, 5.05, 0, 4).unwrap();
+        let (at, heading, src) = w.step(5_050, 5_050, EAST, 4).unwrap();
         assert_eq!(src, Site::Inspection);
         assert_eq!(w.planner.route.stats.reached, 1);
         assert_eq!(w.planner.route.stats.priorities, 1);
-        let bearing = (12.05 - at.1).atan2(8.05 - at.0).to_degrees();
-        assert!((deg as f64 - bearing).abs() < 3.0, "faces the region: {deg} vs {bearing:.1}");
+        let bearing = atan2((12_050 - at.1) as i32, (8_050 - at.0) as i32);
+        assert!((heading - bearing).unsigned_abs() < BinaryAngle::from_degrees(3).unsigned_abs(), "faces the region");
         // Still pursued on the next step; standing there facing it ends it (the camera looked
         // elsewhere, so its cell is blacklisted), and the route resumes at waypoint 1.
-        assert_eq!(w.step(6.0, 6.0, 0, 6).map(|g| g.2), Some(Site::Inspection));
-        let (at, _, src) = w.step(at.0, at.1, deg, 8).unwrap();
-        assert!(near(at, (15.05, 5.05)) && src == Site::Route, "{at:?} {src:?}");
+        assert_eq!(w.step(6_000, 6_000, EAST, 6).map(|g| g.2), Some(Site::Inspection));
+        let (at, _, src) = w.step(at.0, at.1, heading, 8).unwrap();
+        assert!(near(at, (15_050, 5_050)) && src == Site::Route, "{at:?} {src:?}");
         // Waypoint 1 reached 5 s after the priority ended: not due (10 s), the route goes on.
-        let (at, _, src) = w.step(15.05, 5.05, 0, 13).unwrap();
-        assert!(near(at, (15.05, 15.05)) && src == Site::Route, "{at:?} {src:?}");
+        let (at, _, src) = w.step(15_050, 5_050, EAST, 13).unwrap();
+        assert!(near(at, (15_050, 15_050)) && src == Site::Route, "{at:?} {src:?}");
         assert_eq!(w.planner.route.stats.priorities, 1);
     }
 
     #[test]
     fn the_baselines_never_insert_priorities_and_a_blacklisted_waypoint_is_skipped() {
         let mut w = World::new(PlannerKind::LidarCoverage);
+        w.region(8_000, 12_000);
+        let (at, _, src) = w.step(5_050, 5_050, EAST, 30).unwrap();
+        assert!(near(at, (15_050, 5_050)) && src == Site::Route, "{at:?} {src:?}");
         let geom = w.lidar.geom;
-        w.nonmap.insert(&geom, m(8.0), m(12.0), w.cfg.nonmap_pool_radius_m);
-        let (at, _, src) = w.step(5.05, 5.05, 0, 30).unwrap();
-        assert!(near(at, (15.05, 5.05)) && src == Site::Route, "{at:?} {src:?}");
-        w.planner.blacklist(geom.cell_of(m(15.0), m(5.0)));
-        let (at, _, _) = w.step(6.0, 5.0, 0, 31).unwrap();
-        assert!(near(at, (15.05, 15.05)), "{at:?}");
+        w.planner.blacklist(geom.cell_of(m(15_000), m(5_000)));
+        let (at, _, _) = w.step(6_000, 5_000, EAST, 31).unwrap();
+        assert!(near(at, (15_050, 15_050)), "{at:?}");
         assert_eq!(w.planner.route.stats.skipped, 1);
         // The last one reached: the route is done and the baseline has nothing left.
-        assert_eq!(w.step(15.05, 15.05, 90, 40), None);
+        assert_eq!(w.step(15_050, 15_050, NORTH, 40), None);
         // `live` would still look at the region once the route is done.
         let mut l = World::new(PlannerKind::Live);
-        l.nonmap.insert(&geom, m(8.0), m(12.0), l.cfg.nonmap_pool_radius_m);
+        l.region(8_000, 12_000);
         for i in 0..3 {
             l.planner.route.mark_done(i);
         }
-        assert_eq!(l.step(15.05, 15.05, 90, 50).map(|g| g.2), Some(Site::Inspection));
+        assert_eq!(l.step(15_050, 15_050, NORTH, 50).map(|g| g.2), Some(Site::Inspection));
     }
 }
