@@ -23,7 +23,8 @@
 //! ([`crate::Controller::prior_map_row`]), seeds its LiDAR grid from the prior's occupied and
 //! free cells ([`PriorMap::seed`]) and keeps LIVE's search map over the prior's free space
 //! ([`crate::searchmap`]). The STF points go to the non-map store, whose filters are LIVE's
-//! inspection-region filters (pooling, removal near LTFs, removal where the camera looked).
+//! inspection-region filters (pooling, removal where the camera looked, and removal near LTFs
+//! when `nonmap_wall_clearance_m` is not 0, its default).
 
 use crate::capacity::{BEAMS, CELL_MM, GRID_CELLS};
 use crate::grid::{BitGrid, GridGeometry, LidarGrid};

@@ -23,9 +23,9 @@
 //!   after another; then the planner has nothing ([`crate::Mode::Exhausted`]).
 //!
 //! Inspection regions are the non-map store's points ([`crate::nonmap`]): with a prior map, the
-//! known-map classifier's STFs ([`crate::knownmap`]), pooled within `nonmap_pool_radius_m`,
-//! removed within `nonmap_wall_clearance_m` of LTF points and where the camera has looked — the
-//! paper's three filters.
+//! known-map classifier's STFs ([`crate::knownmap`]), pooled within `nonmap_pool_radius_m` and
+//! removed where the camera has looked; the paper's third filter, removal within
+//! `nonmap_wall_clearance_m` of LTF points, is off by default (0 m), as for LIVES.
 
 use super::proposals::PROPOSAL_LAMBDA_PER_MILLE;
 use super::{Planner, Site, Step, Viewpoint, UNREACHABLE};
