@@ -190,13 +190,12 @@ impl SearchSpec {
     }
 
     /// Loads [`SearchSpec::prior_map`] into `ctrl`, whose grid it was drawn on, and, for a
-    /// planner that follows a route, plans the route from the robot's start and gives it.
-    /// Returns what LIVE's central server did (`None` without a map).
-    pub fn load_prior(&self, ctrl: &mut Controller) -> Option<crate::live::LiveSummary> {
+    /// planner that follows a route, plans the route from the robot's `start` (world x, y) and
+    /// gives it. Returns what LIVE's central server did (`None` without a map).
+    pub fn load_prior(&self, ctrl: &mut Controller, start: [f64; 2]) -> Option<crate::live::LiveSummary> {
         let cells = self.prior_map.as_ref()?;
         crate::live::load(ctrl, cells);
-        let start = Sim::new(self.world.clone(), self.sim.clone(), self.seed).pose();
-        Some(crate::live::plan_and_give(ctrl, cells, [start[0], start[1]]))
+        Some(crate::live::plan_and_give(ctrl, cells, start))
     }
 
     /// `easy` or `hard`; `file` for a world file (its own scenario).
@@ -445,29 +444,27 @@ pub fn try_run_observed(
     if let (true, Some(blob)) = (spec.classifier(), spec.model) {
         ctrl.set_model(blob)?;
     }
-    let live = spec.load_prior(&mut ctrl);
-    Ok(run_with(spec, ctrl, live, progress, observe))
+    Ok(run_with(spec, ctrl, progress, observe))
 }
 
 /// [`try_run`] for specs without a model (ground-truth or no labels): cannot fail.
 pub fn run(spec: &SearchSpec, progress: impl FnMut(f64)) -> SearchRun {
     let spec = SearchSpec { model: None, ..spec.clone() };
     let cfg = controller_config(&spec.controller, &spec.world, spec.planner.kind());
-    let mut ctrl = Box::new(Controller::new(cfg));
-    let live = spec.load_prior(&mut ctrl);
-    run_with(&spec, ctrl, live, progress, |_| {})
+    run_with(&spec, Box::new(Controller::new(cfg)), progress, |_| {})
 }
 
 fn run_with(
     spec: &SearchSpec,
-    ctrl: Box<Controller>,
-    mut live: Option<crate::live::LiveSummary>,
+    mut ctrl: Box<Controller>,
     mut progress: impl FnMut(f64),
     mut observe: impl FnMut(&TickView<'_>),
 ) -> SearchRun {
     // The labels the core used are scored against the truth: the classifier's or the map's.
     let classifier = spec.classifier() || spec.prior_map.is_some();
     let mut source = spec.sim_source();
+    let start = source.sim.pose();
+    let mut live = spec.load_prior(&mut ctrl, [start[0], start[1]]);
     let mut brain = InProcess::new(ctrl);
     let mut goals = Vec::new();
     let mut confusion = [[0u64; 2]; 2];

@@ -27,7 +27,7 @@
 //! removed where the camera has looked; the paper's third filter, removal within
 //! `nonmap_wall_clearance_m` of LTF points, is off by default (0 m), as for LIVES.
 
-use super::proposals::PROPOSAL_LAMBDA_PER_MILLE;
+use super::proposals::stand_off;
 use super::{Planner, Site, Step, Viewpoint, UNREACHABLE};
 use crate::capacity::MAX_ROUTE_WAYPOINTS;
 use crate::config::PlannerKind;
@@ -126,7 +126,7 @@ impl Route {
     }
 
     /// Whether waypoint `i` is done (reached or skipped).
-    pub fn is_done(&self, i: usize) -> bool {
+    fn is_done(&self, i: usize) -> bool {
         self.done.get(i / 32).is_some_and(|w| w >> (i % 32) & 1 != 0)
     }
 
@@ -134,16 +134,6 @@ impl Route {
         if let Some(w) = self.done.get_mut(i / 32) {
             *w |= 1 << (i % 32);
         }
-    }
-
-    /// Waypoints done.
-    pub fn done_count(&self) -> usize {
-        (0..self.waypoints.len()).filter(|&i| self.is_done(i)).count()
-    }
-
-    /// Whether a priority waypoint is being pursued.
-    pub fn in_priority(&self) -> bool {
-        self.priority.is_some()
     }
 }
 
@@ -286,18 +276,6 @@ impl Planner {
             nonmap: 0,
         }
     }
-}
-
-/// Where to look at `target` from, seen from `robot` (cells): on the line between them at
-/// `λ·min(camera range, distance)` from the target (Gao et al.'s proposal viewpoint).
-pub(super) fn stand_off(robot: (i32, i32), target: (i32, i32), range_cells: i64) -> (i32, i32) {
-    let (dx, dy) = ((robot.0 - target.0) as i64, (robot.1 - target.1) as i64);
-    let d = fixed_point::isqrt_u64((dx * dx + dy * dy) as u64) as i64;
-    if d == 0 {
-        return robot;
-    }
-    let stand = PROPOSAL_LAMBDA_PER_MILLE * d.min(range_cells) / 1000;
-    ((target.0 as i64 + dx * stand / d) as i32, (target.1 as i64 + dy * stand / d) as i32)
 }
 
 #[cfg(test)]

@@ -176,10 +176,7 @@ impl Planner {
         let mut kept: heapless::Vec<Proposal, MAX_PROPOSALS> = heapless::Vec::new();
         for i in 0..self.proposals.proposals.len() {
             let mut p = self.proposals.proposals[i];
-            let (dx, dy) = ((robot.0 - p.cell.0) as i64, (robot.1 - p.cell.1) as i64);
-            let d = fixed_point::isqrt_u64((dx * dx + dy * dy) as u64) as i64;
-            let stand = PROPOSAL_LAMBDA_PER_MILLE * d.min(r_cells) / 1000;
-            let v = if d == 0 { robot } else { ((p.cell.0 as i64 + dx * stand / d) as i32, (p.cell.1 as i64 + dy * stand / d) as i32) };
+            let v = stand_off(robot, p.cell, r_cells);
             work += ((2 * snap + 1) * (2 * snap + 1)) as u32;
             let Some(v) = self.reachable_near(v, snap) else {
                 self.stats.unreachable += 1;
@@ -195,4 +192,17 @@ impl Planner {
         self.proposals.proposals = kept;
         work
     }
+}
+
+/// Where to look at `target` from, seen from `robot` (cells): on the line between them at
+/// `λ·min(camera range, distance)` from the target (Gao et al.'s proposal viewpoint; LIVE's
+/// priority waypoints stand there too).
+pub(super) fn stand_off(robot: (i32, i32), target: (i32, i32), range_cells: i64) -> (i32, i32) {
+    let (dx, dy) = ((robot.0 - target.0) as i64, (robot.1 - target.1) as i64);
+    let d = fixed_point::isqrt_u64((dx * dx + dy * dy) as u64) as i64;
+    if d == 0 {
+        return robot;
+    }
+    let stand = PROPOSAL_LAMBDA_PER_MILLE * d.min(range_cells) / 1000;
+    ((target.0 as i64 + dx * stand / d) as i32, (target.1 as i64 + dy * stand / d) as i32)
 }
