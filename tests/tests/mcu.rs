@@ -50,7 +50,7 @@ const REQUIRED_STAGES: [&str; 5] = ["classify", "lidar", "visual", "nonmap", "pl
 const RERECORD: &str =
     "re-record the fixture: lives trace record --world examples/worlds/apartment-easy-hallway-start.toml --seed 2 --ticks 150 --out tests/fixtures/golden.trace";
 const RERECORD_LIVE: &str =
-    "re-record the fixture: lives map export apartment /tmp/apartment.yaml && lives trace record --world apartment \
+    "re-record the fixture: lives map export apartment --scenario hard /tmp/apartment.yaml && lives trace record --world apartment \
      --scenario hard --seed 2 --planner live --map /tmp/apartment.yaml --ticks 100 --out tests/fixtures/golden-live.trace";
 
 fn image_dir() -> PathBuf {
