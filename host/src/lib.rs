@@ -15,4 +15,5 @@ pub mod render;
 pub mod robot_model;
 pub mod run;
 pub mod search;
+pub mod team;
 pub use lives_sim as sim;

@@ -21,6 +21,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Cmd {
     Search(cli::search::SearchArgs),
+    Team(cli::team::TeamArgs),
     Dataset(cli::dataset::DatasetArgs),
     Soak(cli::soak::SoakArgs),
     Node(cli::node::NodeArgs),
@@ -93,6 +94,7 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<ExitCode, String> {
     match cli.command {
         Cmd::Search(args) => cli::search::run(args),
+        Cmd::Team(args) => cli::team::run(args),
         Cmd::Dataset(args) => cli::dataset::run(args),
         Cmd::Soak(args) => cli::soak::run(args),
         Cmd::Node(args) => cli::node::run(args),

@@ -34,9 +34,14 @@ impl Controller {
         self.known.prior.set_free_row_bits(y, x0, bits, n)
     }
 
-    /// Forgets the coverage route (LIVE's waypoint manager, [`crate::planner::coverage`]).
+    /// Forgets the coverage route (LIVE's waypoint manager, [`crate::planner::coverage`]) and
+    /// the goal taken from it: the next tick plans on the route that follows (a team's
+    /// coordinator re-assigning waypoints; no goal outlives the route it came from).
     pub fn route_clear(&mut self) {
         self.planner.route.clear();
+        if self.cfg.planner.is_coverage() {
+            self.goal = None;
+        }
     }
 
     /// Appends a waypoint to the coverage route: where to stand and which way to face, in the

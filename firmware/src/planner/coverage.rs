@@ -126,7 +126,7 @@ impl Route {
     }
 
     /// Whether waypoint `i` is done (reached or skipped).
-    fn is_done(&self, i: usize) -> bool {
+    pub fn is_done(&self, i: usize) -> bool {
         self.done.get(i / 32).is_some_and(|w| w >> (i % 32) & 1 != 0)
     }
 

@@ -20,7 +20,7 @@ pub(crate) use say;
 
 /// What to simulate: the world, scenario, planner and seed (shared by `search`, `bridge` and
 /// `trace record`).
-#[derive(clap::Args)]
+#[derive(clap::Args, Clone)]
 pub struct RunArgs {
     /// A built-in world (apartment, office, hallway), `random` (with --seed), or a world file (.toml).
     #[arg(long, default_value = "apartment")]

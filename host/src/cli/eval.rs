@@ -48,10 +48,15 @@ pub struct EvalArgs {
     /// `lidar-cpp` (docs/live.md). The held-out worlds get theirs too.
     #[arg(long)]
     known_map: bool,
+    /// Teams: run a team of each size given (e.g. `1,2,3`) on every setting and seed instead of
+    /// single robots (`lives team`, docs/team.md), and write the team table (team.md,
+    /// team.json). Held-out worlds are not run.
+    #[arg(long, value_delimiter = ',')]
+    robots: Vec<usize>,
 }
 
 pub fn run(args: EvalArgs) -> Result<ExitCode, String> {
-    let EvalArgs { trials, worlds, scenarios, planners, threads, out, no_pictures, robot: robot_args, heldout, known_map } = args;
+    let EvalArgs { trials, worlds, scenarios, planners, threads, out, no_pictures, robot: robot_args, heldout, known_map, robots } = args;
     let planners = match (planners.is_empty(), known_map) {
         (false, _) => planners,
         (true, false) => PlannerChoice::ALL.into_iter().rev().collect(),
@@ -66,6 +71,9 @@ pub fn run(args: EvalArgs) -> Result<ExitCode, String> {
     }
     let configure = |spec: &mut SearchSpec| robot_args.configure(spec);
     let mut specs = eval::eval_specs(&worlds, &scenarios, &planners, trials, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?;
+    if !robots.is_empty() {
+        return teams(specs, &robots, known_map, threads.unwrap_or_else(cores), &out);
+    }
     specs.extend(eval::heldout_specs(heldout, &planners, firmware::classifier::EMBEDDED_GEO_MODEL, configure)?);
     if known_map {
         host::measure::eval::give_true_maps(&mut specs)?;
@@ -159,5 +167,35 @@ pub fn run(args: EvalArgs) -> Result<ExitCode, String> {
         out.display(),
         if no_pictures { "" } else { ", trajectories/" }
     );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--robots`: a team of each size on every spec.
+fn teams(mut specs: Vec<SearchSpec>, robots: &[usize], known_map: bool, threads: usize, out: &std::path::Path) -> Result<ExitCode, String> {
+    if let Some(n) = robots.iter().find(|&&n| n == 0 || n > host::team::MAX_ROBOTS) {
+        return Err(format!("--robots {n}: a team has 1 to {} robots", host::team::MAX_ROBOTS));
+    }
+    if known_map {
+        host::measure::eval::give_true_maps(&mut specs)?;
+    }
+    let pb = count_bar();
+    pb.set_length((specs.len() * robots.len()) as u64);
+    let t0 = Instant::now();
+    let results = host::team::eval::run_batch(&specs, robots, threads, |n| pb.set_position(n as u64))?;
+    pb.finish_and_clear();
+    let cells = host::team::eval::summarise(&results);
+    let command = std::env::args().map(|a| if a.contains(' ') { format!("'{a}'") } else { a }).collect::<Vec<_>>().join(" ");
+    let md = format!(
+        "{}\nCommand: `{command}` · {} team searches in {:.0} s on {threads} threads.\n",
+        host::team::eval::markdown_table(&cells),
+        results.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    write_file(&out.join("team.md"), &md)?;
+    let json = serde_json::json!({ "command": command, "summary": cells, "trials": results });
+    write_file(&out.join("team.json"), &serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?)?;
+    say!("{md}");
+    say!("written: {0}/team.md, {0}/team.json", out.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -14,6 +14,7 @@ pub mod ros2;
 pub mod search;
 pub mod sim_serve;
 pub mod soak;
+pub mod team;
 pub mod trace;
 #[cfg(feature = "train")]
 pub mod train;

@@ -239,95 +239,161 @@ fn line(a: (i64, i64), b: (i64, i64)) -> impl Iterator<Item = (i64, i64)> {
     })
 }
 
-/// The coverage route of `map` for a robot of `radius_m` starting at `start` (world x, y) with
-/// footprint `fp`.
-pub fn plan(map: &KnownGrid, radius_m: f64, start: [f64; 2], fp: Footprint) -> Result<Route, RouteError> {
+/// A coverage problem over a known building: where the robot can stand, the candidate
+/// waypoints and what each sees. Built once; routes for one robot ([`plan`]) or a team
+/// ([`Coverage::plan_team`]) are planned on it.
+pub struct Coverage<'a> {
+    map: &'a KnownGrid<'a>,
+    fp: Footprint,
+    ok: Vec<bool>,
+    /// (cell, heading, free cells seen).
+    cands: Vec<(usize, f64, Vec<u32>)>,
+    coverable: usize,
+    free: usize,
+}
+
+impl<'a> Coverage<'a> {
+    /// The problem of `map` for a robot of `radius_m` with footprint `fp`; candidates are the
+    /// lattice cells reachable from `start` (world x, y).
+    pub fn new(map: &'a KnownGrid<'a>, radius_m: f64, start: [f64; 2], fp: Footprint) -> Result<Self, RouteError> {
+        let n = map.side;
+        let ok = map.standable(radius_m);
+        let start_cell = start_cell(map, &ok, start)?;
+        let from_start = map.dijkstra(&ok, start_cell);
+        let headings: Vec<f64> = match fp {
+            Footprint::Camera { .. } => (0..CAMERA_HEADINGS).map(|k| k as f64 * std::f64::consts::TAU / CAMERA_HEADINGS as f64).collect(),
+            Footprint::Lidar { .. } => vec![0.0],
+        };
+        let mut cands: Vec<(usize, f64, Vec<u32>)> = Vec::new();
+        for y in (0..n).step_by(LATTICE_CELLS) {
+            for x in (0..n).step_by(LATTICE_CELLS) {
+                let c = y * n + x;
+                if !ok[c] || from_start[c] == u32::MAX {
+                    continue;
+                }
+                for &h in &headings {
+                    cands.push((c, h, map.seen_from(c, h, fp)));
+                }
+            }
+        }
+        let free = map.cells.iter().filter(|c| **c == Cell3::Free).count();
+        let mut coverable = vec![false; n * n];
+        for (_, _, s) in &cands {
+            for &i in s {
+                coverable[i as usize] = true;
+            }
+        }
+        let coverable = coverable.iter().filter(|b| **b).count();
+        Ok(Coverage { map, fp, ok, cands, coverable, free })
+    }
+
+    /// An empty coverage (no cell covered) to mark and plan with.
+    pub fn nothing_covered(&self) -> Vec<bool> {
+        vec![false; self.ok.len()]
+    }
+
+    /// Marks in `covered` what the footprint sees from waypoint `w` (a waypoint a robot reached:
+    /// its cells need no other robot).
+    pub fn cover(&self, covered: &mut [bool], w: &Waypoint) {
+        let (x, y) = self.map.cell_of([w.x, w.y]);
+        if x < 0 || y < 0 || x >= self.map.side as i64 || y >= self.map.side as i64 {
+            return;
+        }
+        let c = y as usize * self.map.side + x as usize;
+        for i in self.map.seen_from(c, w.heading, self.fp) {
+            if let Some(b) = covered.get_mut(i as usize) {
+                *b = true;
+            }
+        }
+    }
+
+    /// Routes for a team whose robots stand at `starts` (world x, y), covering what `covered`
+    /// does not: greedy coverage per metre as [`plan`], and the next waypoint always goes to the
+    /// robot whose route is shortest so far (ties to the lower index), so the routes end about
+    /// together. A robot that cannot add [`MIN_GAIN_CELLS`] from where its route is stops
+    /// taking waypoints. One start gives [`plan`]'s route.
+    pub fn plan_team(&self, starts: &[[f64; 2]], covered: &[bool]) -> Result<Vec<Route>, RouteError> {
+        let mut covered = covered.to_vec();
+        covered.resize(self.ok.len(), false);
+        let overhead = (LEG_OVERHEAD_M / CELL_M * 5.0) as u64;
+        let mut fields = Vec::with_capacity(starts.len());
+        for &s in starts {
+            fields.push(self.map.dijkstra(&self.ok, start_cell(self.map, &self.ok, s)?));
+        }
+        let mut length_units = vec![0u64; starts.len()];
+        let mut open = vec![true; starts.len()];
+        let mut chosen: Vec<Vec<(usize, usize)>> = vec![Vec::new(); starts.len()];
+        // The robot whose route is shortest and can still add.
+        while let Some(r) = (0..starts.len()).filter(|&r| open[r]).min_by_key(|&r| (length_units[r], r)) {
+            let mut best: Option<(u64, u64, usize, usize)> = None; // (gain·K / cost, cost, index, gain)
+            for (k, (c, _, seen)) in self.cands.iter().enumerate() {
+                let d = fields[r][*c];
+                if d == u32::MAX {
+                    continue;
+                }
+                let gain = seen.iter().filter(|&&i| !covered[i as usize]).count();
+                if gain < MIN_GAIN_CELLS {
+                    continue;
+                }
+                let rate = ((gain as u64) << 20) / (d as u64 + overhead);
+                if best.is_none_or(|b| rate > b.0) {
+                    best = Some((rate, d as u64, k, gain));
+                }
+            }
+            let Some((_, d, k, gain)) = best else {
+                open[r] = false;
+                continue;
+            };
+            for &i in &self.cands[k].2 {
+                covered[i as usize] = true;
+            }
+            length_units[r] += d;
+            chosen[r].push((k, gain));
+            fields[r] = self.map.dijkstra(&self.ok, self.cands[k].0);
+        }
+        let covered_n = covered.iter().filter(|b| **b).count();
+        Ok(chosen
+            .iter()
+            .zip(starts)
+            .zip(&length_units)
+            .map(|((ch, &start), &units)| {
+                let mut waypoints = Vec::with_capacity(ch.len());
+                let mut prev = start;
+                for &(k, gain) in ch {
+                    let p = self.map.centre(self.cands[k].0);
+                    let heading = match self.fp {
+                        Footprint::Camera { .. } => self.cands[k].1,
+                        Footprint::Lidar { .. } if (p[0] - prev[0]).hypot(p[1] - prev[1]) > 1e-9 => (p[1] - prev[1]).atan2(p[0] - prev[0]),
+                        Footprint::Lidar { .. } => 0.0,
+                    };
+                    waypoints.push(Waypoint { x: p[0], y: p[1], heading, gain });
+                    prev = p;
+                }
+                Route { waypoints, coverable: self.coverable, covered: covered_n, free: self.free, length_m: units as f64 * CELL_M / 5.0 }
+            })
+            .collect())
+    }
+}
+
+/// The cell of `start`, or the nearest cell the robot can stand on within 1 m (it may start
+/// close to a wall).
+fn start_cell(map: &KnownGrid, ok: &[bool], start: [f64; 2]) -> Result<usize, RouteError> {
     let n = map.side;
-    let ok = map.standable(radius_m);
     let (sx, sy) = map.cell_of(start);
-    // The start, or the nearest cell the robot can stand on within 1 m (it may start close to
-    // a wall).
-    let start_cell = (0..=10i64)
+    (0..=10i64)
         .flat_map(|r| (-r..=r).flat_map(move |dy| (-r..=r).map(move |dx| (dx, dy))))
         .map(|(dx, dy)| (sx + dx, sy + dy))
         .find(|&(x, y)| x >= 0 && y >= 0 && x < n as i64 && y < n as i64 && ok[y as usize * n + x as usize])
         .map(|(x, y)| y as usize * n + x as usize)
-        .ok_or(RouteError::StartOutside)?;
-    let from_start = map.dijkstra(&ok, start_cell);
+        .ok_or(RouteError::StartOutside)
+}
 
-    // Candidates: reachable lattice cells (and headings).
-    let headings: Vec<f64> = match fp {
-        Footprint::Camera { .. } => (0..CAMERA_HEADINGS).map(|k| k as f64 * std::f64::consts::TAU / CAMERA_HEADINGS as f64).collect(),
-        Footprint::Lidar { .. } => vec![0.0],
-    };
-    let mut cands: Vec<(usize, f64, Vec<u32>)> = Vec::new();
-    for y in (0..n).step_by(LATTICE_CELLS) {
-        for x in (0..n).step_by(LATTICE_CELLS) {
-            let c = y * n + x;
-            if !ok[c] || from_start[c] == u32::MAX {
-                continue;
-            }
-            for &h in &headings {
-                cands.push((c, h, map.seen_from(c, h, fp)));
-            }
-        }
-    }
-    let free = map.cells.iter().filter(|c| **c == Cell3::Free).count();
-    let mut coverable = vec![false; n * n];
-    for (_, _, s) in &cands {
-        for &i in s {
-            coverable[i as usize] = true;
-        }
-    }
-    let coverable_n = coverable.iter().filter(|b| **b).count();
-
-    // Greedy by coverage per metre: from where the route is, the candidate that adds the most
-    // cells not yet covered per metre of path to it (plus [`LEG_OVERHEAD_M`]), until none adds
-    // [`MIN_GAIN_CELLS`]. A search wants the building covered early, not the shortest tour.
-    let mut covered = vec![false; n * n];
-    let mut chosen: Vec<(usize, usize)> = Vec::new();
-    let mut field = from_start.clone();
-    let mut length_units: u64 = 0;
-    let overhead = (LEG_OVERHEAD_M / CELL_M * 5.0) as u64;
-    loop {
-        let mut best: Option<(u64, u64, usize, usize)> = None; // (gain·K / cost, cost, index, gain)
-        for (k, (c, _, seen)) in cands.iter().enumerate() {
-            let d = field[*c];
-            if d == u32::MAX {
-                continue;
-            }
-            let gain = seen.iter().filter(|&&i| !covered[i as usize]).count();
-            if gain < MIN_GAIN_CELLS {
-                continue;
-            }
-            let rate = ((gain as u64) << 20) / (d as u64 + overhead);
-            if best.is_none_or(|b| rate > b.0) {
-                best = Some((rate, d as u64, k, gain));
-            }
-        }
-        let Some((_, d, k, gain)) = best else { break };
-        for &i in &cands[k].2 {
-            covered[i as usize] = true;
-        }
-        length_units += d;
-        chosen.push((k, gain));
-        field = map.dijkstra(&ok, cands[k].0);
-    }
-    let covered_n = covered.iter().filter(|b| **b).count();
-
-    let mut waypoints = Vec::with_capacity(chosen.len());
-    let mut prev = start;
-    for &(k, gain) in &chosen {
-        let p = map.centre(cands[k].0);
-        let heading = match fp {
-            Footprint::Camera { .. } => cands[k].1,
-            Footprint::Lidar { .. } if (p[0] - prev[0]).hypot(p[1] - prev[1]) > 1e-9 => (p[1] - prev[1]).atan2(p[0] - prev[0]),
-            Footprint::Lidar { .. } => 0.0,
-        };
-        waypoints.push(Waypoint { x: p[0], y: p[1], heading, gain });
-        prev = p;
-    }
-    Ok(Route { waypoints, coverable: coverable_n, covered: covered_n, free, length_m: length_units as f64 * CELL_M / 5.0 })
+/// The coverage route of `map` for a robot of `radius_m` starting at `start` (world x, y) with
+/// footprint `fp`.
+pub fn plan(map: &KnownGrid, radius_m: f64, start: [f64; 2], fp: Footprint) -> Result<Route, RouteError> {
+    let problem = Coverage::new(map, radius_m, start, fp)?;
+    let mut routes = problem.plan_team(&[start], &problem.nothing_covered())?;
+    Ok(routes.remove(0))
 }
 
 #[cfg(test)]

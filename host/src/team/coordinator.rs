@@ -1,0 +1,227 @@
+//! The team's coordinator: LIVE's central server for several robots. It plans the coverage
+//! route's waypoints among the robots by path cost ([`crate::live::coverage::Coverage::plan_team`]),
+//! merges what their cameras have seen, notes which waypoints they have done, re-plans what is
+//! left among the robots still answering when one stops, and stops everyone when one finds the
+//! target. It never reads a clock: a robot is lost when the transport says its status for a
+//! tick did not come.
+
+use super::{Assignment, RobotReport, Status, TeamResult, TickMsg};
+use crate::io::map_file::Cell3;
+use crate::live::coverage::{Coverage, KnownGrid, Waypoint};
+use std::sync::Arc;
+
+/// What the coordinator decided after a tick.
+#[derive(Clone, Debug, Default)]
+pub struct Decision {
+    /// New assignments to send before the next tick.
+    pub assignments: Vec<Assignment>,
+    /// The search is over: stop everyone.
+    pub stop: bool,
+}
+
+/// The coordinator.
+pub struct Coordinator {
+    cfg: firmware::Config,
+    cells: Option<Arc<Vec<Cell3>>>,
+    tick_s: f64,
+    limit_s: f64,
+    n: usize,
+    routes: Vec<Vec<Waypoint>>,
+    epochs: Vec<u32>,
+    alive: Vec<bool>,
+    last: Vec<Option<Status>>,
+    /// Waypoints any robot has done (over every epoch): what they cover needs no one else.
+    done: Vec<Waypoint>,
+    done_now: Vec<Vec<bool>>,
+    seen: Vec<bool>,
+    found_by: Option<usize>,
+    last_tick: u32,
+    /// Reports per robot.
+    pub reports: Vec<RobotReport>,
+    reassignments: u32,
+    stale_goals: u32,
+    entropy_start: Option<u32>,
+}
+
+impl Coordinator {
+    /// A coordinator for `n` robots of controller configuration `cfg` (the planner decides
+    /// whether there is a route to share: `live`, `visual-cpp` and `lidar-cpp` with a known
+    /// map), ticking every `tick_s` until `limit_s`.
+    pub fn new(cfg: firmware::Config, cells: Option<Arc<Vec<Cell3>>>, n: usize, tick_s: f64, limit_s: f64) -> Self {
+        let side = firmware::capacity::GRID_CELLS;
+        Coordinator {
+            cfg,
+            cells,
+            tick_s,
+            limit_s,
+            n,
+            routes: vec![Vec::new(); n],
+            epochs: vec![0; n],
+            alive: vec![true; n],
+            last: vec![None; n],
+            done: Vec::new(),
+            done_now: vec![Vec::new(); n],
+            seen: vec![false; side * side],
+            found_by: None,
+            last_tick: 0,
+            reports: (0..n).map(|robot| RobotReport { robot, ..RobotReport::default() }).collect(),
+            reassignments: 0,
+            stale_goals: 0,
+            entropy_start: None,
+        }
+    }
+
+    /// Takes the robots' announcements (one per robot, in order) and plans the first
+    /// assignments from where they stand.
+    pub fn start(&mut self, hellos: &[Status]) -> Result<Vec<Assignment>, String> {
+        if hellos.len() != self.n {
+            return Err(format!("{} robots announced, {} expected", hellos.len(), self.n));
+        }
+        for (i, h) in hellos.iter().enumerate() {
+            if h.robot as usize != i {
+                return Err(format!("robot {} announced in place of robot {i}", h.robot));
+            }
+            self.reports[i].start = h.pose;
+            self.last[i] = Some(h.clone());
+        }
+        self.entropy_start = self.entropy();
+        self.plan(&(0..self.n).collect::<Vec<_>>())
+    }
+
+    /// Plans what is left among `robots` from their last poses: their new assignments.
+    fn plan(&mut self, robots: &[usize]) -> Result<Vec<Assignment>, String> {
+        let Some(cells) = &self.cells else { return Ok(Vec::new()) };
+        let Some(fp) = crate::live::footprint(self.cfg.planner, &self.cfg) else { return Ok(Vec::new()) };
+        if robots.is_empty() {
+            return Ok(Vec::new());
+        }
+        let map = KnownGrid {
+            cells,
+            side: firmware::capacity::GRID_CELLS,
+            origin: [self.cfg.origin_x_m.to_num::<f64>(), self.cfg.origin_y_m.to_num::<f64>()],
+        };
+        let starts: Vec<[f64; 2]> = robots.iter().map(|&r| self.last[r].as_ref().map_or([0.0; 2], |s| [s.pose[0], s.pose[1]])).collect();
+        let problem = Coverage::new(&map, self.cfg.robot_radius_m.to_num::<f64>(), starts[0], fp).map_err(|e| format!("coverage: {e}"))?;
+        let mut covered = problem.nothing_covered();
+        for w in &self.done {
+            problem.cover(&mut covered, w);
+        }
+        let routes = problem.plan_team(&starts, &covered).map_err(|e| format!("coverage: {e}"))?;
+        let mut out = Vec::new();
+        for (&r, route) in robots.iter().zip(routes) {
+            let wps: Vec<Waypoint> = route.waypoints.into_iter().take(firmware::capacity::MAX_ROUTE_WAYPOINTS).collect();
+            self.epochs[r] += 1;
+            self.reports[r].waypoints_assigned += wps.len();
+            self.done_now[r] = vec![false; wps.len()];
+            out.push(Assignment { robot: r as u32, epoch: self.epochs[r], waypoints: wps.iter().map(|w| [w.x, w.y, w.heading]).collect() });
+            self.routes[r] = wps;
+        }
+        Ok(out)
+    }
+
+    /// The order for tick `tick`.
+    pub fn tick_msg(&self, tick: u32, stop: bool) -> TickMsg {
+        TickMsg { tick, stop, epochs: self.epochs.clone() }
+    }
+
+    /// Whether robot `r` still answers.
+    pub fn alive(&self, r: usize) -> bool {
+        self.alive[r]
+    }
+
+    /// Takes the statuses of tick `tick` (`None`: robot `i` did not answer, or was already
+    /// lost) and decides.
+    pub fn after_tick(&mut self, tick: u32, statuses: &[Option<Status>]) -> Result<Decision, String> {
+        self.last_tick = tick;
+        let mut lost_now = Vec::new();
+        for (i, s) in statuses.iter().enumerate().take(self.n) {
+            let Some(s) = s else {
+                if self.alive[i] {
+                    self.alive[i] = false;
+                    self.reports[i].lost_s = Some(crate::run::round3(tick as f64 * self.tick_s));
+                    lost_now.push(i);
+                }
+                continue;
+            };
+            if !self.alive[i] {
+                continue;
+            }
+            if s.goal_epoch.is_some_and(|e| e != self.epochs[i]) || s.epoch != self.epochs[i] {
+                self.stale_goals += 1;
+            }
+            for &d in &s.done {
+                let d = d as usize;
+                if d < self.routes[i].len() && !self.done_now[i][d] {
+                    self.done_now[i][d] = true;
+                    self.done.push(self.routes[i][d]);
+                    self.reports[i].waypoints_done += 1;
+                }
+            }
+            for &c in &s.seen {
+                if let Some(b) = self.seen.get_mut(c as usize) {
+                    *b = true;
+                }
+            }
+            self.reports[i].path_m = s.path_m;
+            if s.found && self.found_by.is_none() {
+                self.found_by = Some(i);
+            }
+            self.last[i] = Some(s.clone());
+        }
+        let survivors: Vec<usize> = (0..self.n).filter(|&i| self.alive[i]).collect();
+        let mut decision = Decision::default();
+        if !lost_now.is_empty() && !survivors.is_empty() {
+            decision.assignments = self.plan(&survivors)?;
+            self.reassignments += decision.assignments.len() as u32;
+        }
+        let all_idle = survivors.iter().all(|&i| self.last[i].as_ref().is_some_and(|s| s.idle));
+        decision.stop = self.found_by.is_some() || all_idle;
+        Ok(decision)
+    }
+
+    /// Free cells of the known map no camera has seen (`None` without a map).
+    fn entropy(&self) -> Option<u32> {
+        let cells = self.cells.as_ref()?;
+        Some(cells.iter().zip(&self.seen).filter(|(c, s)| **c == Cell3::Free && !**s).count() as u32)
+    }
+
+    /// The result, once the search is over.
+    pub fn result(&self, spec: &super::TeamSpec, transport: &str) -> TeamResult {
+        let base = &spec.base;
+        let found = self.found_by.is_some();
+        let outcome = if found {
+            "found"
+        } else if (self.last_tick + 1) as f64 * self.tick_s >= self.limit_s - 1e-9 {
+            "time-limit"
+        } else {
+            "exhausted"
+        };
+        let mut per_robot = self.reports.clone();
+        let end_s = ((self.last_tick + 1) as f64 * self.tick_s).min(self.limit_s);
+        for r in &mut per_robot {
+            let s = r.lost_s.unwrap_or(end_s).max(self.tick_s);
+            r.up_bps = crate::run::round3(r.bytes_up as f64 / s);
+            r.down_bps = crate::run::round3(r.bytes_down as f64 / s);
+        }
+        TeamResult {
+            world: base.world_name.clone(),
+            scenario: base.scenario_label().to_string(),
+            planner: base.planner.to_string(),
+            seed: base.seed,
+            robots: self.n,
+            map: if self.cells.is_some() { "known-map" } else { "no-map" }.to_string(),
+            transport: transport.to_string(),
+            found,
+            time_s: if found { crate::run::round3(self.last_tick as f64 * self.tick_s) } else { self.limit_s },
+            time_limit_s: self.limit_s,
+            found_by: self.found_by,
+            outcome: outcome.to_string(),
+            ticks: self.last_tick + 1,
+            reassignments: self.reassignments,
+            stale_goals: self.stale_goals,
+            entropy_bits: self.entropy_start.zip(self.entropy()).map(|(a, b)| [a, b]),
+            seen_cells: self.seen.iter().filter(|b| **b).count(),
+            per_robot,
+        }
+    }
+}

@@ -1,0 +1,87 @@
+//! A team in one process: the coordinator and the robots exchange the same messages as over
+//! DDS, by value, in lockstep (the evaluation's transport). Bytes are counted as their CDR
+//! encodings, the payloads DDS would carry.
+
+use super::coordinator::Coordinator;
+use super::robot::TeamRobot;
+use super::{codec, robot_spec, starts, Assignment, Status, TeamResult, TeamSpec};
+use crate::run::TICK_US;
+
+/// The coordinator of `spec` (its robot 0's controller configuration and map).
+pub fn coordinator(spec: &TeamSpec) -> Coordinator {
+    let base = &spec.base;
+    let cfg = crate::run::controller_config(&base.controller, &base.world, base.planner.kind());
+    Coordinator::new(cfg, base.prior_map.clone(), spec.robots, TICK_US as f64 / 1e6, base.world.time_limit_s)
+}
+
+/// Checks a team spec: robots, the robot whose link is cut.
+pub fn check(spec: &TeamSpec) -> Result<(), String> {
+    if spec.robots == 0 || spec.robots > super::MAX_ROBOTS {
+        return Err(format!("--robots {}: 1 to {}", spec.robots, super::MAX_ROBOTS));
+    }
+    if let Some((r, t)) = spec.kill {
+        if r >= spec.robots || !t.is_finite() || t < 0.0 {
+            return Err(format!("--kill {r}@{t}: a robot 0..{} and a time ≥ 0 s", spec.robots - 1));
+        }
+    }
+    Ok(())
+}
+
+/// Runs `spec`'s team in this process.
+pub fn run(spec: &TeamSpec) -> Result<TeamResult, String> {
+    check(spec)?;
+    let starts = starts(&spec.base, spec.robots)?;
+    let mut robots = Vec::with_capacity(spec.robots);
+    for (i, s) in starts.iter().enumerate() {
+        robots.push(TeamRobot::new(i as u32, std::process::id(), &robot_spec(&spec.base, *s))?);
+    }
+    let mut coord = coordinator(spec);
+    let hellos: Vec<Status> = robots.iter().map(TeamRobot::hello).collect();
+    let mut bytes = vec![[0u64; 2]; spec.robots];
+    for (i, h) in hellos.iter().enumerate() {
+        bytes[i][0] += codec::encode_status(h).len() as u64;
+    }
+    let mut pending: Vec<Assignment> = coord.start(&hellos)?;
+    let tick_s = TICK_US as f64 / 1e6;
+    let mut tick = 0u32;
+    loop {
+        let cut = |i: usize, k: u32| spec.kill.is_some_and(|(r, t)| r == i && k as f64 * tick_s >= t);
+        for a in pending.drain(..) {
+            let i = a.robot as usize;
+            if !cut(i, tick) {
+                bytes[i][1] += codec::encode_assignment(&a).len() as u64;
+                robots[i].assign(&a);
+            }
+        }
+        let order = coord.tick_msg(tick, false);
+        let order_bytes = codec::encode_tick(&order).len() as u64;
+        let mut statuses = Vec::with_capacity(spec.robots);
+        for (i, r) in robots.iter_mut().enumerate() {
+            if cut(i, tick) || !coord.alive(i) {
+                statuses.push(None);
+                continue;
+            }
+            bytes[i][1] += order_bytes;
+            let s = r.step(tick);
+            bytes[i][0] += codec::encode_status(&s).len() as u64;
+            statuses.push(Some(s));
+        }
+        let d = coord.after_tick(tick, &statuses)?;
+        pending = d.assignments;
+        if d.stop {
+            let stop_bytes = codec::encode_tick(&coord.tick_msg(tick + 1, true)).len() as u64;
+            for (i, b) in bytes.iter_mut().enumerate() {
+                if coord.alive(i) {
+                    b[1] += stop_bytes;
+                }
+            }
+            break;
+        }
+        tick += 1;
+    }
+    for (i, b) in bytes.iter().enumerate() {
+        coord.reports[i].bytes_up = b[0];
+        coord.reports[i].bytes_down = b[1];
+    }
+    Ok(coord.result(spec, "in-process"))
+}

@@ -1,0 +1,158 @@
+//! One robot of a team: its simulator and its own controller core, stepped one tick at a time
+//! on the coordinator's order.
+
+use super::{Assignment, Status};
+use crate::run::{Answer, Brain, End, InProcess, SimSource, Source};
+use crate::search::SearchSpec;
+use firmware::Controller;
+
+/// A team robot.
+pub struct TeamRobot {
+    /// Its index in the team.
+    pub id: u32,
+    /// The reporting process.
+    pub instance: u32,
+    /// Its simulator.
+    pub source: SimSource,
+    /// Its controller.
+    pub brain: InProcess,
+    /// The epoch of the assignment it follows (0: none yet).
+    pub epoch: u32,
+    goal_epoch: Option<u32>,
+    /// The waypoints of the assignment it follows.
+    route_len: usize,
+    /// Cells already reported seen.
+    reported: Vec<u64>,
+    /// How its run ended (it then idles).
+    pub ended: Option<End>,
+}
+
+impl TeamRobot {
+    /// Robot `id` of a team, searching `spec` (already started where it stands,
+    /// [`super::robot_spec`]); the known map, if any, is loaded but no route given (the
+    /// coordinator assigns it). Fails if the spec's model does not validate.
+    pub fn new(id: u32, instance: u32, spec: &SearchSpec) -> Result<Self, String> {
+        let cfg = crate::run::controller_config(&spec.controller, &spec.world, spec.planner.kind());
+        let mut ctrl = Box::new(Controller::new(cfg));
+        if let (true, Some(blob)) = (spec.classifier(), spec.model) {
+            ctrl.set_model(blob).map_err(|e| format!("robot {id}: {e}"))?;
+        }
+        if let Some(cells) = &spec.prior_map {
+            crate::live::load(&mut ctrl, cells);
+        }
+        let n = firmware::capacity::GRID_CELLS * firmware::capacity::GRID_CELLS;
+        Ok(TeamRobot {
+            id,
+            instance,
+            source: spec.sim_source(),
+            brain: InProcess::new(ctrl),
+            epoch: 0,
+            goal_epoch: None,
+            route_len: 0,
+            reported: vec![0; n.div_ceil(64)],
+            ended: None,
+        })
+    }
+
+    /// Takes an assignment newer than the one it follows (an older or repeated one is ignored):
+    /// the controller's route becomes it, and the goal taken from the old one is dropped.
+    pub fn assign(&mut self, a: &Assignment) {
+        if a.robot != self.id || a.epoch <= self.epoch {
+            return;
+        }
+        let route = crate::live::coverage::Route {
+            waypoints: a.waypoints.iter().map(|w| crate::live::coverage::Waypoint { x: w[0], y: w[1], heading: w[2], gain: 0 }).collect(),
+            coverable: 0,
+            covered: 0,
+            free: 0,
+            length_m: 0.0,
+        };
+        self.route_len = crate::live::give_route(&mut self.brain.ctrl, &route);
+        self.epoch = a.epoch;
+        self.goal_epoch = None;
+    }
+
+    /// Its announcement.
+    pub fn hello(&self) -> Status {
+        self.status(None, Vec::new())
+    }
+
+    /// Steps tick `tick` (sense, think, act) and reports.
+    pub fn step(&mut self, tick: u32) -> Status {
+        if self.ended.is_none() {
+            match self.source.sense(tick) {
+                None => self.ended = Some(End::Source),
+                Some(frame) => {
+                    let Ok(answer) = self.brain.think(&frame);
+                    self.after_think(&answer);
+                    if let Some(end) = answer.end {
+                        self.ended = Some(end);
+                        self.source.act(&Answer { acts: vec![crate::run::Act::Stop], ..Answer::default() });
+                    } else if !self.source.act(&answer) {
+                        self.ended = Some(End::Source);
+                    }
+                }
+            }
+        } else {
+            // Idle: it stands where it is while the others go on.
+            self.source.act(&Answer { acts: vec![crate::run::Act::Stop], ..Answer::default() });
+        }
+        let seen = self.newly_seen();
+        self.status(Some(tick), seen)
+    }
+
+    fn after_think(&mut self, answer: &Answer) {
+        let Some(out) = self.brain.outputs() else { return };
+        if out.goal.is_none() {
+            self.goal_epoch = None;
+        } else if out.new_goal && answer.end.is_none() {
+            self.goal_epoch = Some(self.epoch);
+        }
+    }
+
+    /// Cells the camera has seen that were not reported yet, within the camera's reach of the
+    /// robot.
+    fn newly_seen(&mut self) -> Vec<u32> {
+        let ctrl = &self.brain.ctrl;
+        let Some(pose) = ctrl.pose() else { return Vec::new() };
+        let geom = ctrl.lidar.geom;
+        let (cx, cy) = geom.cell_of(pose.x, pose.y);
+        let r = firmware::grid::GridGeometry::cells(ctrl.config().camera_range_m) + 2;
+        let side = firmware::capacity::GRID_CELLS as i32;
+        let mut out = Vec::new();
+        for y in (cy - r).max(0)..=(cy + r).min(side - 1) {
+            for x in (cx - r).max(0)..=(cx + r).min(side - 1) {
+                let i = (y * side + x) as usize;
+                if ctrl.visual.seen(x, y) && self.reported[i / 64] >> (i % 64) & 1 == 0 {
+                    self.reported[i / 64] |= 1 << (i % 64);
+                    out.push(i as u32);
+                }
+            }
+        }
+        out
+    }
+
+    fn status(&self, tick: Option<u32>, seen: Vec<u32>) -> Status {
+        let ctrl = &self.brain.ctrl;
+        let pose = ctrl.pose().map_or(self.source.start, |p| [p.x.to_num::<f64>(), p.y.to_num::<f64>(), p.theta.to_radians()]);
+        let route = &ctrl.planner.route;
+        Status {
+            robot: self.id,
+            instance: self.instance,
+            tick,
+            pose,
+            found: self.ended == Some(End::Found),
+            idle: self.ended.is_some(),
+            epoch: self.epoch,
+            goal_epoch: self.goal_epoch,
+            done: (0..self.route_len.min(route.waypoints().len())).filter(|&i| route.is_done(i)).map(|i| i as u16).collect(),
+            seen,
+            path_m: crate::run::round3(self.source.sim.path_length_m()),
+        }
+    }
+
+    /// The controller (read only).
+    pub fn controller(&self) -> &Controller {
+        &self.brain.ctrl
+    }
+}
