@@ -74,6 +74,9 @@ pub const ROOM_QUEUE: usize = 16384;
 /// (`crate::planner::proposals`), best evidence first.
 pub const MAX_PROPOSALS: usize = 12;
 
+/// Teammates' goals a robot of a team keeps clear of (`Controller::set_team_claims`).
+pub const MAX_TEAM_CLAIMS: usize = 8;
+
 /// Waypoints of a coverage route (LIVE's waypoint manager, `crate::planner::coverage`): the
 /// host's route over a known building; more are refused.
 pub const MAX_ROUTE_WAYPOINTS: usize = 256;

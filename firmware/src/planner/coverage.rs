@@ -171,7 +171,8 @@ impl Planner {
                 self.route.stats.regions_seen += 1;
             }
             let there = at(stand, p.heading);
-            if seen || there || self.is_blacklisted(stand, bl) || self.distance(stand.0, stand.1) == UNREACHABLE {
+            let claimed = self.is_claimed(stand, super::claim_radius(cfg));
+            if seen || there || claimed || self.is_blacklisted(stand, bl) || self.distance(stand.0, stand.1) == UNREACHABLE {
                 self.route.priority = None;
                 // The interval runs from here: the route gets at least that long before the
                 // next priority waypoint.
@@ -252,7 +253,7 @@ impl Planner {
             let v = stand_off(robot, c, r_cells);
             work += ((2 * step.snap + 1) * (2 * step.snap + 1)) as u32;
             let Some(v) = self.reachable_near(v, step.snap) else { continue };
-            if v == c || self.is_blacklisted(v, bl) {
+            if v == c || self.is_blacklisted(v, bl) || self.is_claimed(v, super::claim_radius(step.inputs.cfg)) {
                 continue;
             }
             let d = self.distance(v.0, v.1);

@@ -212,6 +212,15 @@ pub struct Planner {
     pub sched: schedule::ScheduleStats,
     /// LIVE's waypoint manager: the coverage route and where along it the robot is.
     pub route: coverage::Route,
+    /// A team's goals this robot leaves to its teammates (`Controller::set_team_claims`).
+    claims: heapless::Vec<(i32, i32), { crate::capacity::MAX_TEAM_CLAIMS }>,
+}
+
+/// How far from a teammate's goal a robot of a team chooses none of its own, in cells: half the
+/// camera's range (the teammate's camera looks there; Burgard et al. 2005 lower the utility of
+/// what a teammate's target will let it see).
+pub(crate) fn claim_radius(cfg: &Config) -> i32 {
+    GridGeometry::cells(cfg.camera_range_m) / 2
 }
 
 /// Candidate tasks of one structured step before the [`MAX_TASKS`] best are kept: every
@@ -269,6 +278,7 @@ impl Planner {
             block_stamp: [0; BLOCKS * BLOCKS],
             stamp: 0,
             blacklist: heapless::Deque::new(),
+            claims: heapless::Vec::new(),
             visible: heapless::Vec::new(),
             candidates: heapless::Vec::new(),
             stats: PlanStats {
@@ -370,6 +380,21 @@ impl Planner {
     /// Goals blacklisted so far (oldest first).
     pub fn blacklisted(&self) -> impl Iterator<Item = &(i32, i32)> {
         self.blacklist.iter()
+    }
+
+    /// The teammates' goals this robot leaves to them (at most
+    /// [`crate::capacity::MAX_TEAM_CLAIMS`]; more are ignored).
+    pub fn set_claims(&mut self, cells: &[(i32, i32)]) {
+        self.claims.clear();
+        for &c in cells.iter().take(crate::capacity::MAX_TEAM_CLAIMS) {
+            let _ = self.claims.push(c);
+        }
+    }
+
+    /// Whether site `c` is within `radius_cells` of a teammate's goal.
+    pub(super) fn is_claimed(&self, c: (i32, i32), radius_cells: i32) -> bool {
+        let r2 = radius_cells as i64 * radius_cells as i64;
+        self.claims.iter().any(|b| ((b.0 - c.0) as i64).pow(2) + ((b.1 - c.1) as i64).pow(2) <= r2)
     }
 
     pub(super) fn is_blacklisted(&self, c: (i32, i32), radius_cells: i32) -> bool {
@@ -488,7 +513,7 @@ impl Planner {
             (cell == robot || (d as i64) <= here) && (h - pose.theta).unsigned_abs() <= cfg.goal_heading_tolerance.unsigned_abs()
         };
         for &(site, kind, fixed_heading, own_score) in sites.iter() {
-            if kind != Site::Current && self.is_blacklisted(site, bl) {
+            if kind != Site::Current && (self.is_blacklisted(site, bl) || self.is_claimed(site, claim_radius(cfg))) {
                 self.stats.blacklisted += 1;
                 continue;
             }

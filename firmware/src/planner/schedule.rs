@@ -178,6 +178,7 @@ impl Planner {
         self.tasks.clear();
         self.sched = ScheduleStats { rooms: self.rooms.rooms().len() as u16, ..ScheduleStats::default() };
         let bl = GridGeometry::cells(cfg.blacklist_radius_m);
+        let claim = super::claim_radius(cfg);
         let here = GridGeometry::cells(cfg.goal_tolerance_m) as i64 * STEP_STRAIGHT as i64;
         let pose = step.inputs.pose;
         let robot = step.robot;
@@ -196,7 +197,11 @@ impl Planner {
         for k in 0..self.proposals.proposals.len() {
             let p = self.proposals.proposals[k];
             let d = self.distance(p.viewpoint.0, p.viewpoint.1);
-            if d == UNREACHABLE || self.is_blacklisted(p.viewpoint, bl) || already_there(p.viewpoint, p.heading, d) {
+            if d == UNREACHABLE
+                || self.is_blacklisted(p.viewpoint, bl)
+                || self.is_claimed(p.viewpoint, claim)
+                || already_there(p.viewpoint, p.heading, d)
+            {
                 continue;
             }
             if w_nonmap != Weight::ZERO {
@@ -224,7 +229,7 @@ impl Planner {
         let mut unreachable = 0;
         for f in step.inputs.frontiers.frontiers() {
             let Some(c) = self.snap_site(f.anchor, step.snap, &mut work, &mut unreachable) else { continue };
-            if self.is_blacklisted(c, bl) {
+            if self.is_blacklisted(c, bl) || self.is_claimed(c, claim) {
                 self.stats.blacklisted += 1;
                 continue;
             }
@@ -293,7 +298,7 @@ impl Planner {
             }
             let anchor = self.room_scratch[k];
             let Some(c) = self.reachable_near(anchor, step.snap) else { continue };
-            if self.is_blacklisted(c, bl) {
+            if self.is_blacklisted(c, bl) || self.is_claimed(c, claim) {
                 continue;
             }
             let (best, d, w) = self.look_from(step, c, w_nonmap, &already_there);

@@ -46,7 +46,12 @@ pub struct TeamArgs {
 fn parse_kill(s: &str) -> Result<(usize, f64), String> {
     let (r, t) = s.split_once('@').ok_or_else(|| format!("--kill {s}: expected ROBOT@SECONDS, e.g. 1@60"))?;
     let r = r.trim().parse::<usize>().map_err(|_| format!("--kill {s}: `{r}` is not a robot index"))?;
-    let t = t.trim().parse::<f64>().ok().filter(|t| t.is_finite() && *t >= 0.0).ok_or_else(|| format!("--kill {s}: `{t}` is not a time ≥ 0 s"))?;
+    let t = t
+        .trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|t| t.is_finite() && *t >= 0.0)
+        .ok_or_else(|| format!("--kill {s}: `{t}` is not a time ≥ 0 s"))?;
     Ok((r, t))
 }
 
@@ -74,11 +79,7 @@ pub fn run(args: TeamArgs) -> Result<ExitCode, String> {
     }
     let kill = args.kill.as_deref().map(parse_kill).transpose()?;
     let tspec = TeamSpec { base: spec, robots: args.robots, kill };
-    let result = if args.processes || args.as_robot.is_some() {
-        over_dds(&args, &tspec)?
-    } else {
-        Some(team::local::run(&tspec)?)
-    };
+    let result = if args.processes || args.as_robot.is_some() { over_dds(&args, &tspec)? } else { Some(team::local::run(&tspec)?) };
     let Some(result) = result else { return Ok(ExitCode::SUCCESS) };
     if args.json {
         say!("{}", serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?);
@@ -145,7 +146,11 @@ pub fn summary(r: &TeamResult) -> String {
         r.robots,
         r.map,
         r.transport,
-        if r.found { format!("by robot {} in {:.1} s", r.found_by.unwrap_or(0), r.time_s) } else { format!("{} ({:.0} s)", r.outcome, r.time_s) },
+        if r.found {
+            format!("by robot {} in {:.1} s", r.found_by.unwrap_or(0), r.time_s)
+        } else {
+            format!("{} ({:.0} s)", r.outcome, r.time_s)
+        },
     );
     s += &format!(", {} re-assignments, {} stale goals", r.reassignments, r.stale_goals);
     for p in &r.per_robot {

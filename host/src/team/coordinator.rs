@@ -34,6 +34,10 @@ pub struct Coordinator {
     done: Vec<Waypoint>,
     done_now: Vec<Vec<bool>>,
     seen: Vec<bool>,
+    /// Cells seen at the last tick, for every robot.
+    relay: Vec<u32>,
+    /// LiDAR cells observed at the last tick, for every robot (no map).
+    relay_lidar: Vec<u32>,
     found_by: Option<usize>,
     last_tick: u32,
     /// Reports per robot.
@@ -62,6 +66,8 @@ impl Coordinator {
             done: Vec::new(),
             done_now: vec![Vec::new(); n],
             seen: vec![false; side * side],
+            relay: Vec::new(),
+            relay_lidar: Vec::new(),
             found_by: None,
             last_tick: 0,
             reports: (0..n).map(|robot| RobotReport { robot, ..RobotReport::default() }).collect(),
@@ -121,7 +127,14 @@ impl Coordinator {
 
     /// The order for tick `tick`.
     pub fn tick_msg(&self, tick: u32, stop: bool) -> TickMsg {
-        TickMsg { tick, stop, epochs: self.epochs.clone() }
+        TickMsg {
+            tick,
+            stop,
+            epochs: self.epochs.clone(),
+            goals: (0..self.n).map(|i| if self.alive[i] { self.last[i].as_ref().and_then(|s| s.goal) } else { None }).collect(),
+            seen: self.relay.clone(),
+            lidar: self.relay_lidar.clone(),
+        }
     }
 
     /// Whether robot `r` still answers.
@@ -133,6 +146,8 @@ impl Coordinator {
     /// lost) and decides.
     pub fn after_tick(&mut self, tick: u32, statuses: &[Option<Status>]) -> Result<Decision, String> {
         self.last_tick = tick;
+        self.relay.clear();
+        self.relay_lidar.clear();
         let mut lost_now = Vec::new();
         for (i, s) in statuses.iter().enumerate().take(self.n) {
             let Some(s) = s else {
@@ -158,16 +173,25 @@ impl Coordinator {
                 }
             }
             for &c in &s.seen {
-                if let Some(b) = self.seen.get_mut(c as usize) {
-                    *b = true;
+                if let Some(b) = self.seen.get_mut((c & !super::SEEN_OCCUPIED) as usize) {
+                    if !*b {
+                        *b = true;
+                        self.relay.push(c);
+                    }
                 }
             }
+            self.relay_lidar.extend_from_slice(&s.lidar);
             self.reports[i].path_m = s.path_m;
             if s.found && self.found_by.is_none() {
                 self.found_by = Some(i);
             }
             self.last[i] = Some(s.clone());
         }
+        self.relay.sort_unstable();
+        // One report a cell: the last robot's (in robot order) wins.
+        self.relay_lidar.reverse();
+        self.relay_lidar.sort_by_key(|c| c & !super::SEEN_OCCUPIED);
+        self.relay_lidar.dedup_by_key(|c| *c & !super::SEEN_OCCUPIED);
         let survivors: Vec<usize> = (0..self.n).filter(|&i| self.alive[i]).collect();
         let mut decision = Decision::default();
         if !lost_now.is_empty() && !survivors.is_empty() {

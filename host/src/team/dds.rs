@@ -123,7 +123,14 @@ pub fn run(spec: &TeamSpec, opts: &DdsOptions, robot_args: impl Fn(usize) -> Vec
     }
     let out = coordinate(spec, opts, &tick_w, &assign_w, &mut status_r, &mut children);
     // Stop and reap every robot, whatever happened.
-    let stop = codec::encode_tick(&super::TickMsg { tick: u32::MAX, stop: true, epochs: Vec::new() });
+    let stop = codec::encode_tick(&super::TickMsg {
+        tick: u32::MAX,
+        stop: true,
+        epochs: Vec::new(),
+        goals: Vec::new(),
+        seen: Vec::new(),
+        lidar: Vec::new(),
+    });
     let _ = send(&tick_w, &stop, "the stop");
     let deadline = Instant::now() + Duration::from_secs(5);
     for c in children.iter_mut().flatten() {
@@ -211,7 +218,8 @@ fn coordinate(
         }
         let order = codec::encode_tick(&coord.tick_msg(tick, false));
         let mut statuses: Vec<Option<Status>> = vec![None; n];
-        let waiting = |statuses: &[Option<Status>], coord: &Coordinator| (0..n).filter(|&i| coord.alive(i) && statuses[i].is_none()).count();
+        let waiting =
+            |statuses: &[Option<Status>], coord: &Coordinator| (0..n).filter(|&i| coord.alive(i) && statuses[i].is_none()).count();
         let started = Instant::now();
         let mut last_sent: Option<Instant> = None;
         while waiting(&statuses, &coord) > 0 && started.elapsed() < opts.link_timeout {
@@ -298,6 +306,8 @@ pub fn robot(spec: &TeamSpec, id: usize, opts: &DdsOptions) -> Result<(), String
                 }
                 std::thread::sleep(Duration::from_millis(1));
             }
+            robot.merge(&t.seen, &t.lidar);
+            robot.give_way(&t.goals);
             last = codec::encode_status(&robot.step(t.tick));
             next = t.tick + 1;
             last_sent = None;

@@ -19,7 +19,8 @@ pub fn run_batch(specs: &[SearchSpec], robots: &[usize], threads: usize, done: i
             s.spawn(|| loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 let Some(job) = jobs.get(i) else { break };
-                let r = local::run(job).map_err(|e| format!("{} {} seed {}: {e}", job.base.world_name, job.base.scenario_label(), job.base.seed));
+                let r = local::run(job)
+                    .map_err(|e| format!("{} {} seed {}: {e}", job.base.world_name, job.base.scenario_label(), job.base.seed));
                 if let Ok(mut v) = slots.lock() {
                     v[i] = Some(r);
                 }
@@ -90,7 +91,8 @@ pub fn summarise(results: &[TeamResult]) -> Vec<TeamCell> {
         .collect();
     let ones: Vec<TeamCell> = cells.iter().filter(|c| c.robots == 1).cloned().collect();
     for c in &mut cells {
-        if let Some(one) = ones.iter().find(|o| o.world == c.world && o.scenario == c.scenario && o.planner == c.planner && o.map == c.map) {
+        if let Some(one) = ones.iter().find(|o| o.world == c.world && o.scenario == c.scenario && o.planner == c.planner && o.map == c.map)
+        {
             c.vs_one = (one.mean_time_s > 0.0).then(|| crate::run::round3(c.mean_time_s / one.mean_time_s));
         }
     }

@@ -62,6 +62,8 @@ pub fn run(spec: &TeamSpec) -> Result<TeamResult, String> {
                 continue;
             }
             bytes[i][1] += order_bytes;
+            r.merge(&order.seen, &order.lidar);
+            r.give_way(&order.goals);
             let s = r.step(tick);
             bytes[i][0] += codec::encode_status(&s).len() as u64;
             statuses.push(Some(s));

@@ -39,7 +39,7 @@ pub const START_SPACING_M: f64 = 1.0;
 pub const START_REACH_M: f64 = 4.0;
 
 /// The coordinator's order for tick `tick`.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct TickMsg {
     /// The tick to step.
     pub tick: u32,
@@ -47,7 +47,19 @@ pub struct TickMsg {
     pub stop: bool,
     /// The epoch of each robot's newest assignment (0: none).
     pub epochs: Vec<u32>,
+    /// The cells the robots' cameras saw for the first time at the last tick, merged (as
+    /// [`Status::seen`]): every robot marks them seen before it steps.
+    pub seen: Vec<u32>,
+    /// Each robot's goal after the last tick `[x, y]` (`None`: none, or lost): robot `i` leaves
+    /// the goals of robots `0 .. i` to them (`firmware::Controller::set_team_claims`).
+    pub goals: Vec<Option<[f64; 2]>>,
+    /// The cells the robots' LiDARs observed anew (or saw change) at the last tick, without a
+    /// known map (as [`Status::lidar`]): every robot takes them as a prior before it steps.
+    pub lidar: Vec<u32>,
 }
+
+/// In a seen cell's index, the bit that says the camera saw a surface (an occupied cell).
+pub const SEEN_OCCUPIED: u32 = 1 << 31;
 
 /// A robot's share of the route.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,8 +93,15 @@ pub struct Status {
     pub goal_epoch: Option<u32>,
     /// Indices of its assignment's waypoints done (reached or skipped).
     pub done: Vec<u16>,
-    /// Grid cells (`y · side + x`) its camera saw for the first time this tick.
+    /// Grid cells (`y · side + x`, with [`SEEN_OCCUPIED`] for a surface) its camera saw for the
+    /// first time this tick, sorted.
     pub seen: Vec<u32>,
+    /// Its goal's position `[x, y]` after the tick.
+    pub goal: Option<[f64; 2]>,
+    /// Without a known map: grid cells (with [`SEEN_OCCUPIED`] for occupied) its LiDAR grid
+    /// holds anew or changed (free ↔ occupied) this tick, not counting what it took from the
+    /// team, sorted.
+    pub lidar: Vec<u32>,
     /// Distance walked, metres.
     pub path_m: f64,
 }

@@ -23,6 +23,9 @@ pub struct TeamRobot {
     route_len: usize,
     /// Cells already reported seen.
     reported: Vec<u64>,
+    /// Without a known map: the LiDAR grid as the team knows it from this robot (0 unknown, 1
+    /// free, 2 occupied), to report what changed.
+    lidar_known: Option<Vec<u8>>,
     /// How its run ended (it then idles).
     pub ended: Option<End>,
 }
@@ -50,6 +53,7 @@ impl TeamRobot {
             goal_epoch: None,
             route_len: 0,
             reported: vec![0; n.div_ceil(64)],
+            lidar_known: spec.prior_map.is_none().then(|| vec![0; n]),
             ended: None,
         })
     }
@@ -70,6 +74,45 @@ impl TeamRobot {
         self.route_len = crate::live::give_route(&mut self.brain.ctrl, &route);
         self.epoch = a.epoch;
         self.goal_epoch = None;
+    }
+
+    /// Marks the cells the team's cameras saw ([`super::TickMsg::seen`]) seen by this robot's
+    /// controller too, and gives it what the team's LiDARs observed
+    /// ([`super::TickMsg::lidar`]; a cell its own LiDAR has observed keeps its own evidence).
+    pub fn merge(&mut self, seen: &[u32], lidar: &[u32]) {
+        let side = firmware::capacity::GRID_CELLS as u32;
+        if let Some(known) = self.lidar_known.as_mut() {
+            for &c in lidar {
+                let i = c & !super::SEEN_OCCUPIED;
+                if i >= side * side {
+                    continue;
+                }
+                let (x, y) = ((i % side) as i32, (i / side) as i32);
+                self.brain.ctrl.merge_lidar(x, y, c & super::SEEN_OCCUPIED != 0);
+                known[i as usize] = cell_code(self.brain.ctrl.lidar.get(x, y));
+            }
+        }
+        for &c in seen {
+            let i = c & !super::SEEN_OCCUPIED;
+            if i >= side * side {
+                continue;
+            }
+            self.brain.ctrl.merge_seen((i % side) as i32, (i / side) as i32, c & super::SEEN_OCCUPIED != 0);
+            if let Some(w) = self.reported.get_mut(i as usize / 64) {
+                *w |= 1 << (i % 64);
+            }
+        }
+    }
+
+    /// Leaves the goals of the robots before it in the team (`goals[0 .. id]`) to them.
+    pub fn give_way(&mut self, goals: &[Option<[f64; 2]>]) {
+        let claims: Vec<(firmware::Meters, firmware::Meters)> = goals
+            .iter()
+            .take(self.id as usize)
+            .flatten()
+            .filter_map(|g| Some((fixed_point::meters_from_f64(g[0])?, fixed_point::meters_from_f64(g[1])?)))
+            .collect();
+        self.brain.ctrl.set_team_claims(&claims);
     }
 
     /// Its announcement.
@@ -98,7 +141,10 @@ impl TeamRobot {
             self.source.act(&Answer { acts: vec![crate::run::Act::Stop], ..Answer::default() });
         }
         let seen = self.newly_seen();
-        self.status(Some(tick), seen)
+        let lidar = self.lidar_changes();
+        let mut s = self.status(Some(tick), seen);
+        s.lidar = lidar;
+        s
     }
 
     fn after_think(&mut self, answer: &Answer) {
@@ -125,10 +171,33 @@ impl TeamRobot {
                 let i = (y * side + x) as usize;
                 if ctrl.visual.seen(x, y) && self.reported[i / 64] >> (i % 64) & 1 == 0 {
                     self.reported[i / 64] |= 1 << (i % 64);
-                    out.push(i as u32);
+                    let surface = ctrl.visual.get(x, y) == firmware::grid::Cell::Occupied;
+                    out.push(i as u32 | if surface { super::SEEN_OCCUPIED } else { 0 });
                 }
             }
         }
+        out.sort_unstable();
+        out
+    }
+
+    /// Without a known map: the LiDAR grid's cells that differ from what the team knows from
+    /// this robot (a cell that became unknown again is not reported).
+    fn lidar_changes(&mut self) -> Vec<u32> {
+        let Some(known) = self.lidar_known.as_mut() else { return Vec::new() };
+        let side = firmware::capacity::GRID_CELLS as i32;
+        let lidar = &self.brain.ctrl.lidar;
+        let mut out = Vec::new();
+        for y in 0..side {
+            for x in 0..side {
+                let i = (y * side + x) as usize;
+                let c = cell_code(lidar.get(x, y));
+                if c != 0 && c != known[i] {
+                    known[i] = c;
+                    out.push(i as u32 | if c == 2 { super::SEEN_OCCUPIED } else { 0 });
+                }
+            }
+        }
+        out.sort_unstable();
         out
     }
 
@@ -146,7 +215,9 @@ impl TeamRobot {
             epoch: self.epoch,
             goal_epoch: self.goal_epoch,
             done: (0..self.route_len.min(route.waypoints().len())).filter(|&i| route.is_done(i)).map(|i| i as u16).collect(),
+            goal: self.brain.outputs().and_then(|o| o.goal.as_ref()).map(|g| [g.pose.x.to_num::<f64>(), g.pose.y.to_num::<f64>()]),
             seen,
+            lidar: Vec::new(),
             path_m: crate::run::round3(self.source.sim.path_length_m()),
         }
     }
@@ -154,5 +225,13 @@ impl TeamRobot {
     /// The controller (read only).
     pub fn controller(&self) -> &Controller {
         &self.brain.ctrl
+    }
+}
+
+fn cell_code(c: firmware::grid::Cell) -> u8 {
+    match c {
+        firmware::grid::Cell::Unknown => 0,
+        firmware::grid::Cell::Free => 1,
+        firmware::grid::Cell::Occupied => 2,
     }
 }

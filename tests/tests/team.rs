@@ -1,0 +1,120 @@
+//! Teams (issue 32, item 5; docs/team.md): a team of one is the single-robot search; a robot
+//! whose link is cut has its waypoints re-assigned and the team still finds the target, with
+//! no goal from a stale assignment; the same team in one process and as separate processes
+//! over DDS on loopback gives the same search; bad input is named.
+
+use host::search::{self, PlannerChoice, SearchSpec};
+use host::sim::{Scenario, World};
+use host::team::{self, TeamSpec};
+use serde_json::Value;
+use std::process::Command;
+use std::time::Duration;
+
+mod common;
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("lives-team-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn q(p: &std::path::Path) -> String {
+    format!("'{}'", p.display())
+}
+
+fn spec(world: &str, scenario: Scenario, planner: PlannerChoice, seed: u64, map: bool) -> SearchSpec {
+    let w = World::builtin(world, scenario).expect("built-in");
+    let mut specs = vec![SearchSpec::new(world, w, scenario, planner, seed)];
+    if map {
+        host::measure::eval::give_true_maps(&mut specs).expect("the true map");
+    }
+    specs.remove(0)
+}
+
+#[test]
+fn a_team_of_one_is_the_single_robot_search_tick_for_tick() {
+    for (planner, map) in [(PlannerChoice::Live, true), (PlannerChoice::Multisensor, false)] {
+        let s = spec("hallway", Scenario::Easy, planner, 1, map);
+        let single = search::run(&s, |_| {}).result;
+        let t = team::local::run(&TeamSpec { base: s, robots: 1, kill: None }).expect("a team of one");
+        assert_eq!((t.found, t.time_s), (single.found, single.time_s), "{planner}: {t:?}");
+        assert_eq!(t.per_robot[0].path_m, single.path_m, "{planner}");
+        assert_eq!(t.ticks, single.ticks, "{planner}");
+        assert_eq!((t.stale_goals, t.reassignments), (0, 0));
+    }
+}
+
+#[test]
+fn starts_are_spaced_clear_and_deterministic() {
+    let s = spec("office", Scenario::Hard, PlannerChoice::Live, 3, false);
+    let a = team::starts(&s, 3).expect("room for three");
+    assert_eq!(a, team::starts(&s, 3).unwrap());
+    assert_eq!(a[0], host::sim::Sim::new(s.world.clone(), s.sim.clone(), s.seed).pose(), "robot 0 starts as the single robot does");
+    for i in 0..3 {
+        assert!(s.world.disc_is_clear([a[i][0], a[i][1]], s.sim.robot_radius_m), "start {i} {:?}", a[i]);
+        for j in 0..i {
+            assert!((a[i][0] - a[j][0]).hypot(a[i][1] - a[j][1]) >= team::START_SPACING_M - 1e-9, "{i} {j}");
+        }
+    }
+    assert!(team::starts(&s, 200).unwrap_err().contains("room for"));
+}
+
+#[test]
+fn a_robot_whose_link_is_cut_has_its_waypoints_reassigned_and_the_team_still_finds_the_target() {
+    let s = spec("hallway", Scenario::Hard, PlannerChoice::Live, 2, true);
+    let whole = team::local::run(&TeamSpec { base: s.clone(), robots: 2, kill: None }).unwrap();
+    let cut = team::local::run(&TeamSpec { base: s, robots: 2, kill: Some((1, 10.0)) }).unwrap();
+    assert!(cut.found, "{cut:?}");
+    assert_eq!(cut.found_by, Some(0));
+    assert_eq!(cut.per_robot[1].lost_s, Some(10.0));
+    // The survivor was given the route's rest once: one re-assignment, and every goal after it
+    // came from it.
+    assert_eq!(cut.reassignments, 1, "{cut:?}");
+    assert_eq!(cut.stale_goals, 0);
+    assert!(cut.per_robot[0].waypoints_assigned > whole.per_robot[0].waypoints_assigned, "{cut:?} vs {whole:?}");
+    assert_eq!(whole.reassignments, 0);
+}
+
+/// `lives team ARGS --json` inside a loopback-only network (tests/ros2/netns.sh).
+fn lives_team(args: &str) -> (Option<Value>, String, i32) {
+    let _guard = common::hang_guard("lives team", Duration::from_secs(600));
+    let dir = scratch(&format!("{:x}", args.len() * 7919 + args.bytes().map(|b| b as usize).sum::<usize>()));
+    let (o, e) = (dir.join("out"), dir.join("err"));
+    let script = format!("{} team {args} >{} 2>{}", q(common::lives()), q(&o), q(&e));
+    let st = Command::new(common::root().join("tests/ros2/netns.sh")).arg(&script).status().expect("netns.sh runs");
+    let out = std::fs::read_to_string(&o).unwrap_or_default();
+    (serde_json::from_str(&out).ok(), std::fs::read_to_string(&e).unwrap_or_default(), st.code().unwrap_or(-1))
+}
+
+#[test]
+fn the_team_over_dds_as_separate_processes_is_the_team_in_one_process() {
+    let args = "--world hallway --scenario hard --seed 2 --planner live --known-map --robots 3 --kill 1@10 --link-timeout 3";
+    let s = spec("hallway", Scenario::Hard, PlannerChoice::Live, 2, true);
+    let local = team::local::run(&TeamSpec { base: s, robots: 3, kill: Some((1, 10.0)) }).unwrap();
+    let (v, err, rc) = lives_team(&format!("{args} --processes --domain 21 --json"));
+    let v = v.unwrap_or_else(|| panic!("no JSON from lives team --processes (exit {rc}): {err}"));
+    assert_eq!(v["transport"], "dds");
+    assert_eq!(v["found"], local.found, "{v}");
+    assert_eq!(v["time_s"].as_f64(), Some(local.time_s), "{v}");
+    assert_eq!(v["found_by"].as_u64(), local.found_by.map(|r| r as u64));
+    assert_eq!(v["ticks"].as_u64(), Some(local.ticks as u64));
+    assert_eq!(v["stale_goals"], 0);
+    assert_eq!(v["per_robot"][1]["lost_s"].as_f64(), Some(10.0), "{v}");
+    for i in 0..3 {
+        assert_eq!(v["per_robot"][i]["path_m"].as_f64(), Some(local.per_robot[i].path_m), "robot {i}");
+        // Bandwidth is measured on the wire: every robot sent and received something.
+        assert!(v["per_robot"][i]["bytes_up"].as_u64().unwrap() > 0 && v["per_robot"][i]["bytes_down"].as_u64().unwrap() > 0);
+    }
+}
+
+#[test]
+fn bad_team_input_is_named() {
+    let (_, err, rc) = lives_team("--world hallway --robots 9");
+    assert!(rc != 0 && err.contains("--robots 9"), "{rc} {err}");
+    let (_, err, rc) = lives_team("--world hallway --robots 2 --kill 2@5");
+    assert!(rc != 0 && err.contains("--kill 2@5"), "{rc} {err}");
+    let (_, err, rc) = lives_team("--world hallway --robots 2 --kill x");
+    assert!(rc != 0 && err.contains("ROBOT@SECONDS"), "{rc} {err}");
+    let (_, err, rc) = lives_team("--world hallway --planner live --robots 2");
+    assert!(rc != 0 && err.contains("known building"), "{rc} {err}");
+}
