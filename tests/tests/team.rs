@@ -118,3 +118,23 @@ fn bad_team_input_is_named() {
     let (_, err, rc) = lives_team("--world hallway --planner live --robots 2");
     assert!(rc != 0 && err.contains("known building"), "{rc} {err}");
 }
+
+#[test]
+fn a_second_process_announcing_a_robot_is_refused_by_name() {
+    let _guard = common::hang_guard("lives team with a duplicate robot", Duration::from_secs(600));
+    let dir = scratch("duplicate");
+    let (o, e) = (dir.join("out"), dir.join("err"));
+    let args = "--world hallway --scenario hard --seed 2 --planner live --known-map --robots 2";
+    // The team, and a rogue process that announces itself as robot 1 too.
+    let script = format!(
+        "{bin} team {args} --as-robot 1 --domain 22 >/dev/null 2>&1 & rogue=$!; \
+         {bin} team {args} --processes --domain 22 >{o} 2>{e}; rc=$?; kill $rogue 2>/dev/null; wait $rogue; exit $rc",
+        bin = q(common::lives()),
+        o = q(&o),
+        e = q(&e)
+    );
+    let st = Command::new(common::root().join("tests/ros2/netns.sh")).arg(&script).status().expect("netns.sh runs");
+    let err = std::fs::read_to_string(&e).unwrap_or_default();
+    assert_eq!(st.code(), Some(2), "{err}");
+    assert!(err.contains("robot 1 is announced twice"), "{err}");
+}
