@@ -65,6 +65,68 @@ pub const HIT_SCORE: u32 = 4;
 /// A point's score next to an occupied cell (4-neighbourhood).
 pub const NEAR_SCORE: u32 = 2;
 
+/// Development knobs (temporary): set by the host from `LIVES_MATCH_TUNE`.
+pub mod tune {
+    use core::sync::atomic::{AtomicI32, Ordering};
+    /// −1: the matcher's own tuning; 0: hill-climbing refinement; 1: B-spline field and Gauss–Newton.
+    pub static MODE: AtomicI32 = AtomicI32::new(-1);
+    /// Translation prior weight, Q16 per cell² per point (field mode).
+    pub static PRIOR_T: AtomicI32 = AtomicI32::new(1 << 12);
+    /// Rotation prior weight, Q16 per (1/64 rad)² per point (field mode).
+    pub static PRIOR_R: AtomicI32 = AtomicI32::new(0);
+    /// The coarse search's prior weights, percent of `Motion::weights`.
+    pub static COARSE_PRIOR_PCT: AtomicI32 = AtomicI32::new(3);
+    /// Least evidence a cell needs to count in the field.
+    pub static MIN_LEVEL: AtomicI32 = AtomicI32::new(1);
+    /// 1: cells count LEVEL_MAX when at or above MIN_LEVEL (binary).
+    pub static BINARY: AtomicI32 = AtomicI32::new(0);
+    /// Points of the field refinement (0: the coarse search's).
+    pub static FIELD_POINTS: AtomicI32 = AtomicI32::new(0);
+    /// Reads a knob.
+    pub fn get(a: &AtomicI32) -> i32 {
+        a.load(Ordering::Relaxed)
+    }
+
+    /// The knobs as a tuning, if set.
+    pub fn tuning() -> Option<super::MatchTuning> {
+        (get(&MODE) >= 0).then(|| super::MatchTuning {
+            field: get(&MODE) == 1,
+            prior_t: get(&PRIOR_T),
+            prior_r: get(&PRIOR_R),
+            coarse_prior_pct: get(&COARSE_PRIOR_PCT),
+            min_level: get(&MIN_LEVEL),
+            binary: get(&BINARY) != 0,
+            field_points: get(&FIELD_POINTS) as u16,
+        })
+    }
+}
+
+/// How the matcher refines and weighs its candidates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MatchTuning {
+    /// Refine on the smooth field by Gauss–Newton (else hill-climbing on interpolated levels).
+    pub field: bool,
+    /// The field refinement's translation prior, Q16 per cell² per point.
+    pub prior_t: i32,
+    /// The field refinement's rotation prior, Q16 per (1/[`FIELD_RHO_CELLS`] rad)² per point.
+    pub prior_r: i32,
+    /// The coarse search's prior, percent of `Motion::weights` (field mode only).
+    pub coarse_prior_pct: i32,
+    /// Least evidence a cell needs to count in the field.
+    pub min_level: i32,
+    /// Cells at or above `min_level` count [`LEVEL_MAX`] (else their evidence).
+    pub binary: bool,
+    /// Points the field refinement places (0: the coarse search's [`MATCH_MAX_POINTS`]).
+    pub field_points: u16,
+}
+
+impl MatchTuning {
+    /// The hill-climbing matcher (the simulator's default).
+    pub const HILL_CLIMB: MatchTuning = MatchTuning { field: false, prior_t: 0, prior_r: 0, coarse_prior_pct: 100, min_level: 1, binary: false, field_points: 0 };
+    /// The field matcher.
+    pub const FIELD: MatchTuning = MatchTuning { field: true, prior_t: 4096, prior_r: 0, coarse_prior_pct: 3, min_level: 1, binary: false, field_points: 0 };
+}
+
 const COARSE_TRANSLATIONS: u32 = ((2 * MATCH_WINDOW_CELLS + 1) * (2 * MATCH_WINDOW_CELLS + 1)) as u32;
 const COARSE_HEADINGS: u32 = (2 * MATCH_ANGLE_STEPS + 1) as u32;
 const FINE_CANDIDATES: u32 = 26;
@@ -155,6 +217,8 @@ pub struct ScanMatcher {
     points: [(Meters, Meters); MATCH_MAX_POINTS],
     cells: [(i32, i32); MATCH_MAX_POINTS],
     n: usize,
+    /// How it refines and weighs candidates.
+    pub tuning: MatchTuning,
     /// Counters.
     pub stats: MatchStats,
 }
@@ -229,6 +293,99 @@ fn value(score: u32, n: usize, hx: i32, hy: i32, q: i32, w: (i64, i64)) -> i64 {
     8192 * score as i64 - n as i64 * (w.0 * (hx * hx + hy * hy) as i64 + w.1 * (q * q) as i64)
 }
 
+/// The field refinement's rotation unit: 1/`FIELD_RHO_CELLS` rad (a point this many cells away
+/// moves a cell per unit), so that the normal matrix's rotation entries are of the translation
+/// entries' size.
+pub const FIELD_RHO_CELLS: i64 = 64;
+/// Most field evaluations of the Gauss–Newton refinement (each places every point once and
+/// reads 16 cells per point).
+pub const FIELD_MAX_EVALS: u32 = 10;
+/// A field evaluation's work in point placements (16 cell reads against 5).
+const FIELD_WORK_PER_POINT: u32 = 4;
+
+/// The uniform cubic B-spline's weights and derivatives (Q16) for the 4 cells `i0 − 1 ..= i0 + 2`
+/// around a point at fraction `t` (Q16) past cell centre `i0`.
+#[inline]
+fn bspline(t: i64) -> ([i64; 4], [i64; 4]) {
+    let one = 1i64 << 16;
+    let t2 = (t * t) >> 16;
+    let t3 = (t2 * t) >> 16;
+    let s = one - t;
+    let s2 = (s * s) >> 16;
+    let s3 = (s2 * s) >> 16;
+    (
+        [s3 / 6, (3 * t3 - 6 * t2 + 4 * one) / 6, (-3 * t3 + 3 * t2 + 3 * t + one) / 6, t3 / 6],
+        [-s2 / 2, (3 * t2 - 4 * t) / 2, (-3 * t2 + 2 * t + one) / 2, t2 / 2],
+    )
+}
+
+/// Is range `r` a return within `max_range`?
+#[inline]
+fn usable(r: u16, max_range: Meters) -> bool {
+    r != RANGE_INVALID && r != RANGE_NO_RETURN && mm_to_meters(r) < max_range
+}
+
+/// How many returns `scan` has within `max_range`.
+fn usable_returns(scan: &BeamScan, max_range: Meters) -> usize {
+    scan.ranges_mm.iter().filter(|&&r| usable(r, max_range)).count()
+}
+
+/// The sensor-frame point of return `r` of beam `b`, where the grid marks its hit
+/// (`grid::HIT_DEPTH_MM` behind the surface).
+#[inline]
+fn return_point(b: usize, r: u16) -> (Meters, Meters) {
+    let a = beam_angle(b);
+    let len = mm_to_meters(r).saturating_add(Meters::from_bits(((crate::grid::HIT_DEPTH_MM << 16) / 1000) as i32));
+    (mul_unit(len, cos(a)), mul_unit(len, sin(a)))
+}
+
+/// `min(total, cap)` of the `total` returns of `scan`, spread evenly (Bresenham), as sensor-frame
+/// points.
+fn returns(scan: &BeamScan, max_range: Meters, total: usize, cap: usize) -> impl Iterator<Item = (Meters, Meters)> + '_ {
+    let mut acc = 0usize;
+    let mut taken = 0usize;
+    (0..BEAMS).filter_map(move |b| {
+        let r = scan.ranges_mm[b];
+        if !usable(r, max_range) {
+            return None;
+        }
+        acc += cap;
+        if acc >= total && taken < cap {
+            acc -= total;
+            taken += 1;
+            Some(return_point(b, r))
+        } else {
+            None
+        }
+    })
+}
+
+/// Solves the 3 × 3 system `h·δ = g` (Cramer's rule in `i128`, after scaling both down to 28
+/// bits): `δ` in Q16, or `None` if `h` is singular.
+fn solve3(h: &[[i64; 3]; 3], g: &[i64; 3]) -> Option<[i64; 3]> {
+    let big = h.iter().flatten().chain(g.iter()).map(|v| v.unsigned_abs()).max().unwrap_or(0);
+    let shift = (64 - big.leading_zeros()).saturating_sub(28);
+    let m: [[i128; 3]; 3] = core::array::from_fn(|a| core::array::from_fn(|b| (h[a][b] >> shift) as i128));
+    let r: [i128; 3] = core::array::from_fn(|a| (g[a] >> shift) as i128);
+    let det3 = |m: &[[i128; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det3(&m);
+    if d <= 0 {
+        return None;
+    }
+    let mut out = [0i64; 3];
+    for k in 0..3 {
+        let mut mk = m;
+        for a in 0..3 {
+            mk[a][k] = r[a];
+        }
+        out[k] = ((det3(&mk) << 16) / d).clamp(i64::MIN as i128, i64::MAX as i128) as i64;
+    }
+    Some(out)
+}
+
 impl ScanMatcher {
     /// An empty matcher.
     pub const fn new() -> Self {
@@ -236,6 +393,7 @@ impl ScanMatcher {
             points: [(Meters::ZERO, Meters::ZERO); MATCH_MAX_POINTS],
             cells: [(0, 0); MATCH_MAX_POINTS],
             n: 0,
+            tuning: MatchTuning::HILL_CLIMB,
             stats: MatchStats {
                 matched: 0,
                 too_few_points: 0,
@@ -316,6 +474,156 @@ impl ScanMatcher {
         s
     }
 
+    /// Gauss–Newton on the smooth field from `start`, with a Gaussian prior towards `predicted`
+    /// (weights [`tune::PRIOR_T`], [`tune::PRIOR_R`] per point): at most [`FIELD_MAX_EVALS`]
+    /// evaluations; a step that does not lower the cost is halved. Returns the pose and the work.
+    fn refine_on_field(
+        &self,
+        map: &impl Occupancy,
+        geom: &GridGeometry,
+        predicted: &Pose2,
+        start: (Meters, Meters, BinaryAngle),
+        tuning: &MatchTuning,
+        scan: &BeamScan,
+        max_range: Meters,
+    ) -> ((Meters, Meters, BinaryAngle), u32) {
+        let cap = if tuning.field_points > 0 { tuning.field_points as usize } else { MATCH_MAX_POINTS };
+        let total = usable_returns(scan, max_range);
+        let n_field = total.min(cap);
+        let pts = || returns(scan, max_range, total, cap);
+        let n = n_field as i64;
+        let (wt, wr) = (tuning.prior_t.max(0) as i64, tuning.prior_r.max(0) as i64);
+        // Offsets from the prediction: Q16 cells and Q16 ρ.
+        let offsets = |p: &(Meters, Meters, BinaryAngle)| -> [i64; 3] {
+            [
+                (p.0.to_bits() as i64 - predicted.x.to_bits() as i64) * crate::capacity::CELLS_PER_METER,
+                (p.1.to_bits() as i64 - predicted.y.to_bits() as i64) * crate::capacity::CELLS_PER_METER,
+                // Binary angle (2³² a turn) to Q16 radians times FIELD_RHO_CELLS.
+                ((p.2 - predicted.theta).0 as i64 * FIELD_RHO_CELLS * 411_775) >> 32,
+            ]
+        };
+        let eval = |p: &(Meters, Meters, BinaryAngle)| {
+            let (mut cost, mut h, mut g) = if tuning.field_points > 0 {
+                self.field_at(map, geom, p.0, p.1, p.2, tuning, pts())
+            } else {
+                self.field_at(map, geom, p.0, p.1, p.2, tuning, self.points[..self.n].iter().copied())
+            };
+            let e = offsets(p);
+            let wts = [wt, wt, wr];
+            for a in 0..3 {
+                // cost + n·w·e² (Q32), H + n·w, g − n·w·e.
+                cost += (n * wts[a] * ((e[a] * e[a]) >> 16)) >> 0;
+                h[a][a] += (n * wts[a]) << 16;
+                g[a] -= n * wts[a] * e[a];
+            }
+            (cost, h, g)
+        };
+        let mut work = 0u32;
+        let step_of = |h: &[[i64; 3]; 3], g: &[i64; 3]| -> [i64; 3] {
+            let d = solve3(h, g).unwrap_or([0; 3]);
+            // At most a cell and half a ρ unit (≈ 0.45°) per step.
+            [d[0].clamp(-65_536, 65_536), d[1].clamp(-65_536, 65_536), d[2].clamp(-32_768, 32_768)]
+        };
+        let mut at = start;
+        let (mut cost, h, g) = eval(&at);
+        work += n_field as u32 * FIELD_WORK_PER_POINT;
+        let mut delta = step_of(&h, &g);
+        let mut halvings = 0u32;
+        for _ in 1..FIELD_MAX_EVALS {
+            let d = delta.map(|v| v >> halvings);
+            // Below 1/256 cell and 1/256 ρ unit: converged.
+            if d.iter().all(|v| v.abs() < 256) {
+                break;
+            }
+            let cand = (
+                at.0.saturating_add(Meters::from_bits((d[0] / crate::capacity::CELLS_PER_METER) as i32)),
+                at.1.saturating_add(Meters::from_bits((d[1] / crate::capacity::CELLS_PER_METER) as i32)),
+                // Q16 ρ to binary angle: × 2³² / (2π · 2¹⁶ · FIELD_RHO_CELLS).
+                at.2 + BinaryAngle(((d[2] * 683_565_276) >> 16) as i32 / FIELD_RHO_CELLS as i32),
+            );
+            let (c, h, g) = eval(&cand);
+            work += n_field as u32 * FIELD_WORK_PER_POINT;
+            if c < cost {
+                (at, cost, halvings) = (cand, c, 0);
+                delta = step_of(&h, &g);
+            } else {
+                halvings += 1;
+            }
+        }
+        (at, work)
+    }
+
+    /// The points placed at `(x, y, theta)` on the smooth field (the map's levels convolved with
+    /// a cubic B-spline, 4 × 4 cells around each point): the cost `Σ (1 − f)²` (Q32), the normal
+    /// matrix `H = Σ J Jᵀ` and `g = Σ J (1 − f)` (Q32) of the Gauss–Newton step in
+    /// `(x, y)` cells and `ρ` = 1/[`FIELD_RHO_CELLS`] rad.
+    fn field_at(
+        &self,
+        map: &impl Occupancy,
+        geom: &GridGeometry,
+        x: Meters,
+        y: Meters,
+        theta: BinaryAngle,
+        tuning: &MatchTuning,
+        points: impl Iterator<Item = (Meters, Meters)>,
+    ) -> (i64, [[i64; 3]; 3], [i64; 3]) {
+        let (sn, cs) = (sin(theta), cos(theta));
+        let min_level = tuning.min_level.max(1) as u32;
+        let binary = tuning.binary;
+        let mut cost = 0i64;
+        let mut h = [[0i64; 3]; 3];
+        let mut g = [0i64; 3];
+        for (px, py) in points {
+            let (wx, wy) = place_point(x, y, sn, cs, px, py);
+            // Cell coordinates in Q16 with cell centres on whole numbers.
+            let u = (wx.to_bits() as i64 - geom.origin_x.to_bits() as i64) * crate::capacity::CELLS_PER_METER - (1 << 15);
+            let v = (wy.to_bits() as i64 - geom.origin_y.to_bits() as i64) * crate::capacity::CELLS_PER_METER - (1 << 15);
+            let (x0, y0) = (u.div_euclid(1 << 16), v.div_euclid(1 << 16));
+            let (Ok(x0), Ok(y0)) = (i32::try_from(x0), i32::try_from(y0)) else { continue };
+            let (wxs, dxs) = bspline(u.rem_euclid(1 << 16));
+            let (wys, dys) = bspline(v.rem_euclid(1 << 16));
+            let (mut f, mut fu, mut fv) = (0i64, 0i64, 0i64);
+            for j in 0..4 {
+                let (mut a, mut b) = (0i64, 0i64);
+                for i in 0..4 {
+                    let l = map.level(x0.saturating_add(i as i32 - 1), y0.saturating_add(j as i32 - 1));
+                    let l = if l < min_level {
+                        0
+                    } else if binary {
+                        LEVEL_MAX as i64
+                    } else {
+                        l as i64
+                    };
+                    a += wxs[i] * l;
+                    b += dxs[i] * l;
+                }
+                f += wys[j] * a;
+                fu += wys[j] * b;
+                fv += dys[j] * a;
+            }
+            // Q16, 1 = every cell of the support at LEVEL_MAX.
+            let scale = LEVEL_MAX as i64 * 65_536;
+            let (f, fu, fv) = (f / scale, fu / scale, fv / scale);
+            let r = (65_536 - f).max(0);
+            // The point's offset from the pose, Q16 cells.
+            let rx = (wx.to_bits() as i64 - x.to_bits() as i64) * crate::capacity::CELLS_PER_METER;
+            let ry = (wy.to_bits() as i64 - y.to_bits() as i64) * crate::capacity::CELLS_PER_METER;
+            let fr = ((fv * rx - fu * ry) >> 16) / FIELD_RHO_CELLS;
+            let jac = [fu, fv, fr];
+            cost += r * r;
+            for a in 0..3 {
+                g[a] += jac[a] * r;
+                for b in a..3 {
+                    h[a][b] += jac[a] * jac[b];
+                }
+            }
+        }
+        h[1][0] = h[0][1];
+        h[2][0] = h[0][2];
+        h[2][1] = h[1][2];
+        (cost, h, g)
+    }
+
     /// Matches `scan`, taken at `predicted` (the odometry's pose, corrected by the matches so
     /// far), against `map`. Returns the corrected pose, or why the odometry's stands.
     pub fn match_scan(
@@ -328,6 +636,14 @@ impl ScanMatcher {
         motion: Motion,
     ) -> Result<Match, MatchRefusal> {
         let w = motion.weights();
+        let tuning = tune::tuning().unwrap_or(self.tuning);
+        let field_mode = tuning.field;
+        let w = if field_mode {
+            let pct = tuning.coarse_prior_pct.max(0) as i64;
+            ((w.0 * pct / 100).max(1), (w.1 * pct / 100).max(1))
+        } else {
+            w
+        };
         let n = self.take_points(scan, max_range);
         self.stats.last_work = 0;
         if n < MATCH_MIN_POINTS {
@@ -367,6 +683,16 @@ impl ScanMatcher {
             }
         }
         let (_, coarse_score, k, dx, dy) = best.expect("at least one candidate");
+        if field_mode {
+            let start = (
+                predicted.x.saturating_add(Meters::from_bits(MATCH_HALF_CELL.to_bits().wrapping_mul(2 * dx))),
+                predicted.y.saturating_add(Meters::from_bits(MATCH_HALF_CELL.to_bits().wrapping_mul(2 * dy))),
+                predicted.theta + BinaryAngle(MATCH_ANGLE_STEP.0.wrapping_mul(k)),
+            );
+            let (at, w_field) = self.refine_on_field(map, geom, predicted, start, &tuning, scan, max_range);
+            work += w_field;
+            return self.finish(predicted, at, coarse_score, predicted_score, n, work);
+        }
         // Fine: half cells and eighth degrees around the coarse best.
         let (hx0, hy0, q0) = (2 * dx, 2 * dy, 4 * k);
         let mut fine = (value(coarse_score, n, hx0, hy0, q0, w), coarse_score, hx0, hy0, q0);
@@ -434,6 +760,19 @@ impl ScanMatcher {
                 (step_t, step_q) = (step_t / 2, step_q / 2);
             }
         }
+        self.finish(predicted, at, score, predicted_score, n, work)
+    }
+
+    /// Accepts or refuses the match at `at` whose (coarse or fine) score is `score`.
+    fn finish(
+        &mut self,
+        predicted: &Pose2,
+        at: (Meters, Meters, BinaryAngle),
+        score: u32,
+        predicted_score: u32,
+        n: usize,
+        work: u32,
+    ) -> Result<Match, MatchRefusal> {
         self.stats.last_work = work;
         let per_mille = (score as u64 * 1000 / (HIT_SCORE as u64 * n as u64)) as u16;
         self.stats.last_score_per_mille = per_mille;

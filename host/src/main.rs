@@ -79,6 +79,14 @@ fn main() -> ExitCode {
     if std::env::var_os("RUST_MIN_STACK").is_none() {
         std::env::set_var("RUST_MIN_STACK", (32usize << 20).to_string());
     }
+    if let Ok(t) = std::env::var("LIVES_MATCH_TUNE") {
+        use firmware::matcher::tune::*;
+        for (a, v) in [&MODE, &PRIOR_T, &PRIOR_R, &COARSE_PRIOR_PCT, &MIN_LEVEL, &BINARY, &FIELD_POINTS].iter().zip(t.split(',')) {
+            if !v.is_empty() {
+                a.store(v.parse().expect("LIVES_MATCH_TUNE"), std::sync::atomic::Ordering::Relaxed);
+            }
+        }
+    }
     let matches = negatives_as_values(Cli::command()).get_matches();
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     match run(cli) {
