@@ -105,7 +105,9 @@ fn walk(tuning: MatchTuning, off: [f64; 3]) -> (Vec<f64>, Vec<f64>) {
                 let gy = got.pose.y.to_num::<f64>() - y;
                 let gr = (got.pose.theta - BinaryAngle::from_radians(th).unwrap()).0 as f64 / 4294967296.0 * 360.0;
                 et.push(gx.hypot(gy) * 1000.0);
-                if std::env::var("DBG").is_ok() && gx.hypot(gy) > 0.02 { eprintln!("i {i} err {:.0} {:.0} mm {:.3}°", gx * 1000.0, gy * 1000.0, gr); }
+                if std::env::var("DBG").is_ok() && gx.hypot(gy) > 0.02 {
+                    eprintln!("i {i} err {:.0} {:.0} mm {:.3}°", gx * 1000.0, gy * 1000.0, gr);
+                }
                 er.push(gr.abs());
             }
         }
@@ -130,7 +132,15 @@ fn the_field_matcher_is_more_precise_than_the_hill_climbing_one() {
             let f: Vec<i32> = t.split(',').map(|x| x.parse().unwrap()).collect();
             variants.push((
                 t.to_string(),
-                MatchTuning { field: true, prior_t: f[0], prior_r: f[1], coarse_prior_pct: f[2], min_level: f[3], binary: f[4] != 0, field_points: f[5] as u16 },
+                MatchTuning {
+                    field: true,
+                    prior_t: f[0],
+                    prior_r: f[1],
+                    coarse_prior_pct: f[2],
+                    min_level: f[3],
+                    binary: f[4] != 0,
+                    field_points: f[5] as u16,
+                },
             ));
         }
     }
