@@ -105,9 +105,6 @@ fn walk(tuning: MatchTuning, off: [f64; 3]) -> (Vec<f64>, Vec<f64>) {
                 let gy = got.pose.y.to_num::<f64>() - y;
                 let gr = (got.pose.theta - BinaryAngle::from_radians(th).unwrap()).0 as f64 / 4294967296.0 * 360.0;
                 et.push(gx.hypot(gy) * 1000.0);
-                if std::env::var("DBG").is_ok() && gx.hypot(gy) > 0.02 {
-                    eprintln!("i {i} err {:.0} {:.0} mm {:.3}°", gx * 1000.0, gy * 1000.0, gr);
-                }
                 er.push(gr.abs());
             }
         }
@@ -124,28 +121,10 @@ fn stats(v: &[f64]) -> (f64, f64, f64) {
 }
 
 #[test]
-fn the_field_matcher_is_more_precise_than_the_hill_climbing_one() {
+fn the_field_matcher_recovers_a_heading_error_the_hill_climbing_one_keeps() {
     let mut figures = Vec::new();
-    let mut variants = vec![("hill-climbing".to_string(), MatchTuning::HILL_CLIMB), ("field".to_string(), MatchTuning::FIELD)];
-    if let Ok(v) = std::env::var("SWEEP") {
-        for t in v.split(';') {
-            let f: Vec<i32> = t.split(',').map(|x| x.parse().unwrap()).collect();
-            variants.push((
-                t.to_string(),
-                MatchTuning {
-                    field: true,
-                    prior_t: f[0],
-                    prior_r: f[1],
-                    coarse_prior_pct: f[2],
-                    min_level: f[3],
-                    binary: f[4] != 0,
-                    field_points: f[5] as u16,
-                },
-            ));
-        }
-    }
-    for (name, tuning) in variants {
-        for off in [[0.0, 0.0, 0.0], [0.15, -0.1, 2f64.to_radians()]] {
+    for (name, tuning) in [("hill-climbing", MatchTuning::HILL_CLIMB), ("field", MatchTuning::FIELD)] {
+        for off in [[0.0, 0.0, 0.0], [0.05, -0.03, 2f64.to_radians()]] {
             let (et, er) = walk(tuning, off);
             let (t, r) = (stats(&et), stats(&er));
             eprintln!(
@@ -158,7 +137,18 @@ fn the_field_matcher_is_more_precise_than_the_hill_climbing_one() {
                 r.1,
                 r.2
             );
-            figures.push((et.len(), t, r));
+            assert_eq!(et.len(), 117, "every scan after the first 3 is matched");
+            figures.push((t, r));
         }
     }
+    let [(_, _), (_, hill_off_r), (field_t, field_r), (field_off_t, field_off_r)] = figures[..] else { unreachable!() };
+    // Measured: from the true pose the field matcher errs by 4.3 mm and 0.050° (median; 7.0 mm,
+    // 0.073° mean), the hill-climbing one by 6.2 mm and 0.031°.
+    assert!(field_t.1 < 6.0 && field_t.0 < 10.0 && field_r.1 < 0.08, "{field_t:?} {field_r:?}");
+    // From a prediction 2° and 58 mm off (a real odometry's heading error over a step, as on raw
+    // CSAIL): the field matcher recovers the heading to 0.085° (mean; 14 mm, its translation
+    // prior keeps a quarter of the offset); the hill-climbing matcher's motion prior keeps
+    // 1.2° of the 2°.
+    assert!(field_off_r.0 < 0.15 && field_off_t.1 < 20.0, "{field_off_t:?} {field_off_r:?}");
+    assert!(hill_off_r.0 > 1.0, "{hill_off_r:?}");
 }
