@@ -99,6 +99,8 @@ pub mod tune {
     pub static MIN_LEVEL: AtomicI32 = AtomicI32::new(1);
     /// 1: cells count LEVEL_MAX when at or above MIN_LEVEL (binary).
     pub static BINARY: AtomicI32 = AtomicI32::new(0);
+    /// The field fit's gate, thousandths of the prediction's cost.
+    pub static GATE: AtomicI32 = AtomicI32::new(0);
     /// Reads a knob.
     pub fn get(a: &AtomicI32) -> i32 {
         a.load(Ordering::Relaxed)
@@ -113,6 +115,7 @@ pub mod tune {
             coarse_prior_pct: get(&COARSE_PRIOR_PCT),
             min_level: get(&MIN_LEVEL),
             binary: get(&BINARY) != 0,
+            gate_per_mille: get(&GATE),
         })
     }
 }
@@ -132,14 +135,18 @@ pub struct MatchTuning {
     pub min_level: i32,
     /// Cells at or above `min_level` count [`LEVEL_MAX`] (else their evidence).
     pub binary: bool,
+    /// The field fit must lower the prediction's cost by this many thousandths, or the
+    /// prediction stands (0: no gate).
+    pub gate_per_mille: i32,
 }
 
 impl MatchTuning {
     /// The hill-climbing matcher (the simulator's default).
     pub const HILL_CLIMB: MatchTuning =
-        MatchTuning { field: false, prior_t: 0, prior_r: 0, coarse_prior_pct: 100, min_level: 1, binary: false };
+        MatchTuning { field: false, prior_t: 0, prior_r: 0, coarse_prior_pct: 100, min_level: 1, binary: false, gate_per_mille: 0 };
     /// The field matcher.
-    pub const FIELD: MatchTuning = MatchTuning { field: true, prior_t: 4096, prior_r: 0, coarse_prior_pct: 3, min_level: 1, binary: false };
+    pub const FIELD: MatchTuning =
+        MatchTuning { field: true, prior_t: 4096, prior_r: 0, coarse_prior_pct: 3, min_level: 1, binary: false, gate_per_mille: 0 };
 }
 
 const COARSE_TRANSLATIONS: u32 = ((2 * MATCH_WINDOW_CELLS + 1) * (2 * MATCH_WINDOW_CELLS + 1)) as u32;
@@ -520,6 +527,14 @@ impl ScanMatcher {
                 delta = step_of(&h, &g);
             } else {
                 halvings += 1;
+            }
+        }
+        if tuning.gate_per_mille > 0 {
+            // The prediction's cost (no prior there): keep it unless the fit is clearly better.
+            let (c0, _, _) = eval(&(predicted.x, predicted.y, predicted.theta));
+            work += self.n as u32 * FIELD_WORK_PER_POINT;
+            if c0 - cost < c0 / 1000 * tuning.gate_per_mille as i64 {
+                return ((predicted.x, predicted.y, predicted.theta), work);
             }
         }
         (at, work)

@@ -81,7 +81,7 @@ fn main() -> ExitCode {
     }
     if let Ok(t) = std::env::var("LIVES_MATCH_TUNE") {
         use firmware::matcher::tune::*;
-        for (a, v) in [&MODE, &PRIOR_T, &PRIOR_R, &COARSE_PRIOR_PCT, &MIN_LEVEL, &BINARY].iter().zip(t.split(',')) {
+        for (a, v) in [&MODE, &PRIOR_T, &PRIOR_R, &COARSE_PRIOR_PCT, &MIN_LEVEL, &BINARY, &GATE].iter().zip(t.split(',')) {
             if !v.is_empty() {
                 a.store(v.parse().expect("LIVES_MATCH_TUNE"), std::sync::atomic::Ordering::Relaxed);
             }
