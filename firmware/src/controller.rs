@@ -18,7 +18,7 @@ use crate::config::{Config, ConfigError};
 use crate::frontier::FrontierSet;
 use crate::grid::{GridGeometry, LidarGrid, VisualGrid};
 use crate::knownmap::KnownMap;
-use crate::matcher::{MatchTuning, ScanMatcher, MATCH_WARMUP_SCANS};
+use crate::matcher::{ScanMatcher, MATCH_WARMUP_SCANS};
 use crate::nonmap::NonMapStore;
 use crate::planner::{Goal, PlanInputs, Planner, Site};
 use crate::scan::{BeamScan, ScanError, ScanInput};
@@ -631,7 +631,7 @@ impl Controller {
             return *predicted;
         }
         self.last_scan_odom = Some(odom);
-        self.matcher.tuning = if self.cfg.scan_match_field { MatchTuning::FIELD } else { MatchTuning::HILL_CLIMB };
+        self.matcher.field = self.cfg.scan_match_field;
         match self.matcher.match_scan(&self.lidar, &geom, predicted, &self.beams, self.cfg.lidar_max_range_m, motion) {
             Ok(m) => {
                 let (cx, cy) = geom.cell_of(m.pose.x, m.pose.y);

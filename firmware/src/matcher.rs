@@ -246,8 +246,8 @@ pub struct ScanMatcher {
     points: [(Meters, Meters); MATCH_MAX_POINTS],
     cells: [(i32, i32); MATCH_MAX_POINTS],
     n: usize,
-    /// How it refines and weighs candidates.
-    pub tuning: MatchTuning,
+    /// Refine with the field matcher ([`MatchTuning::FIELD`]; else [`MatchTuning::HILL_CLIMB`]).
+    pub field: bool,
     /// Counters.
     pub stats: MatchStats,
 }
@@ -382,7 +382,7 @@ impl ScanMatcher {
             points: [(Meters::ZERO, Meters::ZERO); MATCH_MAX_POINTS],
             cells: [(0, 0); MATCH_MAX_POINTS],
             n: 0,
-            tuning: MatchTuning::HILL_CLIMB,
+            field: false,
             stats: MatchStats {
                 matched: 0,
                 too_few_points: 0,
@@ -622,7 +622,7 @@ impl ScanMatcher {
         motion: Motion,
     ) -> Result<Match, MatchRefusal> {
         let w = motion.weights();
-        let tuning = tune::tuning().unwrap_or(self.tuning);
+        let tuning = tune::tuning().unwrap_or(if self.field { MatchTuning::FIELD } else { MatchTuning::HILL_CLIMB });
         let field_mode = tuning.field;
         let w = if field_mode {
             let pct = tuning.coarse_prior_pct.max(0) as i64;
@@ -909,7 +909,7 @@ mod tests {
         let scan = cast(&r, &truth);
         let range = mm(10_000);
         let mut m = ScanMatcher::new();
-        m.tuning = MatchTuning::FIELD;
+        m.field = true;
         let motion = Motion { dist_mm: 300, turn_mdeg: 5_000 };
         for (ox, oy, odeg) in [(0, 0, 0), (60, 0, 20), (0, -60, -20), (40, 40, 30), (-70, 30, -15)] {
             let predicted = pose(13_030 + ox, 12_470 + oy, 200 + odeg);
@@ -963,7 +963,7 @@ mod tests {
         assert_eq!(m.n, MATCH_MAX_POINTS);
         assert_eq!(m.stats.last_work, MATCH_WORST_CASE_WORK);
         // The field matcher: at most the coarse search and FIELD_MAX_EVALS evaluations.
-        m.tuning = MatchTuning::FIELD;
+        m.field = true;
         let _ = m.match_scan(&r, &geom(), &pose(13_000, 12_500, 0), &full, mm(10_000), Motion::UNKNOWN);
         assert!(m.stats.last_work <= FIELD_WORST_CASE_WORK && m.stats.last_work > MATCH_MAX_POINTS as u32 * 25 * 49, "{:?}", m.stats);
     }

@@ -7,7 +7,7 @@
 
 use firmware::capacity::BEAMS;
 use firmware::grid::{beam_angle, GridGeometry};
-use firmware::matcher::{MatchTuning, Motion, ScanMatcher};
+use firmware::matcher::{Motion, ScanMatcher};
 use firmware::{BeamScan, BinaryAngle, LidarGrid, Meters, Pose2};
 
 type Seg = ([f64; 2], [f64; 2]);
@@ -77,14 +77,14 @@ fn scan_at(segs: &[Seg], p: [f64; 3], k: &mut u64) -> BeamScan {
     s
 }
 
-/// Errors (mm, degrees) of every match along the walk, for `tuning`, from the truth offset by
+/// Errors (mm, degrees) of every match along the walk, for the field matcher or the hill-climbing one, from the truth offset by
 /// `off` (m, m, rad).
-fn walk(tuning: MatchTuning, off: [f64; 3]) -> (Vec<f64>, Vec<f64>) {
+fn walk(field: bool, off: [f64; 3]) -> (Vec<f64>, Vec<f64>) {
     let segs = building();
     let geom = GridGeometry { origin_x: Meters::ZERO, origin_y: Meters::ZERO };
     let mut grid = Box::new(LidarGrid::new(geom));
     let mut m = ScanMatcher::new();
-    m.tuning = tuning;
+    m.field = field;
     let mut k = 7u64;
     let (mut et, mut er) = (Vec::new(), Vec::new());
     let range = Meters::from_num(12);
@@ -123,9 +123,9 @@ fn stats(v: &[f64]) -> (f64, f64, f64) {
 #[test]
 fn the_field_matcher_recovers_a_heading_error_the_hill_climbing_one_keeps() {
     let mut figures = Vec::new();
-    for (name, tuning) in [("hill-climbing", MatchTuning::HILL_CLIMB), ("field", MatchTuning::FIELD)] {
+    for (name, field) in [("hill-climbing", false), ("field", true)] {
         for off in [[0.0, 0.0, 0.0], [0.05, -0.03, 2f64.to_radians()]] {
-            let (et, er) = walk(tuning, off);
+            let (et, er) = walk(field, off);
             let (t, r) = (stats(&et), stats(&er));
             eprintln!(
                 "{name:>14} from {off:?}: {} matches; error mean {:.1} mm (median {:.1}, p95 {:.1}), {:.3}° (median {:.3}, p95 {:.3})",
