@@ -27,6 +27,12 @@ fn scan_matching_beats_raw_odometry_on_the_csail_relations() {
     let corrected = read_poses(&dir.join("mit-csail-corrected-poses.txt")).unwrap();
     let mut figures = Vec::new();
     let mut field_poses = Vec::new();
+    // The relations the SLAM-corrected poses meet (both ends among its 406 poses): the three side
+    // by side on the same relations.
+    let corrected_index = PoseIndex::new(&corrected);
+    let common: Vec<_> =
+        relations.iter().filter(|r| corrected_index.at(r.t1).is_some() && corrected_index.at(r.t2).is_some()).copied().collect();
+    let mut on_common = Vec::new();
     // Raw odometry, the hill-climbing matcher (the simulator's), the field matcher (real logs').
     for (matching, field) in [(false, true), (true, false), (true, true)] {
         let mut opts = ReplayOptions { model: None, scan_matching: Some(matching), ..ReplayOptions::default() };
@@ -44,12 +50,17 @@ fn scan_matching_beats_raw_odometry_on_the_csail_relations() {
             m.too_few_points
         );
         figures.push(e);
+        on_common.push(relation_errors(&PoseIndex::new(&run.poses), &common));
         if matching && field {
             field_poses = run.poses;
         }
     }
     // The SLAM-corrected poses (406 of them) meet only the relations with both ends among them.
     eprintln!("{}", show("SLAM-corrected poses", &relation_errors(&PoseIndex::new(&corrected), &relations)));
+    for (name, e) in ["raw odometry", "hill-climbing matcher", "field matcher"].iter().zip(&on_common) {
+        eprintln!("{}", show(&format!("{name} on the corrected poses' relations"), e));
+    }
+    assert_eq!(common.len(), 16);
     let (raw, matched, field) = (&figures[0], &figures[1], &figures[2]);
     assert!(raw.used > 1000, "{raw:?}");
     assert_eq!(matched.used, raw.used);
