@@ -81,7 +81,7 @@ pub const HIT_SCORE: u32 = 4;
 pub const NEAR_SCORE: u32 = 2;
 
 /// Overrides of the matcher's tuning for experiments: the host sets them from the environment
-/// variable `LIVES_MATCH_TUNE=mode,prior_t,prior_r,coarse_prior_pct,min_level,binary` (empty
+/// variable `LIVES_MATCH_TUNE=mode,prior_t,prior_r,coarse_prior_pct,min_level,binary,gate` (empty
 /// fields keep the defaults below) to measure a variant on real logs and in the simulator
 /// without rebuilding (docs/experiments/real-lidar-maps.md gives each variant's setting). Unset
 /// (`MODE` −1, as on the MCU, which never sets them) the configuration decides.
