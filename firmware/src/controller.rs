@@ -631,6 +631,7 @@ impl Controller {
             return *predicted;
         }
         self.last_scan_odom = Some(odom);
+        self.matcher.field = self.cfg.scan_match_field;
         match self.matcher.match_scan(&self.lidar, &geom, predicted, &self.beams, self.cfg.lidar_max_range_m, motion) {
             Ok(m) => {
                 let (cx, cy) = geom.cell_of(m.pose.x, m.pose.y);

@@ -57,8 +57,9 @@ pub enum LidarSource {
 }
 
 /// The controller's configuration for a real robot (the base adapter's, `lives ros2`'s): the
-/// default without scan matching (see [`RobotSpec::new`]).
-pub const REAL_ROBOT_CONFIG: Config = Config { scan_matching: false, ..Config::DEFAULT };
+/// default without scan matching (see [`RobotSpec::new`]); with `--set scan_matching=true`, the
+/// field matcher (`scan_match_field`, measured best on real logs: docs/replay.md "Scan matching").
+pub const REAL_ROBOT_CONFIG: Config = Config { scan_matching: false, scan_match_field: true, ..Config::DEFAULT };
 
 /// A robot run: where the adapter listens and how the controller is configured.
 #[derive(Clone, Debug)]

@@ -192,7 +192,7 @@ mod tests {
         }
         for (name, _) in settable() {
             let value = match name {
-                "nonmap_viewpoints" | "look_around_here" | "gaze" | "nonmap_drop_vacated" | "scan_matching" => "true",
+                "nonmap_viewpoints" | "look_around_here" | "gaze" | "nonmap_drop_vacated" | "scan_matching" | "scan_match_field" => "true",
                 "min_frontier_cells" | "nonmap_block_cap" | "nonmap_view_cap" | "unseen_unknown_eighths" => "5",
                 "camera_fov_deg" => "90",
                 _ => "1",

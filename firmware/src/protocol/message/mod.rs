@@ -41,7 +41,10 @@ pub use host_to_core::*;
 ///   a reading at or beyond `range_max` is "no return" and clears no farther than it);
 ///   `WireScanError::BadRangeLimits`. The configuration carries
 ///   `scan_matching` (after `budgets`).
-pub const PROTOCOL_VERSION: u16 = 7;
+/// * v7: LIVE's `MapRow` and `Route`, `live_priority_interval_us` in the configuration,
+///   `search_entropy_bits` in the status.
+/// * v8: the configuration carries `scan_match_field` (after `live_priority_interval_us`).
+pub const PROTOCOL_VERSION: u16 = 8;
 
 /// Most beams one scan carries, whole ([`ScanMsg`]) or in segments ([`ScanSegmentMsg`]): a 360°
 /// scan at 0.33° (1091 beams) fits. Larger scans are refused ([`WireError::TooManyBeams`]).

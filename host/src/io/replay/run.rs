@@ -52,7 +52,8 @@ pub fn options(model: Option<&Path>, no_classifier: bool, set: &[String], max_ra
 impl Default for ReplayOptions {
     fn default() -> Self {
         ReplayOptions {
-            config: Config::DEFAULT,
+            // Real logs: when matching is on, the field matcher (docs/replay.md "Scan matching").
+            config: Config { scan_match_field: true, ..Config::DEFAULT },
             model: Some(firmware::classifier::EMBEDDED_GEO_MODEL),
             record: None,
             max_range_m: None,

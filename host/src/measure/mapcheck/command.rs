@@ -155,12 +155,27 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
     if let Some(p) = &args.png {
         write_png(p, grid.n, &classes)?;
     }
-    let relations = relations.map(|(p, rels)| RelationsReport {
-        file: p.display().to_string(),
-        relations: rels.len(),
-        log_poses: relation_errors(&PoseIndex::new(&log_poses), &rels),
-        controller: relation_errors(&PoseIndex::new(&run.poses), &rels),
-        align_poses: align.as_ref().map(|(_, a)| relation_errors(&PoseIndex::new(a), &rels)),
+    let relations = relations.map(|(p, rels)| {
+        let (log_idx, run_idx) = (PoseIndex::new(&log_poses), PoseIndex::new(&run.poses));
+        let align_idx = align.as_ref().map(|(_, a)| PoseIndex::new(a));
+        let subset = |short: bool| {
+            let sub: Vec<Relation> = rels.iter().filter(|r| ((r.t2 - r.t1).abs() < SHORT_SPAN_S) == short).copied().collect();
+            RelationSubset {
+                relations: sub.len(),
+                log_poses: relation_errors(&log_idx, &sub),
+                controller: relation_errors(&run_idx, &sub),
+                align_poses: align_idx.as_ref().map(|a| relation_errors(a, &sub)),
+            }
+        };
+        RelationsReport {
+            file: p.display().to_string(),
+            relations: rels.len(),
+            log_poses: relation_errors(&log_idx, &rels),
+            controller: relation_errors(&run_idx, &rels),
+            align_poses: align_idx.as_ref().map(|a| relation_errors(a, &rels)),
+            short: subset(true),
+            long: subset(false),
+        }
     });
     let report = MapcheckReport {
         subject: file.display().to_string(),
@@ -328,6 +343,24 @@ pub fn table(r: &MapcheckReport) -> String {
         row("controller", &rel.controller);
         if let Some(a) = &rel.align_poses {
             row("--align poses", a);
+        }
+        for (what, sub) in [("shorter", &rel.short), ("longer", &rel.long)] {
+            let _ = writeln!(s, "  {} relations spanning {what} than {SHORT_SPAN_S} s:", sub.relations);
+            let mut row = |name: &str, st: &RelationStats| {
+                let _ = writeln!(
+                    s,
+                    "    {:<16} {:>5} used   {:>15} m   {:>15}°",
+                    name,
+                    st.used,
+                    pm(st.trans_mean_m, st.trans_std_m, 3),
+                    pm(st.rot_mean_deg, st.rot_std_deg, 2)
+                );
+            };
+            row("log poses", &sub.log_poses);
+            row("controller", &sub.controller);
+            if let Some(a) = &sub.align_poses {
+                row("--align poses", a);
+            }
         }
     }
     s

@@ -18,6 +18,24 @@ pub struct RelationsReport {
     pub controller: RelationStats,
     /// The `--align` poses (e.g. the SLAM-corrected CSAIL poses), when given.
     pub align_poses: Option<RelationStats>,
+    /// The same on the relations spanning less than [`SHORT_SPAN_S`] (consecutive stretches:
+    /// the odometry's and the matcher's local accuracy).
+    pub short: RelationSubset,
+    /// ... and on the others (a place revisited minutes later: the map's global consistency).
+    pub long: RelationSubset,
+}
+
+/// The relation errors on a subset of the relations (by time span).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RelationSubset {
+    /// Relations in the subset.
+    pub relations: usize,
+    /// As [`RelationsReport::log_poses`].
+    pub log_poses: RelationStats,
+    /// As [`RelationsReport::controller`].
+    pub controller: RelationStats,
+    /// As [`RelationsReport::align_poses`].
+    pub align_poses: Option<RelationStats>,
 }
 
 /// How the reference was placed in this run's frame (`--reference` with `--align`).
