@@ -80,46 +80,6 @@ pub const HIT_SCORE: u32 = 4;
 /// A point's score next to an occupied cell (4-neighbourhood).
 pub const NEAR_SCORE: u32 = 2;
 
-/// Overrides of the matcher's tuning for experiments: the host sets them from the environment
-/// variable `LIVES_MATCH_TUNE=mode,prior_t,prior_r,coarse_prior_pct,min_level,binary,gate` (empty
-/// fields keep the defaults below) to measure a variant on real logs and in the simulator
-/// without rebuilding (docs/experiments/real-lidar-maps.md gives each variant's setting). Unset
-/// (`MODE` −1, as on the MCU, which never sets them) the configuration decides.
-pub mod tune {
-    use core::sync::atomic::{AtomicI32, Ordering};
-    /// −1: the matcher's own tuning; 0: hill-climbing refinement; 1: B-spline field and Gauss–Newton.
-    pub static MODE: AtomicI32 = AtomicI32::new(-1);
-    /// Translation prior weight, Q16 per cell² per point (field mode).
-    pub static PRIOR_T: AtomicI32 = AtomicI32::new(1 << 12);
-    /// Rotation prior weight, Q16 per (1/64 rad)² per point (field mode).
-    pub static PRIOR_R: AtomicI32 = AtomicI32::new(0);
-    /// The coarse search's prior weights, percent of `Motion::weights`.
-    pub static COARSE_PRIOR_PCT: AtomicI32 = AtomicI32::new(3);
-    /// Least evidence a cell needs to count in the field.
-    pub static MIN_LEVEL: AtomicI32 = AtomicI32::new(1);
-    /// 1: cells count LEVEL_MAX when at or above MIN_LEVEL (binary).
-    pub static BINARY: AtomicI32 = AtomicI32::new(0);
-    /// The field fit's gate, thousandths of the prediction's cost.
-    pub static GATE: AtomicI32 = AtomicI32::new(0);
-    /// Reads a knob.
-    pub fn get(a: &AtomicI32) -> i32 {
-        a.load(Ordering::Relaxed)
-    }
-
-    /// The knobs as a tuning, if set.
-    pub fn tuning() -> Option<super::MatchTuning> {
-        (get(&MODE) >= 0).then(|| super::MatchTuning {
-            field: get(&MODE) == 1,
-            prior_t: get(&PRIOR_T),
-            prior_r: get(&PRIOR_R),
-            coarse_prior_pct: get(&COARSE_PRIOR_PCT),
-            min_level: get(&MIN_LEVEL),
-            binary: get(&BINARY) != 0,
-            gate_per_mille: get(&GATE),
-        })
-    }
-}
-
 /// How the matcher refines and weighs its candidates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MatchTuning {
@@ -133,20 +93,15 @@ pub struct MatchTuning {
     pub coarse_prior_pct: i32,
     /// Least evidence a cell needs to count in the field.
     pub min_level: i32,
-    /// Cells at or above `min_level` count [`LEVEL_MAX`] (else their evidence).
-    pub binary: bool,
-    /// The field fit must lower the prediction's cost by this many thousandths, or the
-    /// prediction stands (0: no gate).
-    pub gate_per_mille: i32,
 }
 
 impl MatchTuning {
     /// The hill-climbing matcher (the simulator's default).
     pub const HILL_CLIMB: MatchTuning =
-        MatchTuning { field: false, prior_t: 0, prior_r: 0, coarse_prior_pct: 100, min_level: 1, binary: false, gate_per_mille: 0 };
+        MatchTuning { field: false, prior_t: 0, prior_r: 0, coarse_prior_pct: 100, min_level: 1 };
     /// The field matcher.
     pub const FIELD: MatchTuning =
-        MatchTuning { field: true, prior_t: 4096, prior_r: 0, coarse_prior_pct: 3, min_level: 1, binary: false, gate_per_mille: 0 };
+        MatchTuning { field: true, prior_t: 4096, prior_r: 0, coarse_prior_pct: 3, min_level: 1 };
 }
 
 const COARSE_TRANSLATIONS: u32 = ((2 * MATCH_WINDOW_CELLS + 1) * (2 * MATCH_WINDOW_CELLS + 1)) as u32;
@@ -464,7 +419,7 @@ impl ScanMatcher {
     }
 
     /// Gauss–Newton on the smooth field from `start`, with a Gaussian prior towards `predicted`
-    /// (weights [`tune::PRIOR_T`], [`tune::PRIOR_R`] per point): at most [`FIELD_MAX_EVALS`]
+    /// (weights [`MatchTuning::prior_t`], [`MatchTuning::prior_r`] per point): at most [`FIELD_MAX_EVALS`]
     /// evaluations; a step that does not lower the cost is halved. Returns the pose and the work.
     fn refine_on_field(
         &self,
@@ -529,14 +484,6 @@ impl ScanMatcher {
                 halvings += 1;
             }
         }
-        if tuning.gate_per_mille > 0 {
-            // The prediction's cost (no prior there): keep it unless the fit is clearly better.
-            let (c0, _, _) = eval(&(predicted.x, predicted.y, predicted.theta));
-            work += self.n as u32 * FIELD_WORK_PER_POINT;
-            if c0 - cost < c0 / 1000 * tuning.gate_per_mille as i64 {
-                return ((predicted.x, predicted.y, predicted.theta), work);
-            }
-        }
         (at, work)
     }
 
@@ -555,7 +502,6 @@ impl ScanMatcher {
     ) -> (i64, [[i64; 3]; 3], [i64; 3]) {
         let (sn, cs) = (sin(theta), cos(theta));
         let min_level = tuning.min_level.max(1) as u32;
-        let binary = tuning.binary;
         let mut cost = 0i64;
         let mut h = [[0i64; 3]; 3];
         let mut g = [0i64; 3];
@@ -573,13 +519,7 @@ impl ScanMatcher {
                 let (mut a, mut b) = (0i64, 0i64);
                 for i in 0..4 {
                     let l = map.level(x0.saturating_add(i as i32 - 1), y0.saturating_add(j as i32 - 1));
-                    let l = if l < min_level {
-                        0
-                    } else if binary {
-                        LEVEL_MAX as i64
-                    } else {
-                        l as i64
-                    };
+                    let l = if l < min_level { 0 } else { l as i64 };
                     a += wxs[i] * l;
                     b += dxs[i] * l;
                 }
@@ -622,7 +562,7 @@ impl ScanMatcher {
         motion: Motion,
     ) -> Result<Match, MatchRefusal> {
         let w = motion.weights();
-        let tuning = tune::tuning().unwrap_or(if self.field { MatchTuning::FIELD } else { MatchTuning::HILL_CLIMB });
+        let tuning = if self.field { MatchTuning::FIELD } else { MatchTuning::HILL_CLIMB };
         let field_mode = tuning.field;
         let w = if field_mode {
             let pct = tuning.coarse_prior_pct.max(0) as i64;

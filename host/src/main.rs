@@ -80,23 +80,6 @@ fn main() -> ExitCode {
     if std::env::var_os("RUST_MIN_STACK").is_none() {
         std::env::set_var("RUST_MIN_STACK", (32usize << 20).to_string());
     }
-    // Experiments only (docs/experiments/real-lidar-maps.md, "The field matcher"): overrides the
-    // scan matcher's tuning for every controller this process runs, whatever the configuration.
-    if let Ok(t) = std::env::var("LIVES_MATCH_TUNE") {
-        use firmware::matcher::tune::*;
-        let knobs = [&MODE, &PRIOR_T, &PRIOR_R, &COARSE_PRIOR_PCT, &MIN_LEVEL, &BINARY, &GATE];
-        for (a, v) in knobs.iter().zip(t.split(',')) {
-            match v.trim().parse::<i32>() {
-                Ok(x) => a.store(x, std::sync::atomic::Ordering::Relaxed),
-                Err(_) if v.trim().is_empty() => {}
-                Err(_) => {
-                    eprintln!("error: LIVES_MATCH_TUNE `{t}`: `{v}` is not a whole number (mode,prior_t,prior_r,coarse_prior_pct,min_level,binary,gate)");
-                    return ExitCode::from(2);
-                }
-            }
-        }
-        eprintln!("note: LIVES_MATCH_TUNE={t}: the scan matcher's tuning is overridden (experiments)");
-    }
     let matches = negatives_as_values(Cli::command()).get_matches();
     let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
     match run(cli) {
