@@ -97,11 +97,9 @@ pub struct MatchTuning {
 
 impl MatchTuning {
     /// The hill-climbing matcher (the simulator's default).
-    pub const HILL_CLIMB: MatchTuning =
-        MatchTuning { field: false, prior_t: 0, prior_r: 0, coarse_prior_pct: 100, min_level: 1 };
+    pub const HILL_CLIMB: MatchTuning = MatchTuning { field: false, prior_t: 0, prior_r: 0, coarse_prior_pct: 100, min_level: 1 };
     /// The field matcher.
-    pub const FIELD: MatchTuning =
-        MatchTuning { field: true, prior_t: 4096, prior_r: 0, coarse_prior_pct: 3, min_level: 1 };
+    pub const FIELD: MatchTuning = MatchTuning { field: true, prior_t: 4096, prior_r: 0, coarse_prior_pct: 3, min_level: 1 };
 }
 
 const COARSE_TRANSLATIONS: u32 = ((2 * MATCH_WINDOW_CELLS + 1) * (2 * MATCH_WINDOW_CELLS + 1)) as u32;

@@ -25,6 +25,8 @@ fn q(p: &std::path::Path) -> String {
 fn spec(world: &str, scenario: Scenario, planner: PlannerChoice, seed: u64, map: bool) -> SearchSpec {
     let w = World::builtin(world, scenario).expect("built-in");
     let mut specs = vec![SearchSpec::new(world, w, scenario, planner, seed)];
+    // The robot `lives team` and `lives eval` simulate by default.
+    search::Robot::Calibrated.apply(&mut specs[0]).expect("the calibrated robot");
     if map {
         host::measure::eval::give_true_maps(&mut specs).expect("the true map");
     }
