@@ -22,23 +22,30 @@ use std::sync::Mutex;
 /// `done` is called after each finished search with the number finished so far. A spec whose
 /// model blob does not validate is an error naming it.
 pub fn run_batch(specs: &[SearchSpec], threads: usize, done: impl Fn(usize) + Sync) -> Result<Vec<SearchResult>, String> {
+    in_parallel(specs, threads, done, |spec| {
+        search::try_run(spec, |_| {}).map(|run| run.result).map_err(|e| {
+            format!("{} {} {} seed {}: the model does not validate: {e}", spec.world_name, spec.scenario_label(), spec.planner, spec.seed)
+        })
+    })
+}
+
+/// `run` on every job, `threads` at a time, the results in the jobs' order; `done` gets how
+/// many have finished. The first error (in the jobs' order) is the result.
+pub fn in_parallel<J: Sync, R: Send + Clone>(
+    jobs: &[J],
+    threads: usize,
+    done: impl Fn(usize) + Sync,
+    run: impl Fn(&J) -> Result<R, String> + Sync,
+) -> Result<Vec<R>, String> {
     let next = AtomicUsize::new(0);
     let finished = AtomicUsize::new(0);
-    let slots: Mutex<Vec<Option<Result<SearchResult, String>>>> = Mutex::new(vec![None; specs.len()]);
+    let slots: Mutex<Vec<Option<Result<R, String>>>> = Mutex::new(vec![None; jobs.len()]);
     std::thread::scope(|s| {
-        for _ in 0..threads.clamp(1, specs.len().max(1)) {
+        for _ in 0..threads.clamp(1, jobs.len().max(1)) {
             s.spawn(|| loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(spec) = specs.get(i) else { break };
-                let r = search::try_run(spec, |_| {}).map(|run| run.result).map_err(|e| {
-                    format!(
-                        "{} {} {} seed {}: the model does not validate: {e}",
-                        spec.world_name,
-                        spec.scenario_label(),
-                        spec.planner,
-                        spec.seed
-                    )
-                });
+                let Some(job) = jobs.get(i) else { break };
+                let r = run(job);
                 if let Ok(mut v) = slots.lock() {
                     v[i] = Some(r);
                 }
@@ -46,8 +53,8 @@ pub fn run_batch(specs: &[SearchSpec], threads: usize, done: impl Fn(usize) + Sy
             });
         }
     });
-    let slots = slots.into_inner().map_err(|_| "a search thread panicked".to_string())?;
-    slots.into_iter().map(|r| r.unwrap_or_else(|| Err("a search thread panicked".into()))).collect()
+    let slots = slots.into_inner().map_err(|_| "a worker thread panicked".to_string())?;
+    slots.into_iter().map(|r| r.unwrap_or_else(|| Err("a worker thread panicked".into()))).collect()
 }
 
 /// One planner in one setting, over its trials.

@@ -40,8 +40,7 @@ pub struct Coordinator {
     relay_lidar: Vec<u32>,
     found_by: Option<usize>,
     last_tick: u32,
-    /// Reports per robot.
-    pub reports: Vec<RobotReport>,
+    reports: Vec<RobotReport>,
     reassignments: u32,
     stale_goals: u32,
     entropy_start: Option<u32>,
@@ -209,8 +208,9 @@ impl Coordinator {
         Some(cells.iter().zip(&self.seen).filter(|(c, s)| **c == Cell3::Free && !**s).count() as u32)
     }
 
-    /// The result, once the search is over.
-    pub fn result(&self, spec: &super::TeamSpec, transport: &str) -> TeamResult {
+    /// The result, once the search is over: `bytes[i]` are robot `i`'s payload bytes sent and
+    /// received over `transport`.
+    pub fn result(&self, spec: &super::TeamSpec, transport: &str, bytes: &[[u64; 2]]) -> TeamResult {
         let base = &spec.base;
         let found = self.found_by.is_some();
         let outcome = if found {
@@ -221,6 +221,9 @@ impl Coordinator {
             "exhausted"
         };
         let mut per_robot = self.reports.clone();
+        for (r, b) in per_robot.iter_mut().zip(bytes) {
+            (r.bytes_up, r.bytes_down) = (b[0], b[1]);
+        }
         let end_s = ((self.last_tick + 1) as f64 * self.tick_s).min(self.limit_s);
         for r in &mut per_robot {
             let s = r.lost_s.unwrap_or(end_s).max(self.tick_s);

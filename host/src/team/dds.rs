@@ -248,11 +248,7 @@ fn coordinate(
         }
         tick += 1;
     }
-    for (i, b) in bytes.iter().enumerate() {
-        coord.reports[i].bytes_up = b[0];
-        coord.reports[i].bytes_down = b[1];
-    }
-    Ok(coord.result(spec, "dds"))
+    Ok(coord.result(spec, "dds", &bytes))
 }
 
 /// Robot `id`'s side (a process of its own): joins, announces itself, steps every tick the

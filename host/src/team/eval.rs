@@ -4,32 +4,14 @@
 use super::{local, TeamResult, TeamSpec};
 use crate::search::SearchSpec;
 use serde::Serialize;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 /// Runs a team of each size in `robots` on every spec, `threads` at a time.
 pub fn run_batch(specs: &[SearchSpec], robots: &[usize], threads: usize, done: impl Fn(usize) + Sync) -> Result<Vec<TeamResult>, String> {
     let jobs: Vec<TeamSpec> =
         specs.iter().flat_map(|s| robots.iter().map(|&n| TeamSpec { base: s.clone(), robots: n, kill: None })).collect();
-    let next = AtomicUsize::new(0);
-    let finished = AtomicUsize::new(0);
-    let slots: Mutex<Vec<Option<Result<TeamResult, String>>>> = Mutex::new(vec![None; jobs.len()]);
-    std::thread::scope(|s| {
-        for _ in 0..threads.clamp(1, jobs.len().max(1)) {
-            s.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(job) = jobs.get(i) else { break };
-                let r = local::run(job)
-                    .map_err(|e| format!("{} {} seed {}: {e}", job.base.world_name, job.base.scenario_label(), job.base.seed));
-                if let Ok(mut v) = slots.lock() {
-                    v[i] = Some(r);
-                }
-                done(finished.fetch_add(1, Ordering::Relaxed) + 1);
-            });
-        }
-    });
-    let slots = slots.into_inner().map_err(|_| "a team thread panicked".to_string())?;
-    slots.into_iter().map(|r| r.unwrap_or_else(|| Err("a team thread panicked".into()))).collect()
+    crate::measure::eval::in_parallel(&jobs, threads, done, |job| {
+        local::run(job).map_err(|e| format!("{} {} seed {}: {e}", job.base.world_name, job.base.scenario_label(), job.base.seed))
+    })
 }
 
 /// One team size in one setting, over its trials.

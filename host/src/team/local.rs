@@ -81,9 +81,5 @@ pub fn run(spec: &TeamSpec) -> Result<TeamResult, String> {
         }
         tick += 1;
     }
-    for (i, b) in bytes.iter().enumerate() {
-        coord.reports[i].bytes_up = b[0];
-        coord.reports[i].bytes_down = b[1];
-    }
-    Ok(coord.result(spec, "in-process"))
+    Ok(coord.result(spec, "in-process", &bytes))
 }

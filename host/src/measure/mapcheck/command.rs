@@ -329,39 +329,26 @@ pub fn table(r: &MapcheckReport) -> String {
     let _ = writeln!(s, "  {:<18} {:>8}   {} of {} free cells", "free-space leak", pct(m.free_space_leak), m.leak_cells, m.free_cells);
     if let Some(rel) = &r.relations {
         let _ = writeln!(s, "  relations {} ({} relations): translation (m) and rotation (°), mean ± std", rel.file, rel.relations);
-        let mut row = |name: &str, st: &RelationStats| {
-            let _ = writeln!(
-                s,
-                "  {:<18} {:>5} used   {:>15} m   {:>15}°",
-                name,
-                st.used,
-                pm(st.trans_mean_m, st.trans_std_m, 2),
-                pm(st.rot_mean_deg, st.rot_std_deg, 2)
-            );
-        };
-        row("log poses", &rel.log_poses);
-        row("controller", &rel.controller);
-        if let Some(a) = &rel.align_poses {
-            row("--align poses", a);
-        }
+        relation_rows(&mut s, "  ", 18, 2, [Some(&rel.log_poses), Some(&rel.controller), rel.align_poses.as_ref()]);
         for (what, sub) in [("shorter", &rel.short), ("longer", &rel.long)] {
             let _ = writeln!(s, "  {} relations spanning {what} than {SHORT_SPAN_S} s:", sub.relations);
-            let mut row = |name: &str, st: &RelationStats| {
-                let _ = writeln!(
-                    s,
-                    "    {:<16} {:>5} used   {:>15} m   {:>15}°",
-                    name,
-                    st.used,
-                    pm(st.trans_mean_m, st.trans_std_m, 3),
-                    pm(st.rot_mean_deg, st.rot_std_deg, 2)
-                );
-            };
-            row("log poses", &sub.log_poses);
-            row("controller", &sub.controller);
-            if let Some(a) = &sub.align_poses {
-                row("--align poses", a);
-            }
+            relation_rows(&mut s, "    ", 16, 3, [Some(&sub.log_poses), Some(&sub.controller), sub.align_poses.as_ref()]);
         }
     }
     s
+}
+
+/// The relation errors of the log's poses, the controller's and the `--align` poses, one row
+/// each (`indent`, the name in `width` columns, translations to `decimals` places).
+fn relation_rows(s: &mut String, indent: &str, width: usize, decimals: usize, stats: [Option<&RelationStats>; 3]) {
+    for (name, st) in ["log poses", "controller", "--align poses"].into_iter().zip(stats) {
+        let Some(st) = st else { continue };
+        let _ = writeln!(
+            s,
+            "{indent}{name:<width$} {:>5} used   {:>15} m   {:>15}°",
+            st.used,
+            pm(st.trans_mean_m, st.trans_std_m, decimals),
+            pm(st.rot_mean_deg, st.rot_std_deg, 2)
+        );
+    }
 }
