@@ -140,3 +140,36 @@ fn a_second_process_announcing_a_robot_is_refused_by_name() {
     assert_eq!(st.code(), Some(2), "{err}");
     assert!(err.contains("robot 1 is announced twice"), "{err}");
 }
+
+#[test]
+fn lives_search_robots_runs_the_team_with_the_map_file() {
+    let dir = scratch("search-robots");
+    let map = dir.join("hallway-hard.yaml");
+    let st = Command::new(common::lives()).args(["map", "export", "hallway", "--scenario", "hard"]).arg(&map).status().unwrap();
+    assert!(st.success());
+    let out = Command::new(common::lives())
+        .args([
+            "search",
+            "--world",
+            "hallway",
+            "--scenario",
+            "hard",
+            "--seed",
+            "2",
+            "--planner",
+            "live",
+            "--robots",
+            "2",
+            "--json",
+            "--map",
+        ])
+        .arg(&map)
+        .output()
+        .unwrap();
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stderr)));
+    let local =
+        team::local::run(&TeamSpec { base: spec("hallway", Scenario::Hard, PlannerChoice::Live, 2, true), robots: 2, kill: None }).unwrap();
+    // The exported map file is the true map `--known-map` gives: the same search.
+    assert_eq!((v["robots"].as_u64(), v["time_s"].as_f64(), v["found"].as_bool()), (Some(2), Some(local.time_s), Some(local.found)), "{v}");
+    assert_eq!(v["map"], "known-map");
+}

@@ -34,11 +34,27 @@ pub struct SearchArgs {
     /// MCAP file that Foxglove opens (docs/recording.md).
     #[arg(long, value_name = "FILE.mcap")]
     record: Option<PathBuf>,
+    /// Search with a team of N robots sharing the search (`lives team --robots N`, docs/team.md;
+    /// in this process, no picture or recording).
+    #[arg(long, default_value_t = 1)]
+    robots: usize,
 }
 
 pub fn run(args: SearchArgs) -> Result<ExitCode, String> {
-    let SearchArgs { run, png, json, trace, trace_candidates, model, robot, record } = args;
+    let SearchArgs { run, png, json, trace, trace_candidates, model, robot, record, robots } = args;
     let mut spec = load_spec(&run)?;
+    if robots != 1 {
+        if png.is_some() || record.is_some() || trace || trace_candidates.is_some() || model.is_some() {
+            return Err(format!("--robots {robots}: a team search takes no --png, --record, --trace or --model (lives team)"));
+        }
+        robot.configure(&mut spec)?;
+        if spec.planner.uses_classifier() {
+            spec.model = host::learn::model::model_option(None, false)?;
+        }
+        let r = host::team::local::run(&host::team::TeamSpec { base: spec, robots, kill: None })?;
+        say!("{}", if json { serde_json::to_string(&r).map_err(|e| e.to_string())? } else { r.summary() });
+        return Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) });
+    }
     spec.trace = trace || trace_candidates.is_some();
     spec.trace_candidates = trace_candidates.unwrap_or(0);
     robot.configure(&mut spec)?;

@@ -84,7 +84,7 @@ pub fn run(args: TeamArgs) -> Result<ExitCode, String> {
     if args.json {
         say!("{}", serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?);
     } else {
-        say!("{}", summary(&result));
+        say!("{}", result.summary());
     }
     Ok(if result.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
@@ -132,40 +132,4 @@ fn over_dds(args: &TeamArgs, spec: &TeamSpec) -> Result<Option<TeamResult>, Stri
 #[cfg(not(feature = "ros2"))]
 fn over_dds(_args: &TeamArgs, _spec: &TeamSpec) -> Result<Option<TeamResult>, String> {
     Err("--processes talks over DDS: build with `--features ros2`".into())
-}
-
-/// The human-readable summary.
-pub fn summary(r: &TeamResult) -> String {
-    let mut s = format!(
-        "{} {} {} {} seed {} · {} robots ({}, {}): {}",
-        if r.found { "FOUND" } else { "NOT FOUND" },
-        r.world,
-        r.scenario,
-        r.planner,
-        r.seed,
-        r.robots,
-        r.map,
-        r.transport,
-        if r.found {
-            format!("by robot {} in {:.1} s", r.found_by.unwrap_or(0), r.time_s)
-        } else {
-            format!("{} ({:.0} s)", r.outcome, r.time_s)
-        },
-    );
-    s += &format!(", {} re-assignments, {} stale goals", r.reassignments, r.stale_goals);
-    for p in &r.per_robot {
-        s += &format!(
-            "\n  robot {}: start ({:.1}, {:.1}), path {:.1} m, waypoints {}/{}{}, {:.0} B/s up, {:.0} B/s down",
-            p.robot,
-            p.start[0],
-            p.start[1],
-            p.path_m,
-            p.waypoints_done,
-            p.waypoints_assigned,
-            p.lost_s.map_or(String::new(), |t| format!(", link lost at {t:.1} s")),
-            p.up_bps,
-            p.down_bps
-        );
-    }
-    s
 }

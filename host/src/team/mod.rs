@@ -219,3 +219,42 @@ pub fn robot_spec(spec: &SearchSpec, start: [f64; 3]) -> SearchSpec {
     s.world.start = crate::sim::Start { pose: start, jitter_m: 0.0, jitter_yaw_rad: 0.0 };
     s
 }
+
+impl TeamResult {
+    /// The human-readable summary: the outcome, then a line per robot.
+    pub fn summary(&self) -> String {
+        let r = self;
+        let mut s = format!(
+            "{} {} {} {} seed {} · {} robots ({}, {}): {}",
+            if r.found { "FOUND" } else { "NOT FOUND" },
+            r.world,
+            r.scenario,
+            r.planner,
+            r.seed,
+            r.robots,
+            r.map,
+            r.transport,
+            if r.found {
+                format!("by robot {} in {:.1} s", r.found_by.unwrap_or(0), r.time_s)
+            } else {
+                format!("{} ({:.0} s)", r.outcome, r.time_s)
+            },
+        );
+        s += &format!(", {} re-assignments, {} stale goals", r.reassignments, r.stale_goals);
+        for p in &r.per_robot {
+            s += &format!(
+                "\n  robot {}: start ({:.1}, {:.1}), path {:.1} m, waypoints {}/{}{}, {:.0} B/s up, {:.0} B/s down",
+                p.robot,
+                p.start[0],
+                p.start[1],
+                p.path_m,
+                p.waypoints_done,
+                p.waypoints_assigned,
+                p.lost_s.map_or(String::new(), |t| format!(", link lost at {t:.1} s")),
+                p.up_bps,
+                p.down_bps
+            );
+        }
+        s
+    }
+}
