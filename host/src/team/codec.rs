@@ -95,8 +95,8 @@ fn cdr(e: CdrError) -> String {
     e.to_string()
 }
 
-/// `Tick`: `uint32 tick`, `bool stop`, `uint32[] epochs`, `goals` (points: `uint32[]` which
-/// robots, `float64[]` their x, y), `uint32[] seen` (runs), `uint32[]
+/// `Tick`: `uint32 tick`, `bool stop`, `uint32[] epochs`, `goals` and `positions` (points:
+/// `uint32[]` which robots, `float64[]` their x, y), `uint32[] seen` (runs), `uint32[]
 /// lidar` (runs).
 pub fn encode_tick(m: &TickMsg) -> Vec<u8> {
     let mut w = CdrWriter::new();
@@ -104,6 +104,7 @@ pub fn encode_tick(m: &TickMsg) -> Vec<u8> {
     w.put([m.stop as u8]);
     put_u32s(&mut w, m.epochs.iter().copied());
     put_points(&mut w, &m.goals);
+    put_points(&mut w, &m.positions);
     put_seen(&mut w, &m.seen);
     put_seen(&mut w, &m.lidar);
     w.finish()
@@ -115,9 +116,10 @@ pub fn decode_tick(buf: &[u8]) -> Result<TickMsg, String> {
     let stop = r.u8("stop").map_err(cdr)? != 0;
     let epochs = u32s(&mut r, "epochs", MAX_ROBOTS)?;
     let goals = points(&mut r, "goals", epochs.len(), MAX_ROBOTS)?;
+    let positions = points(&mut r, "positions", epochs.len(), MAX_ROBOTS)?;
     let seen_cells = seen(&mut r, "seen")?;
     let lidar = seen(&mut r, "lidar")?;
-    Ok(TickMsg { tick, stop, epochs, goals, seen: seen_cells, lidar })
+    Ok(TickMsg { tick, stop, epochs, goals, positions, seen: seen_cells, lidar })
 }
 
 /// `Assignment`: `uint32 robot`, `uint32 epoch`, `float64[] waypoints` (x, y, heading each).
@@ -251,6 +253,7 @@ mod tests {
             stop: true,
             epochs: vec![1, 2, 0],
             goals: vec![Some([1.0, 2.0]), None, Some([-3.5, 0.25])],
+            positions: vec![Some([0.0, 0.5]), Some([1.5, 2.5]), None],
             seen: vec![5, 6, 7, 7 | crate::team::SEEN_OCCUPIED, 100],
             lidar: vec![1, 2],
         };
@@ -287,8 +290,15 @@ mod tests {
         s[20..28].copy_from_slice(&f64::INFINITY.to_le_bytes());
         assert!(decode_status(&s).unwrap_err().contains("pose"));
         // A goal for robot 5 in a tick of 3 robots.
-        let t =
-            TickMsg { tick: 1, stop: false, epochs: vec![0; 3], goals: vec![None, None, Some([1.0, 1.0])], seen: vec![], lidar: vec![] };
+        let t = TickMsg {
+            tick: 1,
+            stop: false,
+            epochs: vec![0; 3],
+            goals: vec![None, None, Some([1.0, 1.0])],
+            positions: vec![None; 3],
+            seen: vec![],
+            lidar: vec![],
+        };
         let mut b = encode_tick(&t);
         // Header 4, tick 4, stop 1 + 3, epochs 4 + 12, `which` count 4: its element at 32.
         assert_eq!(b[32..36], 2u32.to_le_bytes());

@@ -131,6 +131,9 @@ impl Coordinator {
             stop,
             epochs: self.epochs.clone(),
             goals: (0..self.n).map(|i| if self.alive[i] { self.last[i].as_ref().and_then(|s| s.goal) } else { None }).collect(),
+            positions: (0..self.n)
+                .map(|i| if self.alive[i] { self.last[i].as_ref().map(|s| [s.pose[0], s.pose[1]]) } else { None })
+                .collect(),
             seen: self.relay.clone(),
             lidar: self.relay_lidar.clone(),
         }

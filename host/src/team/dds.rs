@@ -128,6 +128,7 @@ pub fn run(spec: &TeamSpec, opts: &DdsOptions, robot_args: impl Fn(usize) -> Vec
         stop: true,
         epochs: Vec::new(),
         goals: Vec::new(),
+        positions: Vec::new(),
         seen: Vec::new(),
         lidar: Vec::new(),
     });
@@ -303,7 +304,7 @@ pub fn robot(spec: &TeamSpec, id: usize, opts: &DdsOptions) -> Result<(), String
                 std::thread::sleep(Duration::from_millis(1));
             }
             robot.merge(&t.seen, &t.lidar);
-            robot.give_way(&t.goals);
+            robot.give_way(&t.goals, &t.positions);
             last = codec::encode_status(&robot.step(t.tick));
             next = t.tick + 1;
             last_sent = None;

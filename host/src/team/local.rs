@@ -63,7 +63,7 @@ pub fn run(spec: &TeamSpec) -> Result<TeamResult, String> {
             }
             bytes[i][1] += order_bytes;
             r.merge(&order.seen, &order.lidar);
-            r.give_way(&order.goals);
+            r.give_way(&order.goals, &order.positions);
             let s = r.step(tick);
             bytes[i][0] += codec::encode_status(&s).len() as u64;
             statuses.push(Some(s));

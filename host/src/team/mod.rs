@@ -50,9 +50,12 @@ pub struct TickMsg {
     /// The cells the robots' cameras saw for the first time at the last tick, merged (as
     /// [`Status::seen`]): every robot marks them seen before it steps.
     pub seen: Vec<u32>,
-    /// Each robot's goal after the last tick `[x, y]` (`None`: none, or lost): robot `i` leaves
-    /// the goals of robots `0 .. i` to them (`firmware::Controller::set_team_claims`).
+    /// Each robot's goal after the last tick `[x, y]` (`None`: none, or lost): a robot leaves a
+    /// teammate's goal to it when the teammate is nearer to it
+    /// (`firmware::Controller::set_team_claims`, [`robot::TeamRobot::give_way`]).
     pub goals: Vec<Option<[f64; 2]>>,
+    /// Each robot's position after the last tick (`None`: lost).
+    pub positions: Vec<Option<[f64; 2]>>,
     /// The cells the robots' LiDARs observed anew (or saw change) at the last tick, without a
     /// known map (as [`Status::lidar`]): every robot takes them as a prior before it steps.
     pub lidar: Vec<u32>,

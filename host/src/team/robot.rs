@@ -104,12 +104,23 @@ impl TeamRobot {
         }
     }
 
-    /// Leaves the goals of the robots before it in the team (`goals[0 .. id]`) to them.
-    pub fn give_way(&mut self, goals: &[Option<[f64; 2]>]) {
+    /// Leaves to each teammate the goal it is nearer to than this robot is (as the crow flies;
+    /// a tie to the lower index), so two robots never pursue one goal and the nearer one keeps
+    /// it (`positions` and `goals` by robot, this robot's own ignored).
+    pub fn give_way(&mut self, goals: &[Option<[f64; 2]>], positions: &[Option<[f64; 2]>]) {
+        let me = self.brain.ctrl.pose().map(|p| [p.x.to_num::<f64>(), p.y.to_num::<f64>()]);
+        let id = self.id as usize;
         let claims: Vec<(firmware::Meters, firmware::Meters)> = goals
             .iter()
-            .take(self.id as usize)
-            .flatten()
+            .zip(positions)
+            .enumerate()
+            .filter(|&(j, _)| j != id)
+            .filter_map(|(j, (g, p))| {
+                let (g, p) = ((*g)?, (*p)?);
+                let theirs = (g[0] - p[0]).hypot(g[1] - p[1]);
+                let mine = me.map_or(f64::INFINITY, |m| (g[0] - m[0]).hypot(g[1] - m[1]));
+                (theirs < mine || (theirs == mine && j < id)).then_some(g)
+            })
             .filter_map(|g| Some((fixed_point::meters_from_f64(g[0])?, fixed_point::meters_from_f64(g[1])?)))
             .collect();
         self.brain.ctrl.set_team_claims(&claims);
