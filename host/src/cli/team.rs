@@ -6,8 +6,9 @@ use std::process::ExitCode;
 
 /// Search with a team of N simulated robots: each keeps its own controller core; a coordinator
 /// shares out the known map's coverage route by path cost (planners live, visual-cpp,
-/// lidar-cpp with --map or --known-map), merges what the cameras saw, re-assigns a lost robot's
-/// waypoints, and stops everyone when one finds the target. `--processes` runs every robot as
+/// lidar-cpp with --map or --known-map), merges what the cameras (and, without a map, the
+/// LiDARs) saw, keeps each robot off a goal a nearer teammate pursues, re-assigns a lost
+/// robot's waypoints, and stops everyone when one finds the target. `--processes` runs every robot as
 /// a process of its own, talking to the coordinator over DDS (ROS 2's middleware).
 #[derive(clap::Args)]
 pub struct TeamArgs {
