@@ -33,7 +33,7 @@
 //!    [`MATCH_MIN_SCORE_PER_MILLE`] ‰ of the most the points could score (every point in an
 //!    occupied cell); otherwise the odometry's pose stands (counted by reason in [`MatchStats`]).
 //!
-//! **The field matcher** ([`MatchTuning::FIELD`], `Config::scan_match_field`; what real logs
+//! **The field matcher** (`Config::scan_match_field`; what real logs
 //! and a real robot use) keeps step 2 (with the prior at 3 % of its weights: the coarse search
 //! only finds the basin) and replaces steps 3–5 by a least-squares fit, as Cartographer's Ceres
 //! matcher: each point scores on a smooth field, the LiDAR grid's evidence ([`Occupancy::level`])
@@ -80,27 +80,12 @@ pub const HIT_SCORE: u32 = 4;
 /// A point's score next to an occupied cell (4-neighbourhood).
 pub const NEAR_SCORE: u32 = 2;
 
-/// How the matcher refines and weighs its candidates.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct MatchTuning {
-    /// Refine on the smooth field by Gauss–Newton (else hill-climbing on interpolated levels).
-    pub field: bool,
-    /// The field refinement's translation prior, Q16 per cell² per point.
-    pub prior_t: i32,
-    /// The field refinement's rotation prior, Q16 per (1/[`FIELD_RHO_CELLS`] rad)² per point.
-    pub prior_r: i32,
-    /// The coarse search's prior, percent of `Motion::weights` (field mode only).
-    pub coarse_prior_pct: i32,
-    /// Least evidence a cell needs to count in the field.
-    pub min_level: i32,
-}
-
-impl MatchTuning {
-    /// The hill-climbing matcher (the simulator's default).
-    pub const HILL_CLIMB: MatchTuning = MatchTuning { field: false, prior_t: 0, prior_r: 0, coarse_prior_pct: 100, min_level: 1 };
-    /// The field matcher.
-    pub const FIELD: MatchTuning = MatchTuning { field: true, prior_t: 4096, prior_r: 0, coarse_prior_pct: 3, min_level: 1 };
-}
+/// The field refinement's translation prior, Q16 per cell² per point (a weak pull towards the
+/// prediction; there is none on the heading: a real odometry's heading is what drifts).
+pub const FIELD_PRIOR_T: i64 = 4096;
+/// The field matcher's coarse-search prior, percent of `Motion::weights` (it only finds the
+/// basin; the hill-climbing matcher uses them whole).
+pub const FIELD_COARSE_PRIOR_PCT: i64 = 3;
 
 const COARSE_TRANSLATIONS: u32 = ((2 * MATCH_WINDOW_CELLS + 1) * (2 * MATCH_WINDOW_CELLS + 1)) as u32;
 const COARSE_HEADINGS: u32 = (2 * MATCH_ANGLE_STEPS + 1) as u32;
@@ -199,7 +184,7 @@ pub struct ScanMatcher {
     points: [(Meters, Meters); MATCH_MAX_POINTS],
     cells: [(i32, i32); MATCH_MAX_POINTS],
     n: usize,
-    /// Refine with the field matcher ([`MatchTuning::FIELD`]; else [`MatchTuning::HILL_CLIMB`]).
+    /// Refine with the field matcher (else hill-climbing).
     pub field: bool,
     /// Counters.
     pub stats: MatchStats,
@@ -417,7 +402,7 @@ impl ScanMatcher {
     }
 
     /// Gauss–Newton on the smooth field from `start`, with a Gaussian prior towards `predicted`
-    /// (weights [`MatchTuning::prior_t`], [`MatchTuning::prior_r`] per point): at most [`FIELD_MAX_EVALS`]
+    /// (weight [`FIELD_PRIOR_T`] per point on the translation): at most [`FIELD_MAX_EVALS`]
     /// evaluations; a step that does not lower the cost is halved. Returns the pose and the work.
     fn refine_on_field(
         &self,
@@ -425,10 +410,8 @@ impl ScanMatcher {
         geom: &GridGeometry,
         predicted: &Pose2,
         start: (Meters, Meters, BinaryAngle),
-        tuning: &MatchTuning,
     ) -> ((Meters, Meters, BinaryAngle), u32) {
         let n = self.n as i64;
-        let (wt, wr) = (tuning.prior_t.max(0) as i64, tuning.prior_r.max(0) as i64);
         // Offsets from the prediction: Q16 cells and Q16 ρ.
         let offsets = |p: &(Meters, Meters, BinaryAngle)| -> [i64; 3] {
             [
@@ -439,9 +422,9 @@ impl ScanMatcher {
             ]
         };
         let eval = |p: &(Meters, Meters, BinaryAngle)| {
-            let (mut cost, mut h, mut g) = self.field_at(map, geom, p.0, p.1, p.2, tuning);
+            let (mut cost, mut h, mut g) = self.field_at(map, geom, p.0, p.1, p.2);
             let e = offsets(p);
-            let wts = [wt, wt, wr];
+            let wts = [FIELD_PRIOR_T, FIELD_PRIOR_T, 0];
             for a in 0..3 {
                 // cost + n·w·e² (Q32), H + n·w, g − n·w·e.
                 cost += n * wts[a] * ((e[a] * e[a]) >> 16);
@@ -496,10 +479,8 @@ impl ScanMatcher {
         x: Meters,
         y: Meters,
         theta: BinaryAngle,
-        tuning: &MatchTuning,
     ) -> (i64, [[i64; 3]; 3], [i64; 3]) {
         let (sn, cs) = (sin(theta), cos(theta));
-        let min_level = tuning.min_level.max(1) as u32;
         let mut cost = 0i64;
         let mut h = [[0i64; 3]; 3];
         let mut g = [0i64; 3];
@@ -517,7 +498,7 @@ impl ScanMatcher {
                 let (mut a, mut b) = (0i64, 0i64);
                 for i in 0..4 {
                     let l = map.level(x0.saturating_add(i as i32 - 1), y0.saturating_add(j as i32 - 1));
-                    let l = if l < min_level { 0 } else { l as i64 };
+                    let l = l as i64;
                     a += wxs[i] * l;
                     b += dxs[i] * l;
                 }
@@ -560,14 +541,7 @@ impl ScanMatcher {
         motion: Motion,
     ) -> Result<Match, MatchRefusal> {
         let w = motion.weights();
-        let tuning = if self.field { MatchTuning::FIELD } else { MatchTuning::HILL_CLIMB };
-        let field_mode = tuning.field;
-        let w = if field_mode {
-            let pct = tuning.coarse_prior_pct.max(0) as i64;
-            ((w.0 * pct / 100).max(1), (w.1 * pct / 100).max(1))
-        } else {
-            w
-        };
+        let w = if self.field { ((w.0 * FIELD_COARSE_PRIOR_PCT / 100).max(1), (w.1 * FIELD_COARSE_PRIOR_PCT / 100).max(1)) } else { w };
         let n = self.take_points(scan, max_range);
         self.stats.last_work = 0;
         if n < MATCH_MIN_POINTS {
@@ -607,13 +581,13 @@ impl ScanMatcher {
             }
         }
         let (_, coarse_score, k, dx, dy) = best.expect("at least one candidate");
-        if field_mode {
+        if self.field {
             let start = (
                 predicted.x.saturating_add(Meters::from_bits(MATCH_HALF_CELL.to_bits().wrapping_mul(2 * dx))),
                 predicted.y.saturating_add(Meters::from_bits(MATCH_HALF_CELL.to_bits().wrapping_mul(2 * dy))),
                 predicted.theta + BinaryAngle(MATCH_ANGLE_STEP.0.wrapping_mul(k)),
             );
-            let (at, w_field) = self.refine_on_field(map, geom, predicted, start, &tuning);
+            let (at, w_field) = self.refine_on_field(map, geom, predicted, start);
             work += w_field;
             return self.finish(predicted, at, coarse_score, predicted_score, n, work);
         }

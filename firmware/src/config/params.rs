@@ -191,7 +191,7 @@ macro_rules! config_params {
             live_priority_interval_us: u64 = 10_000_000, Seconds, "LIVE: least time between two priority waypoints", set "live_priority_interval_s";
             /// With [`Config::scan_matching`]: refine each match on a smooth field (the LiDAR grid's
             /// evidence convolved with a cubic B-spline) by Gauss–Newton, with a weak translation
-            /// prior and none on rotation (`crate::matcher::MatchTuning::FIELD`), instead of
+            /// prior and none on rotation (`crate::matcher::FIELD_PRIOR_T`), instead of
             /// hill-climbing on interpolated evidence under the odometry's motion prior. Default
             /// false (the simulator's matcher, calibrated on its odometry); `lives replay`,
             /// `lives mapcheck` of a log and a real robot turn it on: on the raw MIT CSAIL log it

@@ -72,9 +72,7 @@ impl Controller {
         let (search, prior, geom) = (&mut self.search, &self.known.prior, self.lidar.geom);
         self.visual.integrate_noting(&self.lidar, pose, fov, range, |x, y| search.first_seen(prior, &geom, x, y))
     }
-}
 
-impl Controller {
     /// A teammate's camera saw cell `(x, y)` of the grid (an `occupied` one: a surface it looked
     /// at): it is seen here too, so this robot's planner does not go to look at it again, and
     /// with a known building the search map counts it. Returns whether it was new here; a cell
@@ -89,9 +87,7 @@ impl Controller {
         self.visual.grid.set(x, y, if occupied { crate::grid::Cell::Occupied } else { crate::grid::Cell::Free });
         true
     }
-}
 
-impl Controller {
     /// A teammate's LiDAR observed cell `(x, y)` of the grid (`occupied` or free; maps merged
     /// from the robots' known start poses): a cell this robot's LiDAR has never observed takes
     /// it as a prior map's cell is taken ([`crate::knownmap::SEED_OCCUPIED`],
@@ -100,22 +96,20 @@ impl Controller {
     pub fn merge_lidar(&mut self, x: i32, y: i32, occupied: bool) {
         self.lidar.seed(x, y, if occupied { crate::knownmap::SEED_OCCUPIED } else { crate::knownmap::SEED_FREE });
     }
-}
 
-impl Controller {
     /// The goals of the teammates this robot gives way to (map frame; at most
     /// [`crate::capacity::MAX_TEAM_CLAIMS`]): it chooses no site within half the camera's range
     /// of one, and drops its own goal if it lies there (the next tick plans again). A robot
     /// alone has none, and nothing changes.
     pub fn set_team_claims(&mut self, goals: &[(Meters, Meters)]) {
         let mut cells: heapless::Vec<(i32, i32), { crate::capacity::MAX_TEAM_CLAIMS }> = heapless::Vec::new();
-        for &(x, y) in goals.iter().take(crate::capacity::MAX_TEAM_CLAIMS) {
+        for &(x, y) in goals {
+            // More than the capacity are ignored.
             let _ = cells.push(self.lidar.geom.cell_of(x, y));
         }
         self.planner.set_claims(&cells);
-        let r = crate::planner::claim_radius(&self.cfg) as i64;
-        let claimed = |c: (i32, i32)| cells.iter().any(|b| ((b.0 - c.0) as i64).pow(2) + ((b.1 - c.1) as i64).pow(2) <= r * r);
-        if self.goal.as_ref().is_some_and(|g| claimed(g.viewpoint.cell)) {
+        let r = crate::planner::claim_radius(&self.cfg);
+        if self.goal.as_ref().is_some_and(|g| self.planner.is_claimed(g.viewpoint.cell, r)) {
             self.goal = None;
         }
     }

@@ -242,6 +242,7 @@ impl Planner {
         let geom = step.inputs.lidar.geom;
         let robot = self.robot_cell;
         let r_cells = GridGeometry::cells(step.inputs.cfg.camera_range_m) as i64;
+        let claim = super::claim_radius(step.inputs.cfg);
         let mut best: Option<(u16, RegionView)> = None;
         let mut work = 0;
         for p in step.inputs.nonmap.points() {
@@ -253,7 +254,7 @@ impl Planner {
             let v = stand_off(robot, c, r_cells);
             work += ((2 * step.snap + 1) * (2 * step.snap + 1)) as u32;
             let Some(v) = self.reachable_near(v, step.snap) else { continue };
-            if v == c || self.is_blacklisted(v, bl) || self.is_claimed(v, super::claim_radius(step.inputs.cfg)) {
+            if v == c || self.is_blacklisted(v, bl) || self.is_claimed(v, claim) {
                 continue;
             }
             let d = self.distance(v.0, v.1);

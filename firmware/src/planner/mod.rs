@@ -223,6 +223,12 @@ pub(crate) fn claim_radius(cfg: &Config) -> i32 {
     GridGeometry::cells(cfg.camera_range_m) / 2
 }
 
+/// Whether `c` is within `radius_cells` of one of `cells`.
+fn within<'a>(mut cells: impl Iterator<Item = &'a (i32, i32)>, c: (i32, i32), radius_cells: i32) -> bool {
+    let r2 = radius_cells as i64 * radius_cells as i64;
+    cells.any(|b| ((b.0 - c.0) as i64).pow(2) + ((b.1 - c.1) as i64).pow(2) <= r2)
+}
+
 /// Candidate tasks of one structured step before the [`MAX_TASKS`] best are kept: every
 /// frontier, every proposal, the room tasks.
 const TASK_POOL: usize = 2 * MAX_FRONTIERS_PER_GRID + MAX_PROPOSALS + schedule::MAX_ROOM_TASKS;
@@ -392,14 +398,12 @@ impl Planner {
     }
 
     /// Whether site `c` is within `radius_cells` of a teammate's goal.
-    pub(super) fn is_claimed(&self, c: (i32, i32), radius_cells: i32) -> bool {
-        let r2 = radius_cells as i64 * radius_cells as i64;
-        self.claims.iter().any(|b| ((b.0 - c.0) as i64).pow(2) + ((b.1 - c.1) as i64).pow(2) <= r2)
+    pub(crate) fn is_claimed(&self, c: (i32, i32), radius_cells: i32) -> bool {
+        within(self.claims.iter(), c, radius_cells)
     }
 
     pub(super) fn is_blacklisted(&self, c: (i32, i32), radius_cells: i32) -> bool {
-        let r2 = radius_cells as i64 * radius_cells as i64;
-        self.blacklist.iter().any(|b| ((b.0 - c.0) as i64).pow(2) + ((b.1 - c.1) as i64).pow(2) <= r2)
+        within(self.blacklist.iter(), c, radius_cells)
     }
 
     fn offer(&mut self, vp: Viewpoint, best: &mut Option<Viewpoint>, current_utility: &mut Option<i64>, already_there: bool) {
@@ -512,8 +516,9 @@ impl Planner {
         let already_there = |cell: (i32, i32), h: BinaryAngle, d: u16| {
             (cell == robot || (d as i64) <= here) && (h - pose.theta).unsigned_abs() <= cfg.goal_heading_tolerance.unsigned_abs()
         };
+        let claim = claim_radius(cfg);
         for &(site, kind, fixed_heading, own_score) in sites.iter() {
-            if kind != Site::Current && (self.is_blacklisted(site, bl) || self.is_claimed(site, claim_radius(cfg))) {
+            if kind != Site::Current && (self.is_blacklisted(site, bl) || self.is_claimed(site, claim)) {
                 self.stats.blacklisted += 1;
                 continue;
             }

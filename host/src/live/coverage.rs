@@ -313,90 +313,6 @@ impl<'a> Coverage<'a> {
     /// together. A robot that cannot add [`MIN_GAIN_CELLS`] from where its route is stops
     /// taking waypoints. One start gives [`plan`]'s route.
     pub fn plan_team(&self, starts: &[[f64; 2]], covered: &[bool]) -> Result<Vec<Route>, RouteError> {
-        Ok(self.plan_legs(starts, covered)?.into_iter().map(|(r, _)| r).collect())
-    }
-
-    /// Routes for a team whose robots stand at `starts`, covering what `covered` does not, by
-    /// splitting one route (k-split, Frederickson, Hecht & Kim 1978): the route [`plan`] makes
-    /// from the first start is cut into one run of consecutive waypoints a robot, each robot
-    /// taking its run from where it stands, with the cuts (and, for up to
-    /// [`SPLIT_PERMUTE_MAX`] robots, which robot takes which run) chosen so that the longest
-    /// robot's path — to its run, then along it — is the shortest. The robots so go to
-    /// different parts of the building at once; a robot whose run is empty gets no waypoint.
-    pub fn split(&self, starts: &[[f64; 2]], covered: &[bool]) -> Result<Vec<Route>, RouteError> {
-        let k = starts.len();
-        let Some((single, legs)) = self.plan_legs(&starts[..k.min(1)], covered)?.into_iter().next() else { return Ok(Vec::new()) };
-        let m = single.waypoints.len();
-        let mut fields = Vec::with_capacity(k);
-        for &s in starts {
-            fields.push(self.map.dijkstra(&self.ok, start_cell(self.map, &self.ok, s)?));
-        }
-        let cell = |w: &Waypoint| {
-            let (x, y) = self.map.cell_of([w.x, w.y]);
-            y as usize * self.map.side + x as usize
-        };
-        // prefix[i]: path along the route from waypoint 0 to waypoint i.
-        let mut prefix = vec![0u64; m + 1];
-        for i in 1..m {
-            prefix[i] = prefix[i - 1] + legs[i];
-        }
-        // A robot's cost for the run [a, b): to waypoint a, then along the route to b - 1.
-        let cost = |r: usize, a: usize, b: usize| -> u64 {
-            if a >= b {
-                return 0;
-            }
-            let to = fields[r].get(cell(&single.waypoints[a])).copied().unwrap_or(u32::MAX);
-            if to == u32::MAX {
-                return u64::MAX / 4;
-            }
-            to as u64 + prefix[b - 1] - prefix[a]
-        };
-        let orders: Vec<Vec<usize>> = if k <= SPLIT_PERMUTE_MAX { permutations(k) } else { vec![(0..k).collect()] };
-        let mut best: Option<(u64, Vec<usize>, Vec<usize>)> = None; // (makespan, order, cuts)
-        for order in orders {
-            // dp[j][b]: the least makespan of the first j runs covering waypoints [0, b).
-            let mut dp = vec![vec![u64::MAX; m + 1]; k + 1];
-            let mut cut = vec![vec![0usize; m + 1]; k + 1];
-            dp[0][0] = 0;
-            for j in 1..=k {
-                for b in 0..=m {
-                    for a in 0..=b {
-                        if dp[j - 1][a] == u64::MAX {
-                            continue;
-                        }
-                        let v = dp[j - 1][a].max(cost(order[j - 1], a, b));
-                        if v < dp[j][b] {
-                            dp[j][b] = v;
-                            cut[j][b] = a;
-                        }
-                    }
-                }
-            }
-            let span = dp[k][m];
-            if best.as_ref().is_none_or(|b| span < b.0) {
-                let mut cuts = vec![m; k + 1];
-                for j in (1..=k).rev() {
-                    cuts[j - 1] = cut[j][cuts[j]];
-                }
-                best = Some((span, order, cuts));
-            }
-        }
-        let Some((_, order, cuts)) = best else { return Ok(Vec::new()) };
-        let mut routes =
-            vec![
-                Route { waypoints: Vec::new(), coverable: single.coverable, covered: single.covered, free: single.free, length_m: 0.0 };
-                k
-            ];
-        for (j, &r) in order.iter().enumerate() {
-            let (a, b) = (cuts[j], cuts[j + 1]);
-            routes[r].waypoints = single.waypoints[a..b].to_vec();
-            routes[r].length_m = cost(r, a, b) as f64 * CELL_M / 5.0;
-        }
-        Ok(routes)
-    }
-
-    /// [`Coverage::plan_team`]'s routes, each with its legs' path lengths (steps of 5 a cell).
-    fn plan_legs(&self, starts: &[[f64; 2]], covered: &[bool]) -> Result<Vec<(Route, Vec<u64>)>, RouteError> {
         let mut covered = covered.to_vec();
         covered.resize(self.ok.len(), false);
         let overhead = (LEG_OVERHEAD_M / CELL_M * 5.0) as u64;
@@ -406,7 +322,7 @@ impl<'a> Coverage<'a> {
         }
         let mut length_units = vec![0u64; starts.len()];
         let mut open = vec![true; starts.len()];
-        let mut chosen: Vec<Vec<(usize, usize, u64)>> = vec![Vec::new(); starts.len()];
+        let mut chosen: Vec<Vec<(usize, usize)>> = vec![Vec::new(); starts.len()];
         // The robot whose route is shortest and can still add.
         while let Some(r) = (0..starts.len()).filter(|&r| open[r]).min_by_key(|&r| (length_units[r], r)) {
             let mut best: Option<(u64, u64, usize, usize)> = None; // (gain·K / cost, cost, index, gain)
@@ -432,7 +348,7 @@ impl<'a> Coverage<'a> {
                 covered[i as usize] = true;
             }
             length_units[r] += d;
-            chosen[r].push((k, gain, d));
+            chosen[r].push((k, gain));
             fields[r] = self.map.dijkstra(&self.ok, self.cands[k].0);
         }
         let covered_n = covered.iter().filter(|b| **b).count();
@@ -443,7 +359,7 @@ impl<'a> Coverage<'a> {
             .map(|((ch, &start), &units)| {
                 let mut waypoints = Vec::with_capacity(ch.len());
                 let mut prev = start;
-                for &(k, gain, _) in ch {
+                for &(k, gain) in ch {
                     let p = self.map.centre(self.cands[k].0);
                     let heading = match self.fp {
                         Footprint::Camera { .. } => self.cands[k].1,
@@ -453,40 +369,10 @@ impl<'a> Coverage<'a> {
                     waypoints.push(Waypoint { x: p[0], y: p[1], heading, gain });
                     prev = p;
                 }
-                let legs = ch.iter().map(|c| c.2).collect();
-                (
-                    Route {
-                        waypoints,
-                        coverable: self.coverable,
-                        covered: covered_n,
-                        free: self.free,
-                        length_m: units as f64 * CELL_M / 5.0,
-                    },
-                    legs,
-                )
+                Route { waypoints, coverable: self.coverable, covered: covered_n, free: self.free, length_m: units as f64 * CELL_M / 5.0 }
             })
             .collect())
     }
-}
-
-/// Most robots for which [`Coverage::split`] tries every assignment of runs to robots.
-pub const SPLIT_PERMUTE_MAX: usize = 4;
-
-/// Every order of `0..k`, in lexicographic order.
-fn permutations(k: usize) -> Vec<Vec<usize>> {
-    if k == 0 {
-        return vec![Vec::new()];
-    }
-    let mut out = Vec::new();
-    for p in permutations(k - 1) {
-        for i in 0..=p.len() {
-            let mut q = p.clone();
-            q.insert(i, k - 1);
-            out.push(q);
-        }
-    }
-    out.sort();
-    out
 }
 
 /// The cell of `start`, or the nearest cell the robot can stand on within 1 m (it may start

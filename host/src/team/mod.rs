@@ -64,6 +64,19 @@ pub struct TickMsg {
 /// In a seen cell's index, the bit that says the camera saw a surface (an occupied cell).
 pub const SEEN_OCCUPIED: u32 = 1 << 31;
 
+/// Grid cell `i` (`y · side + x`) as the messages carry it, with [`SEEN_OCCUPIED`] if `occupied`.
+pub fn flag_cell(i: usize, occupied: bool) -> u32 {
+    i as u32 | if occupied { SEEN_OCCUPIED } else { 0 }
+}
+
+/// The grid cell `(x, y)` and the occupied flag of a cell as the messages carry it (`None`: off
+/// the grid).
+pub fn unflag_cell(c: u32) -> Option<(i32, i32, bool)> {
+    let side = firmware::capacity::GRID_CELLS as u32;
+    let i = c & !SEEN_OCCUPIED;
+    (i < side * side).then(|| ((i % side) as i32, (i / side) as i32, c & SEEN_OCCUPIED != 0))
+}
+
 /// A robot's share of the route.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Assignment {

@@ -80,27 +80,17 @@ impl TeamRobot {
     /// controller too, and gives it what the team's LiDARs observed
     /// ([`super::TickMsg::lidar`]; a cell its own LiDAR has observed keeps its own evidence).
     pub fn merge(&mut self, seen: &[u32], lidar: &[u32]) {
-        let side = firmware::capacity::GRID_CELLS as u32;
+        let side = firmware::capacity::GRID_CELLS;
         if let Some(known) = self.lidar_known.as_mut() {
-            for &c in lidar {
-                let i = c & !super::SEEN_OCCUPIED;
-                if i >= side * side {
-                    continue;
-                }
-                let (x, y) = ((i % side) as i32, (i / side) as i32);
-                self.brain.ctrl.merge_lidar(x, y, c & super::SEEN_OCCUPIED != 0);
-                known[i as usize] = cell_code(self.brain.ctrl.lidar.get(x, y));
+            for (x, y, occupied) in lidar.iter().filter_map(|&c| super::unflag_cell(c)) {
+                self.brain.ctrl.merge_lidar(x, y, occupied);
+                known[y as usize * side + x as usize] = cell_code(self.brain.ctrl.lidar.get(x, y));
             }
         }
-        for &c in seen {
-            let i = c & !super::SEEN_OCCUPIED;
-            if i >= side * side {
-                continue;
-            }
-            self.brain.ctrl.merge_seen((i % side) as i32, (i / side) as i32, c & super::SEEN_OCCUPIED != 0);
-            if let Some(w) = self.reported.get_mut(i as usize / 64) {
-                *w |= 1 << (i % 64);
-            }
+        for (x, y, occupied) in seen.iter().filter_map(|&c| super::unflag_cell(c)) {
+            self.brain.ctrl.merge_seen(x, y, occupied);
+            let i = y as usize * side + x as usize;
+            self.reported[i / 64] |= 1 << (i % 64);
         }
     }
 
@@ -182,8 +172,7 @@ impl TeamRobot {
                 let i = (y * side + x) as usize;
                 if ctrl.visual.seen(x, y) && self.reported[i / 64] >> (i % 64) & 1 == 0 {
                     self.reported[i / 64] |= 1 << (i % 64);
-                    let surface = ctrl.visual.get(x, y) == firmware::grid::Cell::Occupied;
-                    out.push(i as u32 | if surface { super::SEEN_OCCUPIED } else { 0 });
+                    out.push(super::flag_cell(i, ctrl.visual.get(x, y) == firmware::grid::Cell::Occupied));
                 }
             }
         }
@@ -204,7 +193,7 @@ impl TeamRobot {
                 let c = cell_code(lidar.get(x, y));
                 if c != 0 && c != known[i] {
                     known[i] = c;
-                    out.push(i as u32 | if c == 2 { super::SEEN_OCCUPIED } else { 0 });
+                    out.push(super::flag_cell(i, c == 2));
                 }
             }
         }
