@@ -16,7 +16,10 @@
 //!   one; then, if the interval has passed since the last priority waypoint ended (the route
 //!   gets at least that long; the first may come at once) and an inspection region exists, the goal becomes a viewpoint on the line from the region to
 //!   the robot at `λ·min(camera range, distance)` from it (as an object proposal's,
-//!   [`super::proposals`]), facing it; the nearest such viewpoint by path wins. It is done when
+//!   [`super::proposals`]), facing it — or, when a wall of the LiDAR grid stands between that
+//!   place and the region, the reachable place nearest the robot from which the camera would
+//!   see it ([`Planner::stand_in_sight`]); the nearest such viewpoint by path wins. A region
+//!   needs [`LIVE_REGION_MIN_HITS`] LiDAR returns first. It is done when
 //!   the robot stands there, when the camera has seen the region (the non-map store then drops
 //!   it), or when it is blacklisted; then the route resumes where it was left.
 //! * **Done**: the route is finished; `live` still visits the regions left, nearest first, one
@@ -27,12 +30,42 @@
 //! removed where the camera has looked; the paper's third filter, removal within
 //! `nonmap_wall_clearance_m` of LTF points, is off by default (0 m), as for LIVES.
 
-use super::proposals::stand_off;
+use super::proposals::{stand_off, PROPOSAL_LAMBDA_PER_MILLE};
 use super::{Planner, Site, Step, Viewpoint, UNREACHABLE};
-use crate::capacity::MAX_ROUTE_WAYPOINTS;
+use crate::capacity::{CELL_MM, MAX_ROUTE_WAYPOINTS};
 use crate::config::PlannerKind;
-use crate::grid::GridGeometry;
+use crate::grid::{ray_end, Cell, GridGeometry, LidarGrid, Line};
 use fixed_point::{atan2, BinaryAngle, Meters};
+
+/// The LiDAR returns an inspection region must have gathered (its non-map store point's
+/// `hits`) before a priority waypoint goes to it: a static object seen by one beam for a
+/// second (five scans at 5 Hz) or by five beams once. Fewer are a stray return (a corner
+/// of the map a few centimetres off, a person's last step) that would send the robot
+/// across the building for nothing.
+pub const LIVE_REGION_MIN_HITS: u16 = 5;
+
+/// Rays cast out of an inspection region for a place the camera would see it from, when the
+/// stand-off on the line to the robot would not ([`Planner::stand_in_sight`]).
+pub const INSPECTION_RAYS: usize = 16;
+
+/// The nearest such place to the region, cells (0.5 m: the camera sees the object whole).
+pub const INSPECTION_MIN_CELLS: i64 = 5;
+
+/// Whether the camera at cell `v` would see cell `c`: no occupied cell of the LiDAR grid on the
+/// line between them but in `c`'s own 3 × 3 neighbourhood (the region's points lie on a
+/// surface the grid holds).
+fn sees(lidar: &LidarGrid, v: (i32, i32), c: (i32, i32), work: &mut u32) -> bool {
+    for (x, y) in Line::new(v.0, v.1, c.0, c.1) {
+        *work += 1;
+        if (x - c.0).abs() <= 1 && (y - c.1).abs() <= 1 {
+            return true;
+        }
+        if lidar.get(x, y) == Cell::Occupied {
+            return false;
+        }
+    }
+    true
+}
 
 /// One waypoint of the route: where to stand and which way to face, in the map's frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -248,21 +281,63 @@ impl Planner {
         for p in step.inputs.nonmap.points() {
             let c = geom.cell_of(p.x, p.y);
             work += 1;
-            if step.inputs.visual.seen(c.0, c.1) {
+            if p.hits < LIVE_REGION_MIN_HITS || step.inputs.visual.seen(c.0, c.1) {
                 continue;
             }
+            let usable = |v: (i32, i32)| v != c && !self.is_blacklisted(v, bl) && !self.is_claimed(v, claim);
+            // The paper's stand-off on the line to the robot, if the camera would see the
+            // region from there; else the nearest place that would.
             let v = stand_off(robot, c, r_cells);
             work += ((2 * step.snap + 1) * (2 * step.snap + 1)) as u32;
-            let Some(v) = self.reachable_near(v, step.snap) else { continue };
-            if v == c || self.is_blacklisted(v, bl) || self.is_claimed(v, claim) {
-                continue;
-            }
+            let v = match self.reachable_near(v, step.snap) {
+                Some(v) if usable(v) && sees(step.inputs.lidar, v, c, &mut work) => Some(v),
+                _ => self.stand_in_sight(step.inputs.lidar, c, r_cells, &usable, &mut work),
+            };
+            let Some(v) = v else { continue };
             let d = self.distance(v.0, v.1);
             if best.is_none_or(|b| d < b.0) {
                 best = Some((d, (c, v, atan2(c.1 - v.1, c.0 - v.0))));
             }
         }
         (best.map(|(_, r)| r), work)
+    }
+
+    /// The reachable cell nearest the robot by path from which the camera would see region
+    /// cell `c`: on [`INSPECTION_RAYS`] rays out of `c`, from [`INSPECTION_MIN_CELLS`] to
+    /// `λ·range_cells` away (λ as for proposals), each stopping at the first occupied cell of
+    /// the LiDAR grid. `None` if no such cell is reachable and `usable`.
+    fn stand_in_sight(
+        &self,
+        lidar: &LidarGrid,
+        c: (i32, i32),
+        range_cells: i64,
+        usable: &dyn Fn((i32, i32)) -> bool,
+        work: &mut u32,
+    ) -> Option<(i32, i32)> {
+        let reach_mm = PROPOSAL_LAMBDA_PER_MILLE * range_cells * CELL_MM / 1000;
+        let reach = Meters::from_bits(((reach_mm << 16) / 1000) as i32);
+        let (cx, cy) = lidar.geom.center_of(c.0, c.1);
+        let mut best: Option<(u16, (i32, i32))> = None;
+        for k in 0..INSPECTION_RAYS {
+            let a = BinaryAngle::from_fraction(k as i64, INSPECTION_RAYS as i64);
+            let end = ray_end(&lidar.geom, cx, cy, a, reach);
+            for (x, y) in Line::new(c.0, c.1, end.0, end.1) {
+                *work += 1;
+                let (dx, dy) = ((x - c.0) as i64, (y - c.1) as i64);
+                let near_region = dx.abs() <= 1 && dy.abs() <= 1;
+                if !near_region && lidar.get(x, y) == Cell::Occupied {
+                    break;
+                }
+                if dx * dx + dy * dy < INSPECTION_MIN_CELLS * INSPECTION_MIN_CELLS {
+                    continue;
+                }
+                let d = self.distance(x, y);
+                if d != UNREACHABLE && best.is_none_or(|b| d < b.0) && usable((x, y)) {
+                    best = Some((d, (x, y)));
+                }
+            }
+        }
+        best.map(|b| b.1)
     }
 
     fn route_viewpoint(&self, cell: (i32, i32), heading: BinaryAngle, source: Site) -> Viewpoint {
@@ -348,9 +423,27 @@ mod tests {
             g.map(|g| ((mm(g.pose.x), mm(g.pose.y)), g.pose.theta, g.viewpoint.source))
         }
 
+        /// An inspection region at `(x, y)` (mm) with enough returns to be inspected.
         fn region(&mut self, x: i32, y: i32) {
+            self.returns(x, y, LIVE_REGION_MIN_HITS);
+        }
+
+        /// `n` non-map returns at `(x, y)` (mm).
+        fn returns(&mut self, x: i32, y: i32, n: u16) {
             let geom = self.lidar.geom;
-            self.nonmap.insert(&geom, m(x), m(y), self.cfg.nonmap_pool_radius_m);
+            for _ in 0..n {
+                self.nonmap.insert(&geom, m(x), m(y), self.cfg.nonmap_pool_radius_m);
+            }
+        }
+
+        /// A wall from `(x0, y0)` to `(x1, y1)` (cells, inclusive, along one axis).
+        fn wall(&mut self, (x0, y0): (i32, i32), (x1, y1): (i32, i32)) {
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let _ = self.lidar.evidence.add(x, y, crate::grid::EVIDENCE_MAX);
+                    self.lidar.grid.set(x, y, Cell::Occupied);
+                }
+            }
         }
     }
 
@@ -409,5 +502,49 @@ mod tests {
             l.planner.route.mark_done(i);
         }
         assert_eq!(l.step(15_050, 15_050, NORTH, 50).map(|g| g.2), Some(Site::Inspection));
+    }
+
+    #[test]
+    fn a_region_of_a_few_stray_returns_gets_no_priority_waypoint() {
+        let mut w = World::new(PlannerKind::Live);
+        w.returns(8_000, 12_000, LIVE_REGION_MIN_HITS - 1);
+        let (_, _, src) = w.step(5_050, 5_050, EAST, 4).unwrap();
+        assert_eq!(src, Site::Route, "{} returns are a stray, not a region", LIVE_REGION_MIN_HITS - 1);
+        assert_eq!(w.planner.route.stats.priorities, 0);
+        // One more return and it is one.
+        w.returns(8_000, 12_000, 1);
+        w.planner.route.restart();
+        let (_, _, src) = w.step(5_050, 5_050, EAST, 4).unwrap();
+        assert_eq!(src, Site::Inspection);
+    }
+
+    #[test]
+    fn a_region_behind_a_wall_is_looked_at_from_where_the_camera_sees_it() {
+        let mut w = World::new(PlannerKind::Live);
+        // A wall at x = 10 m from y = 0 to 15 m: the region at (12, 8) m is behind it for a
+        // robot at (5, 5) m, where the paper's stand-off on the line to the robot (half the
+        // camera's reach from the region, towards the robot) would face the wall.
+        w.wall((100, 0), (100, 150));
+        w.region(12_000, 8_000);
+        let robot = (5_050, 5_050);
+        let (at, heading, src) = w.step(robot.0, robot.1, EAST, 4).unwrap();
+        assert_eq!(src, Site::Inspection);
+        let geom = w.lidar.geom;
+        let stand = geom.cell_of(m(at.0 as i32), m(at.1 as i32));
+        let region = geom.cell_of(m(12_000), m(8_000));
+        let mut work = 0;
+        assert!(sees(&w.lidar, stand, region, &mut work), "stands at {at:?}, in sight of the region");
+        assert!(at.0 > 10_100, "on the region's side of the wall: {at:?}");
+        let (dx, dy) = (region.0 - stand.0, region.1 - stand.1);
+        assert!((dx * dx + dy * dy) as i64 >= INSPECTION_MIN_CELLS * INSPECTION_MIN_CELLS);
+        let bearing = atan2(dy, dx);
+        assert!((heading - bearing).unsigned_abs() < BinaryAngle::from_degrees(3).unsigned_abs(), "faces the region");
+        // In the open, the paper's stand-off is kept: on the line from the region to the robot.
+        let mut open = World::new(PlannerKind::Live);
+        open.region(12_000, 8_000);
+        let (at, _, _) = open.step(robot.0, robot.1, EAST, 4).unwrap();
+        let cross = (at.0 - 12_050) * (robot.1 - 8_050) - (at.1 - 8_050) * (robot.0 - 12_050);
+        let len = (((robot.0 - 12_050).pow(2) + (robot.1 - 8_050).pow(2)) as f64).sqrt();
+        assert!((cross as f64 / len).abs() < 150.0, "{at:?} is on the line to the robot");
     }
 }
