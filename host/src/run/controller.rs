@@ -13,20 +13,29 @@ pub struct InProcess {
     out: Option<Outputs>,
     last_start: Option<u64>,
     /// `None`: a search, which ends when the target is found or nothing is left to explore.
-    /// `Some(interval)`: a replay, which never ends the run and starts the search again when it
-    /// is exhausted and `interval` has passed since the last start.
+    /// `Some(interval)`: the run does not end when nothing is left to explore: the search starts
+    /// again when it is exhausted and `interval` has passed since the last start.
     restart_after_us: Option<u64>,
+    /// Whether finding the target ends the run (not for a replay: a log goes on).
+    end_on_found: bool,
 }
 
 impl InProcess {
     /// A search with `ctrl`: `Start` on the first tick, the run ends when it does.
     pub fn new(ctrl: Box<Controller>) -> Self {
-        InProcess { ctrl, out: None, last_start: None, restart_after_us: None }
+        InProcess { ctrl, out: None, last_start: None, restart_after_us: None, end_on_found: true }
     }
 
     /// A replay with `ctrl`: it never ends the run, and starts again when exhausted (every
     /// `interval_us` at most).
     pub fn restarting(ctrl: Box<Controller>, interval_us: u64) -> Self {
+        InProcess { restart_after_us: Some(interval_us), end_on_found: false, ..InProcess::new(ctrl) }
+    }
+
+    /// A team member's search with `ctrl`: it ends when the target is found, but not when
+    /// nothing is left to explore: it waits and starts again (every `interval_us` at most), for
+    /// a teammate's share of the work, a way that opens, or a region that appears.
+    pub fn waiting(ctrl: Box<Controller>, interval_us: u64) -> Self {
         InProcess { restart_after_us: Some(interval_us), ..InProcess::new(ctrl) }
     }
 
@@ -54,9 +63,9 @@ impl Brain for InProcess {
     fn think(&mut self, frame: &Frame) -> Result<Answer, Infallible> {
         let command = self.start(frame.t_us).then_some(Command::Start);
         let out = self.ctrl.tick(frame.t_us, &frame.inputs(command));
-        let end = match (self.restart_after_us, out.status.mode) {
-            (None, Some(Mode::TargetFound)) => Some(End::Found),
-            (None, Some(Mode::Exhausted)) => Some(End::Exhausted),
+        let end = match out.status.mode {
+            Some(Mode::TargetFound) if self.end_on_found => Some(End::Found),
+            Some(Mode::Exhausted) if self.restart_after_us.is_none() => Some(End::Exhausted),
             _ => None,
         };
         let mut acts = Vec::new();

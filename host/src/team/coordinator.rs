@@ -1,8 +1,8 @@
 //! The team's coordinator: LIVE's central server for several robots. It plans the coverage
 //! route's waypoints among the robots by path cost ([`crate::live::coverage::Coverage::plan_team`]),
 //! merges what their cameras have seen, notes which waypoints they have done, re-plans what is
-//! left among the robots still answering when one stops, and stops everyone when one finds the
-//! target. It never reads a clock: a robot is lost when the transport says its status for a
+//! left among the robots still answering when one stops answering or has done its whole share,
+//! and stops everyone when one finds the target. It never reads a clock: a robot is lost when the transport says its status for a
 //! tick did not come.
 
 use super::{Assignment, RobotReport, Status, TeamResult, TickMsg};
@@ -42,6 +42,7 @@ pub struct Coordinator {
     last_tick: u32,
     reports: Vec<RobotReport>,
     reassignments: u32,
+    reshares: u32,
     stale_goals: u32,
     entropy_start: Option<u32>,
 }
@@ -71,6 +72,7 @@ impl Coordinator {
             last_tick: 0,
             reports: (0..n).map(|robot| RobotReport { robot, ..RobotReport::default() }).collect(),
             reassignments: 0,
+            reshares: 0,
             stale_goals: 0,
             entropy_start: None,
         }
@@ -196,9 +198,17 @@ impl Coordinator {
         self.relay_lidar.dedup_by_key(|c| *c & !super::SEEN_OCCUPIED);
         let survivors: Vec<usize> = (0..self.n).filter(|&i| self.alive[i]).collect();
         let mut decision = Decision::default();
+        // A robot that has done every waypoint of its share (a non-empty one: an empty share
+        // means nothing was left to give it) takes part of what the others have left.
+        let finished = survivors
+            .iter()
+            .any(|&i| !self.routes[i].is_empty() && self.done_now[i].iter().all(|&d| d) && self.last[i].as_ref().is_some_and(|s| !s.idle));
         if !lost_now.is_empty() && !survivors.is_empty() {
             decision.assignments = self.plan(&survivors)?;
             self.reassignments += decision.assignments.len() as u32;
+        } else if finished {
+            decision.assignments = self.plan(&survivors)?;
+            self.reshares += 1;
         }
         let all_idle = survivors.iter().all(|&i| self.last[i].as_ref().is_some_and(|s| s.idle));
         decision.stop = self.found_by.is_some() || all_idle;
@@ -248,10 +258,77 @@ impl Coordinator {
             outcome: outcome.to_string(),
             ticks: self.last_tick + 1,
             reassignments: self.reassignments,
+            reshares: self.reshares,
             stale_goals: self.stale_goals,
             entropy_bits: self.entropy_start.zip(self.entropy()).map(|(a, b)| [a, b]),
             seen_cells: self.seen.iter().filter(|b| **b).count(),
             per_robot,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use firmware::capacity::GRID_CELLS;
+
+    /// A 30 × 6 m corridor of free cells walled round, at the grid's origin.
+    fn corridor() -> Arc<Vec<Cell3>> {
+        let mut cells = vec![Cell3::Unknown; GRID_CELLS * GRID_CELLS];
+        for y in 0..=60 {
+            for x in 0..=300 {
+                let wall = x == 0 || y == 0 || x == 300 || y == 60;
+                cells[y * GRID_CELLS + x] = if wall { Cell3::Occupied } else { Cell3::Free };
+            }
+        }
+        Arc::new(cells)
+    }
+
+    fn status(robot: u32, tick: Option<u32>, at: [f64; 2], epoch: u32, done: Vec<u16>) -> Status {
+        Status {
+            robot,
+            instance: 1,
+            tick,
+            pose: [at[0], at[1], 0.0],
+            found: false,
+            idle: false,
+            epoch,
+            goal_epoch: None,
+            done,
+            seen: Vec::new(),
+            goal: None,
+            lidar: Vec::new(),
+            path_m: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_robot_that_has_done_its_share_takes_part_of_what_is_left() {
+        // The camera's footprint (`visual-cpp`): the LiDAR's would cover the corridor from one
+        // waypoint.
+        let mut cfg = firmware::Config::DEFAULT.with_planner(firmware::PlannerKind::VisualCoverage);
+        cfg.origin_x_m = firmware::Meters::ZERO;
+        cfg.origin_y_m = firmware::Meters::ZERO;
+        let (a, b) = ([2.0, 3.0], [28.0, 3.0]);
+        let mut c = Coordinator::new(cfg, Some(corridor()), 2, 0.2, 100.0);
+        let first = c.start(&[status(0, None, a, 0, vec![]), status(1, None, b, 0, vec![])]).unwrap();
+        assert_eq!(first.len(), 2);
+        let (n0, n1) = (first[0].waypoints.len(), first[1].waypoints.len());
+        assert!(n0 > 0 && n1 > 1, "both robots have a share: {n0}, {n1}");
+        // Nothing done yet: no new plan.
+        let d = c.after_tick(0, &[Some(status(0, Some(0), a, 1, vec![])), Some(status(1, Some(0), b, 1, vec![]))]).unwrap();
+        assert!(d.assignments.is_empty() && !d.stop);
+        // Robot 0 has done its whole share, robot 1 none of its: what is left is shared out
+        // again, robot 0 gets part of it, and the epochs move on.
+        let all0: Vec<u16> = (0..n0 as u16).collect();
+        let d = c.after_tick(1, &[Some(status(0, Some(1), a, 1, all0)), Some(status(1, Some(1), b, 1, vec![]))]).unwrap();
+        assert_eq!(d.assignments.len(), 2, "{d:?}");
+        assert!(d.assignments.iter().all(|x| x.epoch == 2));
+        assert!(!d.assignments[0].waypoints.is_empty(), "robot 0 takes part of robot 1's share");
+        assert_eq!((c.reshares, c.reassignments), (1, 0));
+        // The new shares are not done: no re-plan on the next tick.
+        let d = c.after_tick(2, &[Some(status(0, Some(2), a, 2, vec![])), Some(status(1, Some(2), b, 2, vec![]))]).unwrap();
+        assert!(d.assignments.is_empty());
+        assert_eq!(c.reshares, 1);
     }
 }

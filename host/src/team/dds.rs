@@ -260,7 +260,7 @@ pub fn robot(spec: &TeamSpec, id: usize, opts: &DdsOptions) -> Result<(), String
         return Err(format!("--as-robot {id}: the team has robots 0..{}", spec.robots - 1));
     }
     let start = starts(&spec.base, spec.robots)?[id];
-    let mut robot = TeamRobot::new(id as u32, std::process::id(), &robot_spec(&spec.base, start))?;
+    let mut robot = TeamRobot::new(id as u32, std::process::id(), &robot_spec(&spec.base, start), spec.robots > 1)?;
     let bus = Bus::join(opts)?;
     let status_w = bus.writer(&status_topic(id), codec::STATUS_TYPE, STATUS_QOS)?;
     let mut tick_r = bus.reader(TICK_TOPIC, codec::TICK_TYPE, Qos::Latched)?;

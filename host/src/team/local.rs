@@ -33,7 +33,7 @@ pub fn run(spec: &TeamSpec) -> Result<TeamResult, String> {
     let starts = starts(&spec.base, spec.robots)?;
     let mut robots = Vec::with_capacity(spec.robots);
     for (i, s) in starts.iter().enumerate() {
-        robots.push(TeamRobot::new(i as u32, std::process::id(), &robot_spec(&spec.base, *s))?);
+        robots.push(TeamRobot::new(i as u32, std::process::id(), &robot_spec(&spec.base, *s), spec.robots > 1)?);
     }
     let mut coord = coordinator(spec);
     let hellos: Vec<Status> = robots.iter().map(TeamRobot::hello).collect();

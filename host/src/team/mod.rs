@@ -101,7 +101,8 @@ pub struct Status {
     pub pose: [f64; 3],
     /// The camera confirmed the target.
     pub found: bool,
-    /// The robot has nothing left to do (its planner is exhausted) or its run ended.
+    /// Its run ended (a robot with teammates does not end when its planner has nothing left:
+    /// it waits for a share of what the others have left).
     pub idle: bool,
     /// The epoch of the assignment it follows.
     pub epoch: u32,
@@ -178,6 +179,8 @@ pub struct TeamResult {
     pub ticks: u32,
     /// Assignments sent after the first (re-assignments on a lost robot).
     pub reassignments: u32,
+    /// Times what was left was shared out again because a robot had done its whole share.
+    pub reshares: u32,
     /// Ticks at which a robot's goal came from an assignment older than its newest: must be 0.
     pub stale_goals: u32,
     /// Free cells of the known map no camera has seen, at the start and at the end (known-map).
@@ -256,7 +259,7 @@ impl TeamResult {
                 format!("{} ({:.0} s)", r.outcome, r.time_s)
             },
         );
-        s += &format!(", {} re-assignments, {} stale goals", r.reassignments, r.stale_goals);
+        s += &format!(", {} re-assignments, {} re-shares, {} stale goals", r.reassignments, r.reshares, r.stale_goals);
         for p in &r.per_robot {
             s += &format!(
                 "\n  robot {}: start ({:.1}, {:.1}), path {:.1} m, waypoints {}/{}{}, {:.0} B/s up, {:.0} B/s down",

@@ -33,8 +33,11 @@ pub struct TeamRobot {
 impl TeamRobot {
     /// Robot `id` of a team, searching `spec` (already started where it stands,
     /// [`super::robot_spec`]); the known map, if any, is loaded but no route given (the
-    /// coordinator assigns it). Fails if the spec's model does not validate.
-    pub fn new(id: u32, instance: u32, spec: &SearchSpec) -> Result<Self, String> {
+    /// coordinator assigns it). With `teammates`, running out of work does not end its run: it
+    /// waits, re-planning every `replan_interval`, for a share of what the others have left (a
+    /// team of one ends as the single-robot search does). Fails if the spec's model does not
+    /// validate.
+    pub fn new(id: u32, instance: u32, spec: &SearchSpec, teammates: bool) -> Result<Self, String> {
         let cfg = crate::run::controller_config(&spec.controller, &spec.world, spec.planner.kind());
         let mut ctrl = Box::new(Controller::new(cfg));
         if let (true, Some(blob)) = (spec.classifier(), spec.model) {
@@ -48,7 +51,7 @@ impl TeamRobot {
             id,
             instance,
             source: spec.sim_source(),
-            brain: InProcess::new(ctrl),
+            brain: if teammates { InProcess::waiting(ctrl, cfg.replan_interval_us) } else { InProcess::new(ctrl) },
             epoch: 0,
             goal_epoch: None,
             route_len: 0,
