@@ -543,8 +543,9 @@ mod tests {
         let mut open = World::new(PlannerKind::Live);
         open.region(12_000, 8_000);
         let (at, _, _) = open.step(robot.0, robot.1, EAST, 4).unwrap();
+        // Within 150 mm of that line: |cross| / len < 150, in integers.
         let cross = (at.0 - 12_050) * (robot.1 - 8_050) - (at.1 - 8_050) * (robot.0 - 12_050);
-        let len = (((robot.0 - 12_050).pow(2) + (robot.1 - 8_050).pow(2)) as f64).sqrt();
-        assert!((cross as f64 / len).abs() < 150.0, "{at:?} is on the line to the robot");
+        let len2 = (robot.0 - 12_050).pow(2) + (robot.1 - 8_050).pow(2);
+        assert!(cross * cross < 150 * 150 * len2, "{at:?} is on the line to the robot");
     }
 }
