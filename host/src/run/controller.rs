@@ -112,3 +112,64 @@ pub fn centred_origin(centre: [f64; 2]) -> [f64; 2] {
     let half = firmware::capacity::GRID_CELLS as f64 / firmware::capacity::CELLS_PER_METER as f64 / 2.0;
     centre.map(|c| ((c - half) * 10.0).round() / 10.0)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::range::EncodedScan;
+    use firmware::{BinaryAngle, Meters, Pose2};
+
+    /// A tick at `t_us` of a robot at (5, 5) m inside a round wall 1 m away (nothing to explore
+    /// once the wall is mapped), the camera detecting the target if `detection`.
+    fn enclosed(t_us: u64, detection: bool) -> Frame {
+        Frame {
+            t_us,
+            pose: Some(Pose2::new(Meters::from_num(5), Meters::from_num(5), BinaryAngle::ZERO)),
+            base_pose: [5.0, 5.0, 0.0],
+            time_s: t_us as f64 / 1e6,
+            scan: EncodedScan {
+                angle_min: BinaryAngle::ZERO,
+                angle_increment: BinaryAngle::from_fraction(1, 360),
+                ranges_mm: vec![1_000; 360],
+                range_min_mm: 100,
+                range_max_mm: 10_000,
+                labels: Vec::new(),
+            },
+            labels: false,
+            detection,
+            base_blocked: false,
+        }
+    }
+
+    /// The ends and starts of `brain` over `ticks` ticks of 0.2 s.
+    fn run(brain: &mut InProcess, ticks: u64, detection_at: Option<u64>) -> (Vec<End>, usize) {
+        let (mut ends, mut starts) = (Vec::new(), 0);
+        for k in 0..ticks {
+            let Ok(a) = brain.think(&enclosed(k * 200_000, detection_at == Some(k)));
+            ends.extend(a.end);
+            starts += a.command.is_some() as usize;
+        }
+        (ends, starts)
+    }
+
+    fn ctrl() -> Box<Controller> {
+        Box::new(Controller::new(Config::DEFAULT))
+    }
+
+    #[test]
+    fn a_search_ends_when_exhausted_a_waiting_one_starts_again_and_a_replay_never_ends() {
+        // A search: exhausted within the first seconds, and that ends it.
+        let (ends, starts) = run(&mut InProcess::new(ctrl()), 50, None);
+        assert!(ends.contains(&End::Exhausted), "{ends:?}");
+        assert_eq!(starts, 1);
+        // A team member: never ends for it, and starts again (every 1 s at most).
+        let (ends, starts) = run(&mut InProcess::waiting(ctrl(), 1_000_000), 50, None);
+        assert!(ends.is_empty(), "{ends:?}");
+        assert!((3..=10).contains(&starts), "{starts} starts in 10 s");
+        // It does end on a find; a replay does not.
+        let (ends, _) = run(&mut InProcess::waiting(ctrl(), 1_000_000), 50, Some(30));
+        assert_eq!(ends.first(), Some(&End::Found), "{ends:?}");
+        let (ends, _) = run(&mut InProcess::restarting(ctrl(), 1_000_000), 50, Some(30));
+        assert!(ends.is_empty(), "{ends:?}");
+    }
+}
