@@ -9,6 +9,8 @@
 //! `--trace` lines.
 
 pub use crate::robot_model::{controller_model, default_sim, ideal_sim, Robot, CALIBRATED_CAMERA_RANGE_M, SHORT_CAMERA_RANGE_M};
+pub mod picture;
+
 use crate::run::{
     controller_config, count_labels, drive, round3, AfterAct, Answer, End, Ended, Frame, InProcess, LabelScore, Motion, SimSource,
 };
@@ -587,6 +589,24 @@ impl SearchResult {
     }
 }
 
+/// Runs a search, recording every tick into `rec` if there is one
+/// ([`try_run_observed`] with [`Recorder::record_controller_tick`]). The run is the
+/// same as without recording; a recording error stops the recording (not the run) and comes back
+/// beside the run.
+pub fn record_search(
+    spec: &SearchSpec,
+    mut rec: Option<&mut crate::io::record::Recorder>,
+    progress: impl FnMut(f64),
+) -> Result<(SearchRun, Result<(), crate::io::record::RecordError>), firmware::classifier::ModelError> {
+    let mut recorded: Result<(), crate::io::record::RecordError> = Ok(());
+    let run = try_run_observed(spec, progress, |t| {
+        if let (Some(rec), true) = (rec.as_deref_mut(), recorded.is_ok()) {
+            recorded = rec.record_controller_tick(t.t_us, t.inputs, t.outputs, t.controller);
+        }
+    })?;
+    Ok((run, recorded))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -707,3 +727,6 @@ mod ideal_sensor_digest {
         assert_eq!(digest(ideal_sim(), 150), digest(ideal_sim(), 150), "deterministic");
     }
 }
+
+#[cfg(test)]
+mod record_tests;

@@ -6,7 +6,8 @@
 //! Needs python3 with `mcap` (`./scripts/test.sh` installs it into `target/py-mcap`; or set
 //! `LIVES_PYTHON` to an interpreter that has it).
 
-use host::io::record::{record_search, RecordOptions, Recorder};
+use host::io::record::{RecordOptions, Recorder};
+use host::search::record_search;
 use host::search::{PlannerChoice, SearchSpec};
 use host::sim::{Scenario, World};
 use serde_json::Value;
@@ -180,7 +181,7 @@ fn a_killed_lives_search_leaves_a_readable_recording() {
 fn a_bridge_recording_holds_the_protocol_messages_and_changes_nothing() {
     use firmware::node::TimeMode;
     use firmware::Config;
-    use host::io::record::SharedRecording;
+    use host::link::record::SharedRecording;
     use host::link::{mem_pair, run_bridge, BridgeOptions, NodeOptions, NodeProcess, Source};
     use std::sync::atomic::{AtomicBool, Ordering};
 

@@ -251,7 +251,7 @@ fn pictures_render_for_every_planner() {
     for planner in [PlannerChoice::Multisensor, PlannerChoice::Lives, PlannerChoice::Nearest] {
         let run = search::run(&spec("apartment", Scenario::Easy, planner, 1), |_| {});
         let path = dir.join(format!("{planner}.png"));
-        host::render::picture::write_png(&run, &path, "test").unwrap();
+        host::search::picture::write_png(&run, &path, "test").unwrap();
         let bytes = std::fs::read(&path).unwrap();
         assert_eq!(&bytes[..4], b"\x89PNG");
     }

@@ -4,7 +4,7 @@
 mod common;
 use common::{lives, root};
 use firmware::{BinaryAngle, Config, Controller, Pose2};
-use host::io::range::EncodedScan;
+use host::run::range::EncodedScan;
 use host::run::{Act, Brain, Frame, InProcess};
 use host::search::PlannerChoice;
 use serde_json::{json, Value};
@@ -122,7 +122,7 @@ fn ros2_controller(args: &[&str]) -> Box<Controller> {
 fn frame(v: &Value, hello: &Value) -> Frame {
     let s = &v["scan"];
     let f = |x: &Value| x.as_f64().unwrap();
-    let limits = host::io::range::RangeLimits::new(f(&s["range_min"]), f(&s["range_max"]));
+    let limits = host::run::range::RangeLimits::new(f(&s["range_min"]), f(&s["range_max"]));
     let ranges = s["ranges_mm"].as_array().unwrap().iter().map(|r| match r.as_u64().unwrap() {
         r if r == hello["range_invalid"].as_u64().unwrap() => f64::NAN,
         r if r == hello["range_no_return"].as_u64().unwrap() => f64::INFINITY,

@@ -92,7 +92,7 @@ pub fn run(args: BridgeArgs) -> Result<ExitCode, String> {
     let mode = if lockstep { TimeMode::Lockstep } else { TimeMode::RealTime };
     let mut link = open_serial(&port, baud);
     let stop = std::sync::atomic::AtomicBool::new(false);
-    let recording = record.as_ref().map(|p| host::io::record::SharedRecording::create(p)).transpose().map_err(|e| e.to_string())?;
+    let recording = record.as_ref().map(|p| host::link::record::SharedRecording::create(p)).transpose().map_err(|e| e.to_string())?;
     let opts = BridgeOptions {
         scan_segment_beams: scan_segment_beams as usize,
         want_labels: recording.is_some(),

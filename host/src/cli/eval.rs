@@ -158,7 +158,7 @@ pub fn run(args: EvalArgs) -> Result<ExitCode, String> {
                 if r.found { format!("FOUND in {:.1} s", r.time_s) } else { "NOT FOUND".into() }
             );
             let path = dir.join(format!("{}-{}-{}.png", r.world, r.scenario, r.planner));
-            host::render::picture::write_png(&run, &path, &title).map_err(|e| format!("{}: {e}", path.display()))?;
+            host::search::picture::write_png(&run, &path, &title).map_err(|e| format!("{}: {e}", path.display()))?;
         }
     }
     say!("{md}");

@@ -37,7 +37,7 @@ pub struct NodeArgs {
 
 pub fn run(args: NodeArgs) -> Result<ExitCode, String> {
     let NodeArgs { port, baud, lockstep, seconds, model, no_model } = args;
-    let blob = host::learn::model::model_option(model.as_deref(), no_model)?;
+    let blob = host::io::model_file::model_option(model.as_deref(), no_model)?;
     let classifier = match (&model, blob) {
         (Some(p), _) => p.display().to_string(),
         (None, Some(_)) => "geometric (embedded)".to_string(),

@@ -76,7 +76,7 @@ pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
         host::overrides::apply(&mut cfg, a)?;
     }
     let cfg = cfg.with_planner(planner.kind());
-    let blob = if planner.uses_classifier() { host::learn::model::model_option(model.as_deref(), false)? } else { None };
+    let blob = if planner.uses_classifier() { host::io::model_file::model_option(model.as_deref(), false)? } else { None };
     if model.is_some() && blob.is_none() {
         return Err(format!("--model is the classifier `lives` runs; `{planner}` runs none"));
     }

@@ -49,7 +49,7 @@ pub fn run(args: SearchArgs) -> Result<ExitCode, String> {
         }
         robot.configure(&mut spec)?;
         if spec.planner.uses_classifier() {
-            spec.model = host::learn::model::model_option(None, false)?;
+            spec.model = host::io::model_file::model_option(None, false)?;
         }
         let r = host::team::local::run(&host::team::TeamSpec { base: spec, robots, kill: None })?;
         say!("{}", if json { serde_json::to_string(&r).map_err(|e| e.to_string())? } else { r.summary() });
@@ -65,10 +65,10 @@ pub fn run(args: SearchArgs) -> Result<ExitCode, String> {
     if model.is_some() && !spec.planner.uses_classifier() {
         return Err(format!("--model is the classifier `lives` runs; `{}` runs none", spec.planner));
     }
-    spec.model = host::learn::model::model_option(model.as_deref(), false)?;
+    spec.model = host::io::model_file::model_option(model.as_deref(), false)?;
     let mut recorder =
         record.as_ref().map(|p| host::io::record::Recorder::create(p, Default::default())).transpose().map_err(|e| e.to_string())?;
-    let (run, recorded) = host::io::record::record_search(&spec, recorder.as_mut(), |t| pb.set_position(t as u64)).map_err(|e| {
+    let (run, recorded) = host::search::record_search(&spec, recorder.as_mut(), |t| pb.set_position(t as u64)).map_err(|e| {
         format!("{}: the model does not validate: {e}", model.as_ref().map(|p| p.display().to_string()).unwrap_or_default())
     })?;
     let wall = t0.elapsed().as_secs_f64();
@@ -92,7 +92,7 @@ pub fn run(args: SearchArgs) -> Result<ExitCode, String> {
             },
             r.path_m
         );
-        host::render::picture::write_png(&run, path, &title).map_err(|e| format!("writing {}: {e}", path.display()))?;
+        host::search::picture::write_png(&run, path, &title).map_err(|e| format!("writing {}: {e}", path.display()))?;
     }
     if json {
         say!("{}", serde_json::to_string(r).map_err(|e| e.to_string())?);

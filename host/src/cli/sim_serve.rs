@@ -31,7 +31,7 @@ pub fn run(args: SimServeArgs) -> Result<ExitCode, String> {
     let mut spec = load_spec(&args.run)?;
     args.robot.configure(&mut spec)?;
     // As `lives search` without `--model`: `lives` runs the committed geometric classifier.
-    spec.model = host::learn::model::model_option(None, false)?;
+    spec.model = host::io::model_file::model_option(None, false)?;
     if spec.sim_labels() {
         return Err(format!(
             "`{}` runs on the simulator's ground-truth labels, which cannot travel over ROS (a LaserScan has no per-beam labels); \

@@ -67,7 +67,7 @@ pub fn run(args: TeamArgs) -> Result<ExitCode, String> {
     };
     args.robot.configure(&mut spec)?;
     if spec.planner.uses_classifier() {
-        spec.model = host::learn::model::model_option(None, false)?;
+        spec.model = host::io::model_file::model_option(None, false)?;
     }
     if args.known_map {
         if args.run.map.is_some() {

@@ -99,7 +99,7 @@ pub struct BridgeOptions {
     /// scans.
     pub scan_segment_beams: usize,
     /// Sees each tick's pose, scan and detection and every message from the node (recordings:
-    /// `host::io::record::SharedRecording`). It cannot change the run.
+    /// `host::link::record::SharedRecording`). It cannot change the run.
     pub observer: Option<SharedObserver>,
 }
 

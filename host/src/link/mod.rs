@@ -21,6 +21,7 @@ pub mod adapter;
 pub mod bridge;
 pub mod fault;
 pub mod node;
+pub mod record;
 pub mod robot;
 #[cfg(feature = "ros2")]
 pub mod ros2;
@@ -271,22 +272,8 @@ impl Link for MemLink {
     }
 }
 
-/// Summary of a set of samples (microseconds).
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct Summary {
-    /// Samples.
-    pub n: usize,
-    /// Smallest.
-    pub min: f64,
-    /// Median.
-    pub p50: f64,
-    /// 95th percentile.
-    pub p95: f64,
-    /// Largest.
-    pub max: f64,
-    /// Mean.
-    pub mean: f64,
-}
+/// Summary statistics live with the run loop; the link reports its timings with them.
+pub use crate::run::Summary;
 
 /// Timings of a process that runs for days, in bounded memory: count, minimum, maximum and mean
 /// of every sample exactly, the percentiles from a systematic sample of at most
@@ -336,19 +323,6 @@ impl Timings {
         }
         let kept = Summary::of(&self.kept);
         Summary { n: self.n as usize, min: self.min, p50: kept.p50, p95: kept.p95, max: self.max, mean: self.sum / self.n as f64 }
-    }
-}
-
-impl Summary {
-    /// Of `samples` (any order).
-    pub fn of(samples: &[f64]) -> Summary {
-        if samples.is_empty() {
-            return Summary::default();
-        }
-        let mut v = samples.to_vec();
-        v.sort_by(|a, b| a.total_cmp(b));
-        let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
-        Summary { n: v.len(), min: v[0], p50: at(0.5), p95: at(0.95), max: v[v.len() - 1], mean: v.iter().sum::<f64>() / v.len() as f64 }
     }
 }
 

@@ -27,8 +27,8 @@ use super::adapter::{round_to, AdapterConfig, AdapterServer, AdapterStats, Detec
 use super::bridge::{resume_from, Base, Bridge, BridgeError, BridgeOptions, BridgeResult};
 use super::SerialLink;
 use super::{Link, Summary, TimeMode};
-use crate::io::range::{EncodedScan, RangeLimits};
 use crate::io::sensors::vlp16::{PlanarScan, Vlp16Config, Vlp16Udp};
+use crate::run::range::{EncodedScan, RangeLimits};
 use crate::run::round3;
 use crate::search::{PlannerChoice, SearchResult};
 use firmware::protocol::{
@@ -115,7 +115,7 @@ pub struct RobotRun {
     pub log: Vec<(f64, String)>,
 }
 
-/// Encodes a planar scan ([`crate::io::range`]: REP 117, its limits travel with it). More than
+/// Encodes a planar scan ([`crate::run::range`]: REP 117, its limits travel with it). More than
 /// [`MAX_WIRE_BEAMS`] ranges are decimated (every k-th range, the increment k times larger; the
 /// core resamples onto its 897 beams anyway).
 pub(crate) fn encode_planar(angle_min: f64, angle_increment: f64, ranges: &[f32], limits: RangeLimits) -> Option<EncodedScan> {
@@ -700,7 +700,7 @@ pub fn run_cli(o: CliOptions) -> Result<ExitCode, String> {
         eprintln!("waiting for {} ({e})", o.port.display());
         SerialLink::by_path(&o.port, o.baud)
     });
-    let recording = o.record.as_ref().map(|p| crate::io::record::SharedRecording::create(p)).transpose().map_err(|e| e.to_string())?;
+    let recording = o.record.as_ref().map(|p| crate::link::record::SharedRecording::create(p)).transpose().map_err(|e| e.to_string())?;
     let opts = BridgeOptions {
         want_labels: recording.is_some(),
         observer: recording.as_ref().map(|r| r.observer()),

@@ -284,7 +284,7 @@ pub fn cdr_messages(data: &[u8]) {
 /// A classifier blob of either format: validates or is an error; one that validates installs in
 /// a controller as `--model` does.
 pub fn model(data: &[u8]) {
-    if crate::learn::model::validate_blob(data).is_ok() {
+    if crate::io::model_file::validate_blob(data).is_ok() {
         // Only blobs that validate are kept for the rest of the process (the controller takes a
         // `'static` blob, as the firmware's embedded ones are); mutations rarely validate.
         let blob: &'static [u8] = Box::leak(data.to_vec().into_boxed_slice());

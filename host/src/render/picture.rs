@@ -1,10 +1,8 @@
-//! Turns a finished [`SearchRun`] into the renderer's plain-data input and writes the PNG.
+//! What the pictures of a search and of a replay share: the outline of a world's shape and the
+//! layers of the controller's state ([`controller_layers`]).
 
-use crate::render::{render_png, GridView, RenderError, RenderInput};
-use crate::search::SearchRun;
 use crate::sim::Shape;
 use firmware::capacity::GRID_CELLS;
-use std::path::Path;
 
 /// The outline of a shape as a closed polygon.
 pub fn outline(shape: &Shape) -> Vec<[f64; 2]> {
@@ -69,38 +67,4 @@ pub fn controller_layers(ctrl: &firmware::Controller) -> ControllerLayers {
     let goal_path: Vec<[f64; 2]> =
         ctrl.goal().map(|g| g.path.iter().map(|w| [w.0.to_num::<f64>(), w.1.to_num::<f64>()]).collect()).unwrap_or_default();
     ControllerLayers { origin, cell_m: cell, nonmap, frontier_cells, viewpoints, goal, goal_path }
-}
-
-/// Writes the picture of `run` to `path` with `title`.
-pub fn write_png(run: &SearchRun, path: &Path, title: &str) -> Result<(), RenderError> {
-    let ctrl = &run.controller;
-    let world = run.sim.world();
-    let ControllerLayers { origin, cell_m: cell, nonmap, frontier_cells, viewpoints, goal, goal_path } = controller_layers(ctrl);
-    let obstacles: Vec<Vec<[f64; 2]>> = world.obstacles.iter().map(|o| outline(&o.shape)).collect();
-    let targets: Vec<Vec<[f64; 2]>> = run.sim.target_shapes().iter().map(outline).collect();
-    let people: Vec<[f64; 2]> = run.sim.people().iter().map(|p| p.0).collect();
-    let pose = run.sim.pose();
-    let lidar = |x: usize, y: usize| ctrl.lidar.get(x as i32, y as i32).to_ros();
-    let seen = |x: usize, y: usize| ctrl.visual.seen(x as i32, y as i32);
-    let input = RenderInput {
-        title: title.to_string(),
-        bounds: world.bounds,
-        walls: &world.walls,
-        obstacles: &obstacles,
-        people: &people,
-        targets: &targets,
-        grid: GridView { origin, cell_m: cell, width: GRID_CELLS, height: GRID_CELLS, lidar: &lidar, seen: &seen },
-        nonmap_points: &nonmap,
-        frontier_cells: &frontier_cells,
-        viewpoints: &viewpoints,
-        trajectory: &run.trajectory,
-        start: ([run.start[0], run.start[1]], run.start[2]),
-        robot: ([pose[0], pose[1]], pose[2]),
-        goal,
-        goal_path: &goal_path,
-        found_at: run.found_at,
-        camera_fov_rad: run.sim.config().camera_fov_rad,
-        camera_range_m: run.sim.config().camera_range_m,
-    };
-    render_png(path, &input)
 }

@@ -116,7 +116,7 @@ pub fn centred_origin(centre: [f64; 2]) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::range::EncodedScan;
+    use crate::run::range::EncodedScan;
     use firmware::{BinaryAngle, Meters, Pose2};
 
     /// A tick at `t_us` of a robot at (5, 5) m inside a round wall 1 m away (nothing to explore

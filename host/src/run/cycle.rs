@@ -1,6 +1,6 @@
 //! The loop and what passes through it (see the module above).
 
-use crate::io::range::EncodedScan;
+use crate::run::range::EncodedScan;
 use firmware::{Command, Detection, Inputs, Pose2};
 
 /// Controller period and simulator step, microseconds (the LiDAR's 5 Hz).

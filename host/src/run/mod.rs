@@ -32,15 +32,21 @@
 //!   between the node's frames), so its loop stays its own: a session that owns the robot's base.
 //! * **Tick counts.** The loop counts thoughts; the bridge counts ticks the node answered
 //!   (lockstep) or that were sent (real time), its own definition, kept in the node brain.
+//!
+//! Every source gives its scans to the loop in the core's encoding, by one rule ([`range`]: a
+//! metric range to the wire's millimetres, ROS's REP 117).
 
 mod controller;
 mod cycle;
+pub mod range;
 mod score;
 mod sim;
 mod walk;
 
 pub use controller::{centred_origin, controller_config, Idle, InProcess};
 pub use cycle::{drive, Act, AfterAct, Answer, Brain, End, Ended, Frame, Observer, Source, TICK_US};
-pub use score::{count_labels, round3, LabelScore, Motion, RunTally, LIDAR_SIGHTING_BEAMS, MOVING_M_PER_TICK, TURNING_RAD_PER_TICK};
+pub use score::{
+    count_labels, round3, LabelScore, Motion, RunTally, Summary, LIDAR_SIGHTING_BEAMS, MOVING_M_PER_TICK, TURNING_RAD_PER_TICK,
+};
 pub use sim::{encode_sim_scan, gt_label, sim_limits, step_base, BaseStep, Clock, SimSource};
 pub use walk::{line_clear, Walker};

@@ -154,6 +154,36 @@ pub fn round3(v: f64) -> f64 {
     (v * 1000.0).round() / 1000.0
 }
 
+/// Summary of a set of samples (microseconds, millimetres, degrees: whatever they measure).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Summary {
+    /// Samples.
+    pub n: usize,
+    /// Smallest.
+    pub min: f64,
+    /// Median.
+    pub p50: f64,
+    /// 95th percentile.
+    pub p95: f64,
+    /// Largest.
+    pub max: f64,
+    /// Mean.
+    pub mean: f64,
+}
+
+impl Summary {
+    /// Of `samples` (any order).
+    pub fn of(samples: &[f64]) -> Summary {
+        if samples.is_empty() {
+            return Summary::default();
+        }
+        let mut v = samples.to_vec();
+        v.sort_by(|a, b| a.total_cmp(b));
+        let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+        Summary { n: v.len(), min: v[0], p50: at(0.5), p95: at(0.95), max: v[v.len() - 1], mean: v.iter().sum::<f64>() / v.len() as f64 }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

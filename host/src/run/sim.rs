@@ -5,7 +5,7 @@
 use super::cycle::{Act, Answer, Frame, Source, TICK_US};
 use super::score::RunTally;
 use super::walk::Walker;
-use crate::io::range::{encode_range, EncodedScan, RangeLimits};
+use crate::run::range::{encode_range, EncodedScan, RangeLimits};
 use crate::sim::{BaseStatus, HitKind, Scan, Sim, SimConfig};
 use firmware::scan::BeamLabel;
 use firmware::{BinaryAngle, Pose2};
@@ -176,7 +176,7 @@ pub fn sim_limits(cfg: &SimConfig) -> RangeLimits {
     RangeLimits::new(cfg.lidar_min_range_m, cfg.lidar_max_range_m)
 }
 
-/// One simulated scan in the core's encoding (the host/core boundary, [`crate::io::range`]) with its
+/// One simulated scan in the core's encoding (the host/core boundary, [`crate::run::range`]) with its
 /// scanner's own limits, and the ground-truth label of every beam.
 pub fn encode_sim_scan(scan: &Scan) -> EncodedScan {
     let fallback = BinaryAngle::from_fraction(1, scan.ranges_m.len().max(1) as i64);

@@ -31,11 +31,10 @@
 //! - in-process runs (`lives search`, `lives replay`) call [`Recorder::record_controller_tick`]
 //!   after every `Controller::tick` with the tick's time, inputs and outputs and the controller:
 //!   it records everything above that the controller holds (grids, points, frontiers and
-//!   candidates included). [`record_search`] does this for [`crate::search`].
+//!   candidates included). `record_search` in the simulated search (`search.rs`) does this.
 //! - the bridge (`lives bridge`) sees only protocol messages, so grids, non-map points,
-//!   frontiers and candidates are not in its recordings: [`SharedRecording`] gives the bridge a
-//!   [`crate::link::bridge::BridgeObserver`] ([`crate::link::BridgeOptions::observer`]) that
-//!   records pose, scan (with the labels it carries), the node's labels (when the bridge asked
+//!   frontiers and candidates are not in its recordings: `SharedRecording` (the link's
+//!   `record.rs`) gives the bridge an observer that records pose, scan (with the labels it carries), the node's labels (when the bridge asked
 //!   for them), detection, goal, path, status and log.
 //! - anything else calls the single-message methods (`record_pose`, `record_scan`, `record_goal`,
 //!   `record_status`, `record_detection`, `record_grids`, …) itself.
@@ -68,9 +67,7 @@ mod msg;
 use msg::*;
 
 pub(crate) mod convert;
-mod observer;
 use convert::*;
-pub use observer::*;
 
 /// The world frame.
 pub const FRAME_MAP: &str = "map";
@@ -112,7 +109,7 @@ pub mod topics {
 }
 
 /// The schema of each topic: (topic, schema name, JSON Schema).
-const CHANNELS: &[(&str, &str, &str)] = &[
+pub(crate) const CHANNELS: &[(&str, &str, &str)] = &[
     (topics::TF, "foxglove.FrameTransforms", include_str!("schemas/FrameTransforms.json")),
     (topics::POSE, "foxglove.PoseInFrame", include_str!("schemas/PoseInFrame.json")),
     (topics::SCAN, "foxglove.PointCloud", include_str!("schemas/PointCloud.json")),
@@ -339,6 +336,11 @@ impl Recorder {
         self.since_flush = 0;
         self.last_flush = Instant::now();
         Ok(())
+    }
+
+    /// The latest time stamp recorded so far, microseconds.
+    pub fn last_t_us(&self) -> u64 {
+        self.last_t_us
     }
 
     /// The robot's pose: `/tf` (map → base_link → laser) and `/lives/pose`.
@@ -661,6 +663,3 @@ impl Recorder {
         Ok(())
     }
 }
-
-#[cfg(test)]
-mod tests;

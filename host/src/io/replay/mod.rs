@@ -95,7 +95,7 @@ pub struct ScanRecord {
     /// Ranges, metres: `+inf` no return, NaN invalid.
     pub ranges_m: Vec<f32>,
     /// The scanner's `range_min` and `range_max`, metres (REP 117: readings at or beyond
-    /// `range_max` mean "nothing within it"; see [`crate::io::range`]).
+    /// `range_max` mean "nothing within it"; see [`crate::run::range`]).
     pub range_limits_m: [f64; 2],
     /// Where it came from.
     pub at: Location,

@@ -32,7 +32,7 @@ pub struct ReplayOptions {
 /// The options `lives replay` and `lives mapcheck` take: a classifier blob or none, `--set`
 /// overrides (`scan_matching` among them decides matching for every format), `--max-range`.
 pub fn options(model: Option<&Path>, no_classifier: bool, set: &[String], max_range: Option<f64>) -> Result<ReplayOptions, String> {
-    let model = crate::learn::model::model_option(model, no_classifier)?;
+    let model = crate::io::model_file::model_option(model, no_classifier)?;
     let mut opts = ReplayOptions { model, ..ReplayOptions::default() };
     for a in set {
         crate::overrides::apply(&mut opts.config, a)?;
@@ -241,9 +241,9 @@ pub struct MatchReport {
     /// Scans refused: the best score too low.
     pub low_score: u32,
     /// How far each accepted match moved the pose, millimetres.
-    pub shift_mm: crate::link::Summary,
+    pub shift_mm: crate::run::Summary,
     /// How far each turned it, degrees.
-    pub turn_deg: crate::link::Summary,
+    pub turn_deg: crate::run::Summary,
     /// The accepted matches' score at the prediction and at the match, ‰ of the most possible
     /// (means).
     pub score_per_mille: [f64; 2],
@@ -600,8 +600,8 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
                 matched: ms.matched,
                 too_few_points: ms.too_few_points,
                 low_score: ms.low_score,
-                shift_mm: crate::link::Summary::of(&shifts),
-                turn_deg: crate::link::Summary::of(&turns),
+                shift_mm: crate::run::Summary::of(&shifts),
+                turn_deg: crate::run::Summary::of(&turns),
                 score_per_mille: [round3(scores[0] / n), round3(scores[1] / n)],
             }
         },

@@ -2,7 +2,7 @@
 
 use super::error::{compact, BAD_RECORDS_KEPT};
 use super::ScanRecord;
-use crate::io::range::{EncodedScan, RangeLimits};
+use crate::run::range::{EncodedScan, RangeLimits};
 use crate::run::{Answer, Frame, Source, TICK_US};
 use firmware::Pose2;
 

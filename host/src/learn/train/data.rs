@@ -1,9 +1,9 @@
 //! Samples: episodes read from the dataset, the label histories, batches, rollouts and the loss.
 
 use super::*;
-use crate::io::range::{encode_range, RangeLimits};
 use crate::learn::dataset::{self, DatasetReader, Split};
 use crate::learn::model::{normalise_pose_f32, normalise_scan_f32, FloatInputs};
+use crate::run::range::{encode_range, RangeLimits};
 use candle_core::{Device, Tensor};
 use firmware::capacity::BEAMS;
 use firmware::classifier::{Normalisation, HISTORY, LABEL_ROWS, POSE_FEATURES};
@@ -50,7 +50,7 @@ pub(super) fn pose_of(p: [f64; 3]) -> Result<Pose2> {
     Pose2::from_f64(p[0], p[1], p[2]).ok_or_else(|| TrainError(format!("pose {p:?} out of the Q16.16 range")))
 }
 
-/// A step from a dataset record (ranges encoded as `crate::io::range::encode_range` does for the core).
+/// A step from a dataset record (ranges encoded as `crate::run::range::encode_range` does for the core).
 pub fn step_of_record(r: &dataset::Record) -> Result<Step> {
     let min = sim_limits();
     Ok(Step {

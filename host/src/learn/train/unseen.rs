@@ -1,9 +1,9 @@
 //! Episodes in the built-in worlds (never in the dataset): random walks for the unseen-world accuracy.
 
 use super::*;
-use crate::io::range::encode_range;
 use crate::learn::dataset;
 use crate::learn::labeller::{Labeller, LabellerConfig};
+use crate::run::range::encode_range;
 use crate::run::{drive, Answer, Frame, Idle, SimSource, Walker};
 use crate::sim::reach::ReachMap;
 use crate::sim::{Scenario, Sim, World};

@@ -21,11 +21,11 @@
 mod publish;
 pub mod wire;
 
-use crate::io::range::RangeLimits;
 use crate::io::replay::cdr;
 use crate::io::replay::rosbag::{frame, scan_record, EdgeReject, FrameTree, PoseError, MAX_POSE_AGE_NS};
 use crate::io::replay::Location;
 use crate::link::robot::encode_planar;
+use crate::run::range::RangeLimits;
 use crate::run::{drive, Answer, End, Frame, InProcess, Source};
 use firmware::{Config, Controller, Pose2};
 use rustdds::mio1::{Events, Interest, Poll, Token};

@@ -83,7 +83,7 @@ pub fn run_command(
             if args.model.is_some() && !planner.uses_classifier() {
                 return Err(format!("--model is the classifier `lives` runs; `{planner}` runs none"));
             }
-            spec.model = crate::learn::model::model_option(args.model.as_deref(), args.no_classifier)?;
+            spec.model = crate::io::model_file::model_option(args.model.as_deref(), args.no_classifier)?;
             (check_search(&spec, args.png.as_deref())?, true)
         }
         (None, Some(file)) => check_log(file, args)?,

@@ -183,7 +183,7 @@ pub(crate) fn scan_record(s: &cdr::LaserScan, pose: &Iso, t_ns: u64, at: Locatio
     // Upside down: a beam at +a in the laser frame points to −a about the world's z.
     let sign = if z_axis[2] < 0.0 { -1.0 } else { 1.0 };
     // The readings as recorded: the range rule (REP 117) is applied once, with the scan's own
-    // limits, when the scan is encoded for the core (`crate::io::range`).
+    // limits, when the scan is encoded for the core (`crate::run::range`).
     let ranges_m = s.ranges.clone();
     ScanRecord {
         t_s: t_ns as f64 / 1e9,

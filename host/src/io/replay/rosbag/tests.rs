@@ -37,8 +37,8 @@ fn upside_down_laser_negates_angles_and_ros_ranges_apply() {
         assert!(a == b || (a.is_nan() && b.is_nan()), "{:?}", r.ranges_m);
     }
     assert_eq!(r.range_limits_m, [0.2f32 as f64, 10.0]);
-    let lim = crate::io::range::RangeLimits::new(r.range_limits_m[0], r.range_limits_m[1]);
-    let enc: Vec<u16> = r.ranges_m.iter().map(|&v| crate::io::range::encode_range(v as f64, &lim)).collect();
+    let lim = crate::run::range::RangeLimits::new(r.range_limits_m[0], r.range_limits_m[1]);
+    let enc: Vec<u16> = r.ranges_m.iter().map(|&v| crate::run::range::encode_range(v as f64, &lim)).collect();
     use firmware::scan::{RANGE_INVALID as I, RANGE_NO_RETURN as N};
     assert_eq!(enc, [I, I, N, I, N, 5000, N], "NaN, -inf, +inf, below min, beyond max, a return, at max");
 }

@@ -1,30 +1,11 @@
-//! Recording a run as it happens: a simulated search ([`record_search`]) and a bridge's traffic
-//! ([`SharedRecording`], a [`BridgeObserver`]).
+//! Recording a bridge's traffic as it happens ([`SharedRecording`], a [`BridgeObserver`]): the
+//! protocol messages the bridge sends and receives, into an MCAP file ([`crate::io::record`]).
 
-use crate::link::bridge::{BridgeObserver, SharedObserver};
+use super::bridge::{BridgeObserver, SharedObserver};
+use crate::io::record::{RecordError, RecordOptions, RecordSummary, Recorder};
 use firmware::protocol::{CoreToHost, DetectionMsg, PoseMsg, ScanMsg};
 use std::path::Path;
 use std::sync::{Arc, Mutex};
-
-use super::*;
-
-/// Runs a [`crate::search`] search, recording every tick into `rec` if there is one
-/// ([`crate::search::try_run_observed`] with [`Recorder::record_controller_tick`]). The run is the
-/// same as without recording; a recording error stops the recording (not the run) and comes back
-/// beside the run.
-pub fn record_search(
-    spec: &crate::search::SearchSpec,
-    mut rec: Option<&mut Recorder>,
-    progress: impl FnMut(f64),
-) -> Result<(crate::search::SearchRun, Result<(), RecordError>), firmware::classifier::ModelError> {
-    let mut recorded: Result<(), RecordError> = Ok(());
-    let run = crate::search::try_run_observed(spec, progress, |t| {
-        if let (Some(rec), true) = (rec.as_deref_mut(), recorded.is_ok()) {
-            recorded = rec.record_controller_tick(t.t_us, t.inputs, t.outputs, t.controller);
-        }
-    })?;
-    Ok((run, recorded))
-}
 
 /// The bridge's recording: protocol messages only (see the module docs). Hand
 /// [`SharedRecording::observer`] to [`crate::link::BridgeOptions::observer`] and call
@@ -34,7 +15,7 @@ pub fn record_search(
 pub struct SharedRecording(Arc<Mutex<BridgeRecording>>);
 
 #[derive(Debug)]
-pub(super) struct BridgeRecording {
+pub struct BridgeRecording {
     recorder: Option<Recorder>,
     error: Option<RecordError>,
 }
@@ -91,7 +72,7 @@ impl BridgeObserver for BridgeRecording {
         self.attempt(|r| match m {
             CoreToHost::Status(s) => r.record_status(s),
             CoreToHost::Goal(g) => {
-                let t = r.last_t_us;
+                let t = r.last_t_us();
                 r.record_goal(t, g)
             }
             CoreToHost::Labels(l) => r.record_node_labels(l.t_us, &l.labels),

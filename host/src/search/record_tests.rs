@@ -1,9 +1,18 @@
-use super::*;
-use crate::search::{self, PlannerChoice, SearchSpec};
+//! Recording a simulated search ([`super::record_search`]): what the MCAP file holds, and that
+//! recording does not change the run.
+
+use crate::io::record::*;
+use crate::search::{self, record_search, PlannerChoice, SearchSpec};
 use crate::sim::{Scenario, World};
 use base64::Engine as _;
+use firmware::grid::GridGeometry;
 use firmware::grid::{Cell, PackedGrid};
+use firmware::scan::{BeamLabel, BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
+use firmware::Pose2;
 use serde_json::Value;
+use std::path::Path;
+use std::path::PathBuf;
+use std::time::Duration;
 
 fn tmp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("lives-record-{}-{name}", std::process::id()))
