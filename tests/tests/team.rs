@@ -38,7 +38,7 @@ fn a_team_of_one_is_the_single_robot_search_tick_for_tick() {
     for (planner, map) in [(PlannerChoice::Live, true), (PlannerChoice::Multisensor, false)] {
         let s = spec("hallway", Scenario::Easy, planner, 1, map);
         let single = search::run(&s, |_| {}).result;
-        let t = team::local::run(&TeamSpec { base: s, robots: 1, kill: None }).expect("a team of one");
+        let t = team::local::run(&TeamSpec::new(s, 1)).expect("a team of one");
         assert_eq!((t.found, t.time_s), (single.found, single.time_s), "{planner}: {t:?}");
         assert_eq!(t.per_robot[0].path_m, single.path_m, "{planner}");
         assert_eq!(t.ticks, single.ticks, "{planner}");
@@ -64,8 +64,8 @@ fn starts_are_spaced_clear_and_deterministic() {
 #[test]
 fn a_robot_whose_link_is_cut_has_its_waypoints_reassigned_and_the_team_still_finds_the_target() {
     let s = spec("hallway", Scenario::Hard, PlannerChoice::Live, 2, true);
-    let whole = team::local::run(&TeamSpec { base: s.clone(), robots: 2, kill: None }).unwrap();
-    let cut = team::local::run(&TeamSpec { base: s, robots: 2, kill: Some((1, 10.0)) }).unwrap();
+    let whole = team::local::run(&TeamSpec::new(s.clone(), 2)).unwrap();
+    let cut = team::local::run(&TeamSpec { kill: Some((1, 10.0)), ..TeamSpec::new(s, 2) }).unwrap();
     assert!(cut.found, "{cut:?}");
     assert_eq!(cut.found_by, Some(0));
     assert_eq!(cut.per_robot[1].lost_s, Some(10.0));
@@ -92,7 +92,7 @@ fn lives_team(args: &str) -> (Option<Value>, String, i32) {
 fn the_team_over_dds_as_separate_processes_is_the_team_in_one_process() {
     let args = "--world hallway --scenario hard --seed 2 --planner live --known-map --robots 3 --kill 1@10 --link-timeout 3";
     let s = spec("hallway", Scenario::Hard, PlannerChoice::Live, 2, true);
-    let local = team::local::run(&TeamSpec { base: s, robots: 3, kill: Some((1, 10.0)) }).unwrap();
+    let local = team::local::run(&TeamSpec { kill: Some((1, 10.0)), ..TeamSpec::new(s, 3) }).unwrap();
     let (v, err, rc) = lives_team(&format!("{args} --processes --domain 21 --json"));
     let v = v.unwrap_or_else(|| panic!("no JSON from lives team --processes (exit {rc}): {err}"));
     assert_eq!(v["transport"], "dds");
@@ -119,6 +119,10 @@ fn bad_team_input_is_named() {
     assert!(rc != 0 && err.contains("ROBOT@SECONDS"), "{rc} {err}");
     let (_, err, rc) = lives_team("--world hallway --planner live --robots 2");
     assert!(rc != 0 && err.contains("known building"), "{rc} {err}");
+    let (_, err, rc) = lives_team("--world hallway --robots 2 --sim-for 2:speed_mps=1");
+    assert!(rc != 0 && err.contains("--sim-for 2:speed_mps=1"), "{rc} {err}");
+    let (_, err, rc) = lives_team("--world hallway --robots 2 --sim-for 1:speed=1");
+    assert!(rc != 0 && err.contains("robot 1") && err.contains("speed"), "{rc} {err}");
 }
 
 #[test]
@@ -167,8 +171,7 @@ fn lives_search_robots_runs_the_team_with_the_map_file() {
         .output()
         .unwrap();
     let v: Value = serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&out.stderr)));
-    let local =
-        team::local::run(&TeamSpec { base: spec("hallway", Scenario::Hard, PlannerChoice::Live, 2, true), robots: 2, kill: None }).unwrap();
+    let local = team::local::run(&TeamSpec::new(spec("hallway", Scenario::Hard, PlannerChoice::Live, 2, true), 2)).unwrap();
     // The exported map file is the true map `--known-map` gives: the same search.
     assert_eq!((v["robots"].as_u64(), v["time_s"].as_f64(), v["found"].as_bool()), (Some(2), Some(local.time_s), Some(local.found)), "{v}");
     assert_eq!(v["map"], "known-map");

@@ -51,7 +51,7 @@ pub fn run(args: SearchArgs) -> Result<ExitCode, String> {
         if spec.planner.uses_classifier() {
             spec.model = host::io::model_file::model_option(None, false)?;
         }
-        let r = host::team::local::run(&host::team::TeamSpec { base: spec, robots, kill: None })?;
+        let r = host::team::local::run(&host::team::TeamSpec::new(spec, robots))?;
         say!("{}", if json { serde_json::to_string(&r).map_err(|e| e.to_string())? } else { r.summary() });
         return Ok(if r.found { ExitCode::SUCCESS } else { ExitCode::from(1) });
     }

@@ -26,6 +26,11 @@ pub struct TeamArgs {
     /// waypoints are re-assigned.
     #[arg(long, value_name = "R@T")]
     kill: Option<String>,
+    /// Change robot I's simulated robot, e.g. `--sim-for 1:speed_mps=1.0` (a faster base) or
+    /// `--sim-for 2:camera_range_m=4` (repeatable; names as `--sim`, applied after it): a team
+    /// of different robots. The coordinator shares the route out by each robot's time.
+    #[arg(long = "sim-for", value_name = "I:NAME=VALUE")]
+    sim_for: Vec<String>,
     /// Every robot a separate process, over DDS on this machine (feature `ros2`).
     #[arg(long)]
     processes: bool,
@@ -42,6 +47,12 @@ pub struct TeamArgs {
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
+}
+
+fn parse_sim_for(s: &str) -> Result<(usize, String), String> {
+    let (r, a) = s.split_once(':').ok_or_else(|| format!("--sim-for {s}: expected ROBOT:NAME=VALUE, e.g. 1:speed_mps=1.0"))?;
+    let r = r.trim().parse::<usize>().map_err(|_| format!("--sim-for {s}: `{r}` is not a robot index"))?;
+    Ok((r, a.trim().to_string()))
 }
 
 fn parse_kill(s: &str) -> Result<(usize, f64), String> {
@@ -79,7 +90,8 @@ pub fn run(args: TeamArgs) -> Result<ExitCode, String> {
         return Err(format!("`{}` searches a known building: add --known-map or --map FILE.yaml", spec.planner));
     }
     let kill = args.kill.as_deref().map(parse_kill).transpose()?;
-    let tspec = TeamSpec { base: spec, robots: args.robots, kill };
+    let sim_for = args.sim_for.iter().map(|s| parse_sim_for(s)).collect::<Result<Vec<_>, _>>()?;
+    let tspec = TeamSpec { kill, sim_for, ..TeamSpec::new(spec, args.robots) };
     let result = if args.processes || args.as_robot.is_some() { over_dds(&args, &tspec)? } else { Some(team::local::run(&tspec)?) };
     let Some(result) = result else { return Ok(ExitCode::SUCCESS) };
     if args.json {

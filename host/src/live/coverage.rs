@@ -307,12 +307,13 @@ impl<'a> Coverage<'a> {
         }
     }
 
-    /// Routes for a team whose robots stand at `starts` (world x, y), covering what `covered`
-    /// does not: greedy coverage per metre as [`plan`], and the next waypoint always goes to the
-    /// robot whose route is shortest so far (ties to the lower index), so the routes end about
-    /// together. A robot that cannot add [`MIN_GAIN_CELLS`] from where its route is stops
-    /// taking waypoints. One start gives [`plan`]'s route.
-    pub fn plan_team(&self, starts: &[[f64; 2]], covered: &[bool]) -> Result<Vec<Route>, RouteError> {
+    /// Routes for a team whose robots stand at `starts` (world x, y) and walk at `speeds`
+    /// (m/s), covering what `covered` does not: greedy coverage per metre as [`plan`], and the
+    /// next waypoint always goes to the robot whose route takes least time so far (length over
+    /// speed; ties to the lower index), so the routes end about together. A robot that cannot
+    /// add [`MIN_GAIN_CELLS`] from where its route is stops taking waypoints. One start gives
+    /// [`plan`]'s route.
+    pub fn plan_team(&self, starts: &[[f64; 2]], speeds: &[f64], covered: &[bool]) -> Result<Vec<Route>, RouteError> {
         let mut covered = covered.to_vec();
         covered.resize(self.ok.len(), false);
         let overhead = (LEG_OVERHEAD_M / CELL_M * 5.0) as u64;
@@ -323,8 +324,12 @@ impl<'a> Coverage<'a> {
         let mut length_units = vec![0u64; starts.len()];
         let mut open = vec![true; starts.len()];
         let mut chosen: Vec<Vec<(usize, usize)>> = vec![Vec::new(); starts.len()];
-        // The robot whose route is shortest and can still add.
-        while let Some(r) = (0..starts.len()).filter(|&r| open[r]).min_by_key(|&r| (length_units[r], r)) {
+        // The robot whose route takes least time and can still add.
+        let speed = |r: usize| speeds.get(r).copied().unwrap_or(1.0);
+        while let Some(r) = (0..starts.len())
+            .filter(|&r| open[r])
+            .min_by(|&a, &b| (length_units[a] as f64 / speed(a)).total_cmp(&(length_units[b] as f64 / speed(b))).then(a.cmp(&b)))
+        {
             let mut best: Option<(u64, u64, usize, usize)> = None; // (gain·K / cost, cost, index, gain)
             for (k, (c, _, seen)) in self.cands.iter().enumerate() {
                 let d = fields[r][*c];
@@ -392,7 +397,7 @@ fn start_cell(map: &KnownGrid, ok: &[bool], start: [f64; 2]) -> Result<usize, Ro
 /// footprint `fp`.
 pub fn plan(map: &KnownGrid, radius_m: f64, start: [f64; 2], fp: Footprint) -> Result<Route, RouteError> {
     let problem = Coverage::new(map, radius_m, start, fp)?;
-    let mut routes = problem.plan_team(&[start], &problem.nothing_covered())?;
+    let mut routes = problem.plan_team(&[start], &[1.0], &problem.nothing_covered())?;
     Ok(routes.remove(0))
 }
 

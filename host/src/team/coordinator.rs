@@ -26,6 +26,8 @@ pub struct Coordinator {
     tick_s: f64,
     limit_s: f64,
     n: usize,
+    /// Each robot's top speed, m/s: routes are shared out by time, not length.
+    speeds: Vec<f64>,
     routes: Vec<Vec<Waypoint>>,
     epochs: Vec<u32>,
     alive: Vec<bool>,
@@ -48,17 +50,20 @@ pub struct Coordinator {
 }
 
 impl Coordinator {
-    /// A coordinator for `n` robots of controller configuration `cfg` (the planner decides
-    /// whether there is a route to share: `live`, `visual-cpp` and `lidar-cpp` with a known
-    /// map), ticking every `tick_s` until `limit_s`.
-    pub fn new(cfg: firmware::Config, cells: Option<Arc<Vec<Cell3>>>, n: usize, tick_s: f64, limit_s: f64) -> Self {
+    /// A coordinator for robots of top speeds `speeds` (m/s, one per robot) and controller
+    /// configuration `cfg` (robot 0's; the planner decides whether there is a route to share:
+    /// `live`, `visual-cpp` and `lidar-cpp` with a known map), ticking every `tick_s` until
+    /// `limit_s`.
+    pub fn new(cfg: firmware::Config, cells: Option<Arc<Vec<Cell3>>>, speeds: Vec<f64>, tick_s: f64, limit_s: f64) -> Self {
         let side = firmware::capacity::GRID_CELLS;
+        let n = speeds.len();
         Coordinator {
             cfg,
             cells,
             tick_s,
             limit_s,
             n,
+            speeds: speeds.clone(),
             routes: vec![Vec::new(); n],
             epochs: vec![0; n],
             alive: vec![true; n],
@@ -70,7 +75,11 @@ impl Coordinator {
             relay_lidar: Vec::new(),
             found_by: None,
             last_tick: 0,
-            reports: (0..n).map(|robot| RobotReport { robot, ..RobotReport::default() }).collect(),
+            reports: speeds
+                .iter()
+                .enumerate()
+                .map(|(robot, &speed_mps)| RobotReport { robot, speed_mps, ..RobotReport::default() })
+                .collect(),
             reassignments: 0,
             reshares: 0,
             stale_goals: 0,
@@ -113,7 +122,8 @@ impl Coordinator {
         for w in &self.done {
             problem.cover(&mut covered, w);
         }
-        let routes = problem.plan_team(&starts, &covered).map_err(|e| format!("coverage: {e}"))?;
+        let speeds: Vec<f64> = robots.iter().map(|&r| self.speeds[r]).collect();
+        let routes = problem.plan_team(&starts, &speeds, &covered).map_err(|e| format!("coverage: {e}"))?;
         let mut out = Vec::new();
         for (&r, route) in robots.iter().zip(routes) {
             let wps: Vec<Waypoint> = route.waypoints.into_iter().take(firmware::capacity::MAX_ROUTE_WAYPOINTS).collect();
@@ -303,6 +313,28 @@ mod tests {
     }
 
     #[test]
+    fn a_faster_robot_gets_a_longer_share() {
+        let mut cfg = firmware::Config::DEFAULT.with_planner(firmware::PlannerKind::VisualCoverage);
+        cfg.origin_x_m = firmware::Meters::ZERO;
+        cfg.origin_y_m = firmware::Meters::ZERO;
+        let hellos = [status(0, None, [15.0, 3.0], 0, vec![]), status(1, None, [15.5, 3.0], 0, vec![])];
+        let length = |a: &Assignment, from: [f64; 2]| {
+            let mut prev = from;
+            a.waypoints.iter().fold(0.0, |l, w| {
+                let d = (w[0] - prev[0]).hypot(w[1] - prev[1]);
+                prev = [w[0], w[1]];
+                l + d
+            })
+        };
+        let same = Coordinator::new(cfg, Some(corridor()), vec![0.5, 0.5], 0.2, 100.0).start(&hellos).unwrap();
+        let fast = Coordinator::new(cfg, Some(corridor()), vec![0.5, 1.5], 0.2, 100.0).start(&hellos).unwrap();
+        let (s0, s1) = (length(&same[0], [15.0, 3.0]), length(&same[1], [15.5, 3.0]));
+        let (f0, f1) = (length(&fast[0], [15.0, 3.0]), length(&fast[1], [15.5, 3.0]));
+        assert!(f1 > f0 && f1 / f0 > s1 / s0, "equal speeds {s0:.1} / {s1:.1} m, robot 1 three times faster {f0:.1} / {f1:.1} m");
+        assert!(fast.iter().all(|a| !a.waypoints.is_empty()), "both robots have a share");
+    }
+
+    #[test]
     fn a_robot_that_has_done_its_share_takes_part_of_what_is_left() {
         // The camera's footprint (`visual-cpp`): the LiDAR's would cover the corridor from one
         // waypoint.
@@ -310,7 +342,7 @@ mod tests {
         cfg.origin_x_m = firmware::Meters::ZERO;
         cfg.origin_y_m = firmware::Meters::ZERO;
         let (a, b) = ([2.0, 3.0], [28.0, 3.0]);
-        let mut c = Coordinator::new(cfg, Some(corridor()), 2, 0.2, 100.0);
+        let mut c = Coordinator::new(cfg, Some(corridor()), vec![0.5, 0.5], 0.2, 100.0);
         let first = c.start(&[status(0, None, a, 0, vec![]), status(1, None, b, 0, vec![])]).unwrap();
         assert_eq!(first.len(), 2);
         let (n0, n1) = (first[0].waypoints.len(), first[1].waypoints.len());

@@ -14,7 +14,7 @@
 
 use super::coordinator::Coordinator;
 use super::robot::TeamRobot;
-use super::{codec, robot_spec, starts, Status, TeamResult, TeamSpec};
+use super::{codec, starts, Status, TeamResult, TeamSpec};
 use crate::link::ros2::wire::{dds_topic, dds_type, Qos, Raw, RawCdr};
 use rustdds::no_key::{DataReader, DataWriter};
 use rustdds::{DomainParticipant, DomainParticipantBuilder, TopicKind};
@@ -199,7 +199,7 @@ fn coordinate(
         std::thread::sleep(Duration::from_millis(2));
     }
     let hellos: Vec<Status> = hellos.into_iter().flatten().collect();
-    let mut coord = super::local::coordinator(spec);
+    let mut coord = super::local::coordinator(spec)?;
     let mut pending = coord.start(&hellos)?;
     let tick_s = crate::run::TICK_US as f64 / 1e6;
     let mut tick = 0u32;
@@ -260,7 +260,7 @@ pub fn robot(spec: &TeamSpec, id: usize, opts: &DdsOptions) -> Result<(), String
         return Err(format!("--as-robot {id}: the team has robots 0..{}", spec.robots - 1));
     }
     let start = starts(&spec.base, spec.robots)?[id];
-    let mut robot = TeamRobot::new(id as u32, std::process::id(), &robot_spec(&spec.base, start), spec.robots > 1)?;
+    let mut robot = TeamRobot::new(id as u32, std::process::id(), &spec.member(id, start)?, spec.robots > 1)?;
     let bus = Bus::join(opts)?;
     let status_w = bus.writer(&status_topic(id), codec::STATUS_TYPE, STATUS_QOS)?;
     let mut tick_r = bus.reader(TICK_TOPIC, codec::TICK_TYPE, Qos::Latched)?;

@@ -7,8 +7,7 @@ use serde::Serialize;
 
 /// Runs a team of each size in `robots` on every spec, `threads` at a time.
 pub fn run_batch(specs: &[SearchSpec], robots: &[usize], threads: usize, done: impl Fn(usize) + Sync) -> Result<Vec<TeamResult>, String> {
-    let jobs: Vec<TeamSpec> =
-        specs.iter().flat_map(|s| robots.iter().map(|&n| TeamSpec { base: s.clone(), robots: n, kill: None })).collect();
+    let jobs: Vec<TeamSpec> = specs.iter().flat_map(|s| robots.iter().map(|&n| TeamSpec::new(s.clone(), n))).collect();
     crate::measure::eval::in_parallel(&jobs, threads, done, |job| {
         local::run(job).map_err(|e| format!("{} {} seed {}: {e}", job.base.world_name, job.base.scenario_label(), job.base.seed))
     })

@@ -4,14 +4,14 @@
 
 use super::coordinator::Coordinator;
 use super::robot::TeamRobot;
-use super::{codec, robot_spec, starts, Assignment, Status, TeamResult, TeamSpec};
+use super::{codec, starts, Assignment, Status, TeamResult, TeamSpec};
 use crate::run::TICK_US;
 
 /// The coordinator of `spec` (its robot 0's controller configuration and map).
-pub fn coordinator(spec: &TeamSpec) -> Coordinator {
+pub fn coordinator(spec: &TeamSpec) -> Result<Coordinator, String> {
     let base = &spec.base;
     let cfg = crate::run::controller_config(&base.controller, &base.world, base.planner.kind());
-    Coordinator::new(cfg, base.prior_map.clone(), spec.robots, TICK_US as f64 / 1e6, base.world.time_limit_s)
+    Ok(Coordinator::new(cfg, base.prior_map.clone(), spec.speeds()?, TICK_US as f64 / 1e6, base.world.time_limit_s))
 }
 
 /// Checks a team spec: robots, the robot whose link is cut.
@@ -24,7 +24,10 @@ pub fn check(spec: &TeamSpec) -> Result<(), String> {
             return Err(format!("--kill {r}@{t}: a robot 0..{} and a time ≥ 0 s", spec.robots - 1));
         }
     }
-    Ok(())
+    if let Some((r, a)) = spec.sim_for.iter().find(|(r, _)| *r >= spec.robots) {
+        return Err(format!("--sim-for {r}:{a}: a robot 0..{}", spec.robots - 1));
+    }
+    spec.speeds().map(|_| ())
 }
 
 /// Runs `spec`'s team in this process.
@@ -33,9 +36,9 @@ pub fn run(spec: &TeamSpec) -> Result<TeamResult, String> {
     let starts = starts(&spec.base, spec.robots)?;
     let mut robots = Vec::with_capacity(spec.robots);
     for (i, s) in starts.iter().enumerate() {
-        robots.push(TeamRobot::new(i as u32, std::process::id(), &robot_spec(&spec.base, *s), spec.robots > 1)?);
+        robots.push(TeamRobot::new(i as u32, std::process::id(), &spec.member(i, *s)?, spec.robots > 1)?);
     }
-    let mut coord = coordinator(spec);
+    let mut coord = coordinator(spec)?;
     let hellos: Vec<Status> = robots.iter().map(TeamRobot::hello).collect();
     let mut bytes = vec![[0u64; 2]; spec.robots];
     for (i, h) in hellos.iter().enumerate() {

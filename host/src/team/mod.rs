@@ -133,6 +133,31 @@ pub struct TeamSpec {
     pub robots: usize,
     /// Robot `.0`'s link is cut (its process killed) at simulated time `.1` seconds.
     pub kill: Option<(usize, f64)>,
+    /// Changes to one robot's simulated robot (`--sim-for I:NAME=VALUE`, applied after the
+    /// base's `--sim`): a team of different robots (a faster base, a shorter camera). The
+    /// controller's model of that robot follows, as with `--sim`.
+    pub sim_for: Vec<(usize, String)>,
+}
+
+impl TeamSpec {
+    /// A team of `robots` copies of `base`, no link cut.
+    pub fn new(base: SearchSpec, robots: usize) -> Self {
+        TeamSpec { base, robots, kill: None, sim_for: Vec::new() }
+    }
+
+    /// Robot `i`'s search, started at `start`: the base's, with its own `sim_for` changes.
+    pub fn member(&self, i: usize, start: [f64; 3]) -> Result<SearchSpec, String> {
+        let mut s = robot_spec(&self.base, start);
+        for (_, a) in self.sim_for.iter().filter(|(r, _)| *r == i) {
+            crate::overrides::apply_sim(&mut s.sim, &mut s.controller, a).map_err(|e| format!("robot {i}: {e}"))?;
+        }
+        Ok(s)
+    }
+
+    /// Every robot's top speed, m/s.
+    pub fn speeds(&self) -> Result<Vec<f64>, String> {
+        (0..self.robots).map(|i| self.member(i, [0.0; 3]).map(|s| s.sim.speed_mps)).collect()
+    }
 }
 
 /// One robot's part of a team search.
@@ -141,6 +166,8 @@ pub struct RobotReport {
     pub robot: usize,
     /// Where it started `[x, y, yaw]`.
     pub start: [f64; 3],
+    /// Its top speed, m/s.
+    pub speed_mps: f64,
     pub path_m: f64,
     /// Route waypoints assigned to it (over every epoch) and done.
     pub waypoints_assigned: usize,
@@ -262,10 +289,11 @@ impl TeamResult {
         s += &format!(", {} re-assignments, {} re-shares, {} stale goals", r.reassignments, r.reshares, r.stale_goals);
         for p in &r.per_robot {
             s += &format!(
-                "\n  robot {}: start ({:.1}, {:.1}), path {:.1} m, waypoints {}/{}{}, {:.0} B/s up, {:.0} B/s down",
+                "\n  robot {}: start ({:.1}, {:.1}), {:.2} m/s, path {:.1} m, waypoints {}/{}{}, {:.0} B/s up, {:.0} B/s down",
                 p.robot,
                 p.start[0],
                 p.start[1],
+                p.speed_mps,
                 p.path_m,
                 p.waypoints_done,
                 p.waypoints_assigned,

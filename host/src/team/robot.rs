@@ -32,7 +32,7 @@ pub struct TeamRobot {
 
 impl TeamRobot {
     /// Robot `id` of a team, searching `spec` (already started where it stands,
-    /// [`super::robot_spec`]); the known map, if any, is loaded but no route given (the
+    /// [`super::TeamSpec::member`]); the known map, if any, is loaded but no route given (the
     /// coordinator assigns it). With `teammates`, running out of work does not end its run: it
     /// waits, re-planning every `replan_interval`, for a share of what the others have left (a
     /// team of one ends as the single-robot search does). Fails if the spec's model does not
