@@ -25,8 +25,8 @@ pub struct Coordinator {
     cells: Option<Arc<Vec<Cell3>>>,
     tick_s: f64,
     limit_s: f64,
-    n: usize,
-    /// Each robot's top speed, m/s: routes are shared out by time, not length.
+    /// Each robot's top speed, m/s (one per robot: the team's size): routes are shared out by
+    /// time, not length.
     speeds: Vec<f64>,
     routes: Vec<Vec<Waypoint>>,
     epochs: Vec<u32>,
@@ -57,13 +57,14 @@ impl Coordinator {
     pub fn new(cfg: firmware::Config, cells: Option<Arc<Vec<Cell3>>>, speeds: Vec<f64>, tick_s: f64, limit_s: f64) -> Self {
         let side = firmware::capacity::GRID_CELLS;
         let n = speeds.len();
+        let reports =
+            speeds.iter().enumerate().map(|(robot, &speed_mps)| RobotReport { robot, speed_mps, ..RobotReport::default() }).collect();
         Coordinator {
             cfg,
             cells,
             tick_s,
             limit_s,
-            n,
-            speeds: speeds.clone(),
+            speeds,
             routes: vec![Vec::new(); n],
             epochs: vec![0; n],
             alive: vec![true; n],
@@ -75,11 +76,7 @@ impl Coordinator {
             relay_lidar: Vec::new(),
             found_by: None,
             last_tick: 0,
-            reports: speeds
-                .iter()
-                .enumerate()
-                .map(|(robot, &speed_mps)| RobotReport { robot, speed_mps, ..RobotReport::default() })
-                .collect(),
+            reports,
             reassignments: 0,
             reshares: 0,
             stale_goals: 0,
@@ -87,11 +84,16 @@ impl Coordinator {
         }
     }
 
+    /// The team's size.
+    fn n(&self) -> usize {
+        self.speeds.len()
+    }
+
     /// Takes the robots' announcements (one per robot, in order) and plans the first
     /// assignments from where they stand.
     pub fn start(&mut self, hellos: &[Status]) -> Result<Vec<Assignment>, String> {
-        if hellos.len() != self.n {
-            return Err(format!("{} robots announced, {} expected", hellos.len(), self.n));
+        if hellos.len() != self.n() {
+            return Err(format!("{} robots announced, {} expected", hellos.len(), self.n()));
         }
         for (i, h) in hellos.iter().enumerate() {
             if h.robot as usize != i {
@@ -101,7 +103,7 @@ impl Coordinator {
             self.last[i] = Some(h.clone());
         }
         self.entropy_start = self.entropy();
-        self.plan(&(0..self.n).collect::<Vec<_>>())
+        self.plan(&(0..self.n()).collect::<Vec<_>>())
     }
 
     /// Plans what is left among `robots` from their last poses: their new assignments.
@@ -142,8 +144,8 @@ impl Coordinator {
             tick,
             stop,
             epochs: self.epochs.clone(),
-            goals: (0..self.n).map(|i| if self.alive[i] { self.last[i].as_ref().and_then(|s| s.goal) } else { None }).collect(),
-            positions: (0..self.n)
+            goals: (0..self.n()).map(|i| if self.alive[i] { self.last[i].as_ref().and_then(|s| s.goal) } else { None }).collect(),
+            positions: (0..self.n())
                 .map(|i| if self.alive[i] { self.last[i].as_ref().map(|s| [s.pose[0], s.pose[1]]) } else { None })
                 .collect(),
             seen: self.relay.clone(),
@@ -163,7 +165,7 @@ impl Coordinator {
         self.relay.clear();
         self.relay_lidar.clear();
         let mut lost_now = Vec::new();
-        for (i, s) in statuses.iter().enumerate().take(self.n) {
+        for (i, s) in statuses.iter().enumerate().take(self.n()) {
             let Some(s) = s else {
                 if self.alive[i] {
                     self.alive[i] = false;
@@ -206,7 +208,7 @@ impl Coordinator {
         self.relay_lidar.reverse();
         self.relay_lidar.sort_by_key(|c| c & !super::SEEN_OCCUPIED);
         self.relay_lidar.dedup_by_key(|c| *c & !super::SEEN_OCCUPIED);
-        let survivors: Vec<usize> = (0..self.n).filter(|&i| self.alive[i]).collect();
+        let survivors: Vec<usize> = (0..self.n()).filter(|&i| self.alive[i]).collect();
         let mut decision = Decision::default();
         // A robot that has done every waypoint of its share (a non-empty one: an empty share
         // means nothing was left to give it) takes part of what the others have left.
@@ -258,7 +260,7 @@ impl Coordinator {
             scenario: base.scenario_label().to_string(),
             planner: base.planner.to_string(),
             seed: base.seed,
-            robots: self.n,
+            robots: self.n(),
             map: if self.cells.is_some() { "known-map" } else { "no-map" }.to_string(),
             transport: transport.to_string(),
             found,
@@ -294,6 +296,15 @@ mod tests {
         Arc::new(cells)
     }
 
+    /// `visual-cpp` at the grid's origin: the camera's footprint (the LiDAR's would cover the
+    /// corridor from one waypoint).
+    fn camera_route_cfg() -> firmware::Config {
+        let mut cfg = firmware::Config::DEFAULT.with_planner(firmware::PlannerKind::VisualCoverage);
+        cfg.origin_x_m = firmware::Meters::ZERO;
+        cfg.origin_y_m = firmware::Meters::ZERO;
+        cfg
+    }
+
     fn status(robot: u32, tick: Option<u32>, at: [f64; 2], epoch: u32, done: Vec<u16>) -> Status {
         Status {
             robot,
@@ -314,9 +325,7 @@ mod tests {
 
     #[test]
     fn a_faster_robot_gets_a_longer_share() {
-        let mut cfg = firmware::Config::DEFAULT.with_planner(firmware::PlannerKind::VisualCoverage);
-        cfg.origin_x_m = firmware::Meters::ZERO;
-        cfg.origin_y_m = firmware::Meters::ZERO;
+        let cfg = camera_route_cfg();
         let hellos = [status(0, None, [15.0, 3.0], 0, vec![]), status(1, None, [15.5, 3.0], 0, vec![])];
         let length = |a: &Assignment, from: [f64; 2]| {
             let mut prev = from;
@@ -336,11 +345,7 @@ mod tests {
 
     #[test]
     fn a_robot_that_has_done_its_share_takes_part_of_what_is_left() {
-        // The camera's footprint (`visual-cpp`): the LiDAR's would cover the corridor from one
-        // waypoint.
-        let mut cfg = firmware::Config::DEFAULT.with_planner(firmware::PlannerKind::VisualCoverage);
-        cfg.origin_x_m = firmware::Meters::ZERO;
-        cfg.origin_y_m = firmware::Meters::ZERO;
+        let cfg = camera_route_cfg();
         let (a, b) = ([2.0, 3.0], [28.0, 3.0]);
         let mut c = Coordinator::new(cfg, Some(corridor()), vec![0.5, 0.5], 0.2, 100.0);
         let first = c.start(&[status(0, None, a, 0, vec![]), status(1, None, b, 0, vec![])]).unwrap();
