@@ -80,3 +80,14 @@ pub const MAX_TEAM_CLAIMS: usize = 8;
 /// Waypoints of a coverage route (LIVE's waypoint manager, `crate::planner::coverage`): the
 /// host's route over a known building; more are refused.
 pub const MAX_ROUTE_WAYPOINTS: usize = 256;
+
+/// Side of a tile of the rolling window's memory (`crate::rolling::memory`), cells: a shift
+/// ([`crate::rolling::WINDOW_SHIFT_CELLS`] = 160) moves whole tiles.
+pub const MEMORY_TILE_CELLS: usize = 32;
+/// Tiles the window's memory keeps outside the window (10.24 m² each: 2 600 m² of building);
+/// more are not kept (counted).
+pub const MEMORY_TILES: usize = 256;
+/// Bytes of run-length-coded cells the window's memory keeps. A tile of walls and free space
+/// takes about 100–170 (the CSAIL logs: 7.5–12 KB at the most for 42–69 tiles outside the
+/// window); a tile that does not fit is not kept (counted).
+pub const MEMORY_BYTES: usize = 32 * 1024;

@@ -21,6 +21,7 @@ use crate::knownmap::KnownMap;
 use crate::matcher::{ScanMatcher, MATCH_WARMUP_SCANS};
 use crate::nonmap::NonMapStore;
 use crate::planner::{Goal, PlanInputs, Planner, Site};
+use crate::rolling::memory::WindowMemory;
 use crate::scan::{BeamScan, ScanError, ScanInput};
 use crate::searchmap::SearchMap;
 
@@ -260,6 +261,8 @@ pub struct Controller {
     pub known: KnownMap,
     /// LIVE's search map over the prior's free space ([`crate::searchmap`]).
     pub search: SearchMap,
+    /// What has left the rolling window ([`crate::rolling::memory`]).
+    pub memory: WindowMemory,
     /// The prior map has been seeded into the LiDAR grid as it is now (cleared by a new row,
     /// a reset and a move of the window).
     seeded: bool,
@@ -303,6 +306,7 @@ impl Controller {
             matcher: ScanMatcher::new(),
             known: KnownMap::new(),
             search: SearchMap::new(),
+            memory: WindowMemory::new(),
             seeded: false,
             beams: BeamScan::new(),
             mode: Mode::Idle,
@@ -414,6 +418,7 @@ impl Controller {
         self.seeded = false;
         self.lidar.clear();
         self.visual.grid.clear();
+        self.memory.clear();
         self.nonmap.clear();
         self.planner.clear();
         self.mode = Mode::Idle;
@@ -482,6 +487,7 @@ impl Controller {
                     frontiers: &mut self.frontiers,
                     planner: &mut self.planner,
                     goal: &mut self.goal,
+                    memory: &mut self.memory,
                 };
                 if crate::rolling::follow(maps, &p, self.cfg.nonmap_pool_radius_m) {
                     self.last_plan_us = None;

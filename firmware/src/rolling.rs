@@ -12,8 +12,9 @@
 //! non-map points) need nothing, but non-map points outside the new window are dropped and the
 //! pooling index is rebuilt. The controller then replans.
 //!
-//! What leaves the window is forgotten (see `docs/architecture.md`, "Buildings larger than the
-//! grid", for why no coarse summary is kept).
+//! What leaves the window is kept in [`memory`], tile by tile, as each cell's state (LiDAR and
+//! camera) run-length coded, and restored when it comes back: a robot that returns to a part of
+//! the building finds its walls, its free space and what its camera has searched there.
 //!
 //! **Why the map must reach the edge.** A floor that fits the grid should never shift it: the
 //! simulator centres its worlds (up to 45 m) in the grid, so a robot in a corner of the office
@@ -31,16 +32,20 @@
 //!
 //! **Work.** A shift writes each of the six cell arrays once (LiDAR ternary view and evidence,
 //! visual grid, wall mask, traversability mask, distance field: 6 × 512² cells, 832 KiB) plus
-//! the stored coordinates; the count is [`WindowStats::last_work`] and is added to the LiDAR
-//! stage's work of the tick ([`crate::controller::StageCost::lidar`]).
+//! the stored coordinates, and reads the tiles that leave and writes those that come back
+//! ([`memory`]); the count is [`WindowStats::last_work`] and is added to the LiDAR stage's work
+//! of the tick ([`crate::controller::StageCost::lidar`]).
 
-use crate::capacity::{BLOCK_CELLS, CELLS_PER_METER, GRID_AREA, GRID_CELLS};
+pub mod memory;
+
+use crate::capacity::{BLOCK_CELLS, CELLS_PER_METER, GRID_AREA, GRID_CELLS, MEMORY_TILE_CELLS};
 use crate::config::MAX_ORIGIN_M;
 use crate::frontier::FrontierSet;
 use crate::grid::{Cell, GridGeometry, LidarGrid, PackedGrid, VisualGrid};
 use crate::nonmap::NonMapStore;
 use crate::planner::{Goal, Planner};
 use fixed_point::{Meters, Pose2};
+use memory::WindowMemory;
 
 /// A pose this close to an edge (cells; 3 m) moves the window, if the LiDAR map reaches that edge.
 /// Measured on the CARMEN logs (`docs/experiments/real-lidar-maps.md`): 8 m moved the window 12 times in the
@@ -75,6 +80,8 @@ pub struct Maps<'a> {
     pub planner: &'a mut Planner,
     /// The goal being pursued.
     pub goal: &'a mut Option<Goal>,
+    /// What has left the window.
+    pub memory: &'a mut WindowMemory,
 }
 
 /// Called with every accepted pose: moves the window if the robot nears an edge (see the
@@ -126,7 +133,7 @@ fn axis_shift(lidar: &mut LidarGrid, c: i32, x_axis: bool, work: &mut u32) -> i3
 /// shift is not such a multiple or the new origin would leave the fixed-point range
 /// ([`Meters::MIN`] ..= [`MAX_ORIGIN_M`]).
 pub fn shift(maps: Maps<'_>, sx: i32, sy: i32, pool_radius: Meters) -> Option<u32> {
-    let Maps { lidar, visual, nonmap, frontiers, planner, goal } = maps;
+    let Maps { lidar, visual, nonmap, frontiers, planner, goal, memory } = maps;
     let q = WINDOW_SHIFT_CELLS;
     let moved = |o: Meters, s: i32| {
         let bits = o.to_bits() as i64 + s as i64 * 65_536 / CELLS_PER_METER;
@@ -138,9 +145,28 @@ pub fn shift(maps: Maps<'_>, sx: i32, sy: i32, pool_radius: Meters) -> Option<u3
         return None;
     };
     let geom = GridGeometry { origin_x: ox, origin_y: oy };
+    // World tiles: the window's tile (i, j) is world tile `base + (i, j)`.
+    let t = MEMORY_TILE_CELLS as i32;
+    let tiles = GRID_CELLS as i32 / t;
+    let old = (lidar.window.moved_cells.0 / t, lidar.window.moved_cells.1 / t);
+    let new = (old.0 + sx / t, old.1 + sy / t);
+    let inside = |base: (i32, i32), w: (i32, i32)| (0..tiles).contains(&(w.0 - base.0)) && (0..tiles).contains(&(w.1 - base.1));
+    let mut work = 0;
+    for (i, j) in (0..tiles).flat_map(|j| (0..tiles).map(move |i| (i, j))) {
+        let w = (old.0 + i, old.1 + j);
+        if !inside(new, w) {
+            work += memory.keep(lidar, visual, (i * t, j * t), w);
+        }
+    }
     lidar.shift(sx, sy, geom);
     visual.grid.shift(sx, sy);
-    let mut work = 3 * GRID_AREA as u32;
+    for (i, j) in (0..tiles).flat_map(|j| (0..tiles).map(move |i| (i, j))) {
+        let w = (new.0 + i, new.1 + j);
+        if !inside(old, w) {
+            work += memory.restore(lidar, visual, (i * t, j * t), w);
+        }
+    }
+    work += 3 * GRID_AREA as u32;
     work += nonmap.shift(sx, sy, &geom, pool_radius);
     let (w, mut dropped) = frontiers.shift(sx, sy);
     work += w;

@@ -18,6 +18,7 @@ fn static_memory_matches_the_documented_budget() {
         ("Classifier", size_of::<firmware::classifier::Classifier<'static>>()),
         ("ScanMatcher", size_of::<firmware::matcher::ScanMatcher>()),
         ("KnownMap", size_of::<firmware::knownmap::KnownMap>()),
+        ("WindowMemory", size_of::<firmware::rolling::memory::WindowMemory>()),
         ("Controller", size_of::<Controller>()),
     ];
     for (name, bytes) in sizes {

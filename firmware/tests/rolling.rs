@@ -7,6 +7,7 @@ use firmware::config::MAX_ORIGIN_M;
 use firmware::frontier::FrontierSource;
 use firmware::grid::{Cell, GridGeometry, LidarGrid, VisualGrid};
 use firmware::planner::{Goal, Site, Viewpoint};
+use firmware::rolling::memory::{WindowMemory, RESTORED_FREE, RESTORED_OCCUPIED};
 use firmware::rolling::{self, Maps, WINDOW_SHIFT_CELLS};
 use firmware::scan::BeamLabel;
 use firmware::{BinaryAngle, Command, Config, Controller, FrontierSet, Inputs, Meters, NonMapStore, Planner, Pose2, Status};
@@ -149,6 +150,7 @@ struct OwnedMaps {
     frontiers: Box<FrontierSet>,
     planner: Box<Planner>,
     goal: Option<Goal>,
+    memory: Box<WindowMemory>,
 }
 
 impl OwnedMaps {
@@ -161,13 +163,14 @@ impl OwnedMaps {
             frontiers: Box::new(FrontierSet::new()),
             planner: Box::new(Planner::new()),
             goal: None,
+            memory: Box::new(WindowMemory::new()),
         }
     }
 
     /// `rolling::shift` of all of them by (`sx`, `sy`) cells.
     fn shift(&mut self, sx: i32, sy: i32, pool_radius: Meters) -> Option<u32> {
-        let OwnedMaps { lidar, visual, nonmap, frontiers, planner, goal } = self;
-        rolling::shift(Maps { lidar, visual, nonmap, frontiers, planner, goal }, sx, sy, pool_radius)
+        let OwnedMaps { lidar, visual, nonmap, frontiers, planner, goal, memory } = self;
+        rolling::shift(Maps { lidar, visual, nonmap, frontiers, planner, goal, memory }, sx, sy, pool_radius)
     }
 }
 
@@ -396,4 +399,134 @@ fn a_shift_is_not_a_configuration_change() {
     let cfg = Config { origin_x_m: Config::mm(-1_000), ..corridor_config() };
     ctl.set_config(cfg).unwrap();
     assert_eq!(ctl.lidar.geom, GridGeometry { origin_x: cfg.origin_x_m, origin_y: cfg.origin_y_m });
+}
+
+/// A map-like pattern: walls on a 4 m lattice (with 1 m doorways), free space between them over
+/// the western two thirds, unknown beyond; the camera has searched the south-west quarter.
+fn rooms_pattern(w: &mut OwnedMaps) {
+    for y in 0..N {
+        for x in 0..N {
+            let wall = (x % 40 == 0 || y % 40 == 0) && !(x % 40 > 15 && x % 40 < 25) && !(y % 40 > 15 && y % 40 < 25);
+            if x < 2 * N / 3 {
+                let delta = if wall { 6 } else { -4 };
+                w.lidar.evidence.add(x, y, delta);
+                w.lidar.grid.set(x, y, firmware::grid::cell_of_evidence(w.lidar.evidence.get(x, y)));
+                if x < N / 2 && y < N / 2 {
+                    w.visual.grid.set(x, y, if wall { Cell::Occupied } else { Cell::Free });
+                }
+            }
+        }
+    }
+}
+
+/// What leaves the window is kept and comes back when the window does: out 16 m east and 32 m
+/// south, then back. Every cell's state (LiDAR and camera) is as before; the cells that left get
+/// the middle evidence of their side, the others keep theirs; every tile kept was restored.
+#[test]
+fn what_leaves_the_window_comes_back_with_it() {
+    let geom = GridGeometry { origin_x: m(-3.2), origin_y: m(7.5) };
+    let mut w = OwnedMaps::new(geom);
+    rooms_pattern(&mut w);
+    let before_lidar = w.lidar.clone();
+    let before_visual = w.visual.clone();
+    let r = Config::DEFAULT.nonmap_pool_radius_m;
+    w.shift(160, -320, r).unwrap();
+    let kept = w.memory.stats.kept;
+    // Tiles that left: x in [0, 5) tiles (all), or y in [6, 16) tiles; observed: x < 341 cells.
+    // Leaving: columns 0..5 (16 rows each) and rows 6..16 of columns 5..16; observed columns 0..=10.
+    assert_eq!(kept, 5 * 16 + 10 * 6, "every tile that left with something observed in it");
+    assert_eq!((w.memory.stats.dropped, w.memory.tiles()), (0, kept as usize));
+    assert!(w.memory.bytes_used() <= firmware::capacity::MEMORY_BYTES);
+    // Before it comes back, the cells are not in the window.
+    assert_eq!(w.lidar.get(0, 0), Cell::Unknown);
+    w.shift(-160, 320, r).unwrap();
+    assert_eq!(w.lidar.geom, geom);
+    assert_eq!(w.memory.stats.restored, kept);
+    assert_eq!(w.memory.tiles(), 0);
+    for y in 0..N {
+        for x in 0..N {
+            assert_eq!(w.lidar.get(x, y), before_lidar.get(x, y), "lidar ({x}, {y})");
+            assert_eq!(w.visual.get(x, y), before_visual.get(x, y), "visual ({x}, {y})");
+            let stayed = x >= 160 && y < 192;
+            let want = match (stayed, before_lidar.get(x, y)) {
+                (true, _) => before_lidar.evidence.get(x, y),
+                (false, Cell::Occupied) => Some(RESTORED_OCCUPIED),
+                (false, Cell::Free) => Some(RESTORED_FREE),
+                (false, Cell::Unknown) => None,
+            };
+            assert_eq!(w.lidar.evidence.get(x, y), want, "evidence ({x}, {y})");
+        }
+    }
+}
+
+/// The store is bounded: random tiles (the worst coding) fill it; a tile that does not fit is not
+/// kept and counted, earlier ones are; tiles restored leave holes that a compaction closes for new
+/// ones; every tile restored is exactly the one kept; a reset forgets all.
+#[test]
+fn the_window_memory_is_bounded_and_compacts() {
+    let geom = GridGeometry { origin_x: m(0.0), origin_y: m(0.0) };
+    let mut src = OwnedMaps::new(geom);
+    let mut rng = 0xC0FF_EE11u32;
+    for y in 0..N {
+        for x in 0..N {
+            let r = firmware::rrt::xorshift32(&mut rng);
+            // Runs of 1–8 cells: 1 byte a code.
+            let c = [Cell::Unknown, Cell::Free, Cell::Occupied][(r % 3) as usize];
+            let e = match c {
+                Cell::Occupied => Some(3),
+                Cell::Free => Some(-2),
+                Cell::Unknown => None,
+            };
+            if let Some(e) = e {
+                src.lidar.seed(x, y, e);
+            }
+            src.visual.grid.set(x, y, [Cell::Unknown, Cell::Free][(r >> 8) as usize & 1]);
+        }
+    }
+    let mut mem = Box::new(WindowMemory::new());
+    let tiles: Vec<(i32, i32)> = (0..16).flat_map(|j| (0..16).map(move |i| (i, j))).collect();
+    let mut held = Vec::new();
+    for &t in &tiles {
+        let before = mem.stats;
+        mem.keep(&src.lidar, &src.visual, (t.0 * 32, t.1 * 32), t);
+        if mem.stats.kept > before.kept {
+            assert_eq!(mem.stats.dropped, 0, "nothing is kept after the first drop");
+            held.push(t);
+        }
+    }
+    assert!(mem.stats.dropped > 0 && !held.is_empty(), "random tiles overflow the store: {:?}", mem.stats);
+    assert_eq!(held, tiles[..held.len()].to_vec(), "what left first stays");
+    assert!(mem.bytes_used() <= firmware::capacity::MEMORY_BYTES);
+    let check = |mem: &mut WindowMemory, t: (i32, i32)| {
+        let mut dst = OwnedMaps::new(geom);
+        assert!(mem.holds(t));
+        mem.restore(&mut dst.lidar, &mut dst.visual, (t.0 * 32, t.1 * 32), t);
+        assert!(!mem.holds(t));
+        for y in t.1 * 32..t.1 * 32 + 32 {
+            for x in t.0 * 32..t.0 * 32 + 32 {
+                assert_eq!(dst.lidar.get(x, y), src.lidar.get(x, y), "tile {t:?} lidar ({x}, {y})");
+                assert_eq!(dst.visual.get(x, y), src.visual.get(x, y), "tile {t:?} visual ({x}, {y})");
+            }
+        }
+    };
+    // Restore every other tile; the holes make room for new ones only after a compaction.
+    for &t in held.iter().step_by(2) {
+        check(&mut mem, t);
+    }
+    let dropped = mem.stats.dropped;
+    let next = tiles[held.len()];
+    mem.keep(&src.lidar, &src.visual, (next.0 * 32, next.1 * 32), next);
+    assert_eq!(mem.stats.compactions, 1);
+    assert_eq!(mem.stats.dropped, dropped, "the compacted store has room");
+    for &t in held.iter().skip(1).step_by(2).chain([next].iter()) {
+        check(&mut mem, t);
+    }
+    assert_eq!(mem.tiles(), 0);
+    // An unobserved tile is not kept.
+    let empty = OwnedMaps::new(geom);
+    mem.keep(&empty.lidar, &empty.visual, (0, 0), (0, 0));
+    assert_eq!(mem.tiles(), 0);
+    mem.keep(&src.lidar, &src.visual, (0, 0), (7, 7));
+    mem.clear();
+    assert_eq!((mem.tiles(), mem.stats), (0, Default::default()));
 }

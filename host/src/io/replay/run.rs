@@ -100,6 +100,21 @@ pub struct GridCounts {
 }
 
 /// Why scans were not used.
+/// What the rolling window's memory did over a replay ([`ReplayReport::window_tiles`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct WindowTiles {
+    /// Tiles kept as they left the window.
+    pub kept: u32,
+    /// Tiles restored as they came back.
+    pub restored: u32,
+    /// Tiles that left with something observed in them and did not fit.
+    pub dropped: u32,
+    /// Tiles held at the end (outside the final window).
+    pub held: u32,
+    /// The most bytes the tiles held took at once.
+    pub peak_bytes: u32,
+}
+
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Rejected {
     /// The laser's pose lies outside the controller's 51.2 m window at that moment: it jumped
@@ -198,6 +213,9 @@ pub struct ReplayReport {
     pub final_grid_origin: [f64; 2],
     /// Times the rolling window moved.
     pub window_shifts: u32,
+    /// Tiles of 32 × 32 cells the window's memory kept as they left the window, restored as they
+    /// came back, and dropped for want of room (`firmware::rolling::memory`).
+    pub window_tiles: WindowTiles,
     /// Grid side, metres.
     pub grid_size_m: f64,
     /// Bounding box of the laser's trajectory `[[min x, min y], [max x, max y]]`, metres (without
@@ -541,12 +559,15 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     if exceeds {
         warnings.push(format!(
             "the trajectory ({:.1} × {:.1} m) does not fit the controller's {size:.1} m grid: the grid started on the first \
-             pose and its window moved {} time{} to follow the laser, forgetting what it left; the final grid and picture \
-             show the window at the end, lower-left corner ({}, {})",
+             pose and its window moved {} time{} to follow the laser, keeping what it left ({} tiles kept, {} restored, \
+             {} dropped for want of room); the final grid and picture show the window at the end, lower-left corner ({}, {})",
             bounds[1][0] - bounds[0][0],
             bounds[1][1] - bounds[0][1],
             window.shifts,
             if window.shifts == 1 { "" } else { "s" },
+            ctrl.memory.stats.kept,
+            ctrl.memory.stats.restored,
+            ctrl.memory.stats.dropped,
             compact(final_origin[0]),
             compact(final_origin[1])
         ));
@@ -586,6 +607,13 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         grid_origin: origin,
         final_grid_origin: final_origin,
         window_shifts: window.shifts,
+        window_tiles: WindowTiles {
+            kept: ctrl.memory.stats.kept,
+            restored: ctrl.memory.stats.restored,
+            dropped: ctrl.memory.stats.dropped,
+            held: ctrl.memory.tiles() as u32,
+            peak_bytes: ctrl.memory.stats.peak_bytes,
+        },
         grid_size_m: size,
         trajectory_bounds: bounds.map(|p| p.map(round3)),
         exceeds_grid: exceeds,
