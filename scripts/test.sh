@@ -71,7 +71,7 @@ if ! command -v qemu-system-arm >/dev/null 2>&1; then
 fi
 need qemu-system-arm "apt-get install -y qemu-system-arm (Debian/Ubuntu), or your distribution's QEMU Arm system emulator"
 qemu-system-arm --version | head -1
-# The images: mcu-node (real time), mcu-lockstep, mcu-trace (golden trace + timing), mcu-selftest.
+# The images: mcu-node (real time), mcu-lockstep, mcu-trace and mcu-trace-live (the golden and known-map traces + timing), mcu-selftest.
 cargo build --profile mcu --target "$TARGET" -p firmware --features mcu --bins
 LIVES_MCU_DIR="${CARGO_TARGET_DIR:-target}/$TARGET/mcu"
 case "$LIVES_MCU_DIR" in /*) ;; *) LIVES_MCU_DIR="$PWD/$LIVES_MCU_DIR" ;; esac

@@ -38,8 +38,7 @@ const LIVE_FIXTURE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/golden
 const BUDGETS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../firmware/mcu-budgets.toml");
 /// Ticks in the fixture (`lives trace record --ticks 150`).
 const TRACE_TICKS: u32 = 150;
-/// Ticks in the known-map fixture (`--ticks 100`: with the map it holds, the most `mcu-trace`'s
-/// flash takes beside the golden trace).
+/// Ticks in the known-map fixture (`--ticks 100`; its image is `mcu-trace-live`).
 const LIVE_TRACE_TICKS: u32 = 100;
 /// Guest instructions per SysTick count under `-icount shift=0` (25 MHz, 1 ns per instruction).
 const INSTRUCTIONS_PER_COUNT: u64 = 40;
@@ -125,7 +124,8 @@ fn run_qemu(c: Command, limit: Duration) -> (Option<i32>, String, String) {
     (status.and_then(|s| s.code()), o, e)
 }
 
-/// One `R` line of `mcu-trace`: the digest, the record's SysTick counts, the stages' counts.
+/// One `R` line of `mcu-trace` (or `L` line of `mcu-trace-live`): the digest, the record's SysTick
+/// counts, the stages' counts.
 #[derive(Clone, Debug, PartialEq, Eq)]
 struct McuRecord {
     digest: Digest,
@@ -145,7 +145,7 @@ struct McuTrace {
 
 fn parse_trace_output(out: &str) -> McuTrace {
     let (mut records, mut live) = (Vec::new(), Vec::new());
-    let (mut ticks, mut stack_max, mut live_ticks) = (None, None, None);
+    let (mut ticks, mut stack_max, mut live_ticks) = (None, None::<u64>, None);
     for line in out.lines() {
         let f: Vec<&str> = line.split_whitespace().collect();
         match f.first() {
@@ -169,9 +169,18 @@ fn parse_trace_output(out: &str) -> McuTrace {
                     stages,
                 });
             }
-            Some(&"DONE") => ticks = f.get(1).and_then(|s| s.strip_prefix("ticks=")).and_then(|s| s.parse().ok()),
-            Some(&"LIVE") => live_ticks = f.get(1).and_then(|s| s.strip_prefix("ticks=")).and_then(|s| s.parse().ok()),
-            Some(&"STACK") => stack_max = f.get(2).and_then(|s| s.strip_prefix("max=")).and_then(|s| s.parse().ok()),
+            Some(&"DONE") => {
+                let n = f.get(2).and_then(|s| s.strip_prefix("ticks=")).and_then(|s| s.parse().ok());
+                match f.get(1) {
+                    Some(&"R") => ticks = n,
+                    Some(&"L") => live_ticks = n,
+                    _ => panic!("bad line from a trace image: {line}"),
+                }
+            }
+            Some(&"STACK") => {
+                let m = f.get(2).and_then(|s| s.strip_prefix("max=")).and_then(|s| s.parse().ok());
+                stack_max = stack_max.max(m);
+            }
             _ => {}
         }
     }
@@ -180,34 +189,41 @@ fn parse_trace_output(out: &str) -> McuTrace {
         ticks: ticks.unwrap_or_else(|| panic!("mcu-trace did not finish:\n{out}")),
         stack_max: stack_max.unwrap_or_else(|| panic!("mcu-trace printed no stack figure:\n{out}")),
         live,
-        live_ticks: live_ticks.unwrap_or_else(|| panic!("mcu-trace did not replay the known-map trace:\n{out}")),
+        live_ticks: live_ticks.unwrap_or_else(|| panic!("mcu-trace-live did not finish:\n{out}")),
     }
 }
 
-/// The golden trace on the MCU, twice (in parallel), under `-icount shift=0`; shared by the tests.
+/// The golden trace (`mcu-trace`) and the known-map trace (`mcu-trace-live`) on the MCU, each
+/// twice (two at a time), under `-icount shift=0`; shared by the tests.
 fn mcu_runs() -> &'static (McuTrace, McuTrace) {
     static RUNS: OnceLock<(McuTrace, McuTrace)> = OnceLock::new();
     RUNS.get_or_init(|| {
-        let img = image("mcu-trace");
-        let run = |img: PathBuf| {
+        let run = |name: &'static str| {
+            let img = image(name);
             std::thread::spawn(move || {
                 let (code, out, err) = run_qemu(qemu(&img, true, "null", &[]), Duration::from_secs(600));
-                assert_eq!(code, Some(0), "mcu-trace failed:\n{out}\n{err}");
-                parse_trace_output(&out)
+                assert_eq!(code, Some(0), "{name} failed:\n{out}\n{err}");
+                out
             })
         };
-        let (a, b) = (run(img.clone()), run(img));
-        (a.join().expect("first QEMU run"), b.join().expect("second QEMU run"))
+        let mut outs = Vec::new();
+        for name in ["mcu-trace", "mcu-trace-live"] {
+            let (a, b) = (run(name), run(name));
+            outs.push((a.join().expect("first QEMU run"), b.join().expect("second QEMU run")));
+        }
+        let ((r1, r2), (l1, l2)) = (&outs[0], &outs[1]);
+        (parse_trace_output(&format!("{r1}{l1}")), parse_trace_output(&format!("{r2}{l2}")))
     })
 }
 
-/// Both fixtures replayed on the host as `mcu-trace` replays them: the golden trace, then the
-/// known-map trace on the same controller and a new node. Digests and ticks of each.
+/// Both fixtures replayed on the host as `mcu-trace` and `mcu-trace-live` replay them: each on a
+/// new controller (the default configuration, no model until the trace asks for one) and a new
+/// node. Digests and ticks of each.
 fn host_digests() -> &'static [(Vec<Digest>, u32); 2] {
     static HOST: OnceLock<[(Vec<Digest>, u32); 2]> = OnceLock::new();
     HOST.get_or_init(|| {
-        let mut ctl = Box::new(Controller::new(Config::DEFAULT));
         [(TRACE_FIXTURE, RERECORD), (LIVE_FIXTURE, RERECORD_LIVE)].map(|(file, rerecord)| {
+            let mut ctl = Box::new(Controller::new(Config::DEFAULT));
             let bytes = std::fs::read(file).unwrap_or_else(|e| panic!("{file}: {e}"));
             let t = Trace::parse(&bytes).unwrap_or_else(|e| panic!("the fixture {file}: {e}; {rerecord}"));
             let mut node = Box::new(Node::new(NodeConfig::new(TimeMode::Lockstep)));
@@ -380,7 +396,7 @@ fn the_images_fit_memory_x_with_room_for_the_stack() {
     let (ram_len, flash_len) = (region_length(&mem, "RAM"), region_length(&mem, "FLASH"));
     println!("| image | static RAM (.data + .bss) | flash (.text + .rodata + .data image) |");
     println!("|---|---|---|");
-    for name in ["mcu-node", "mcu-lockstep", "mcu-trace", "mcu-selftest"] {
+    for name in ["mcu-node", "mcu-lockstep", "mcu-trace", "mcu-trace-live", "mcu-selftest"] {
         let f = footprint(&image(name));
         println!(
             "| {name} | {} B ({:.1} % of {} KiB) | {} B ({:.1} % of {} KiB) |",
@@ -398,12 +414,12 @@ fn the_images_fit_memory_x_with_room_for_the_stack() {
             assert!(f.data >= std::mem::size_of::<Controller>() as u64 / 2, "{name}: the controller is not in .data");
         }
     }
-    // The stack the golden trace needed, on top of the statics of its image.
-    let trace = footprint(&image("mcu-trace"));
+    // The stack the traces needed (the deeper of the two), on top of the statics of the larger image.
+    let trace = footprint(&image("mcu-trace")).ram.max(footprint(&image("mcu-trace-live")).ram);
     let stack = mcu_runs().0.stack_max;
-    println!("mcu-trace: stack high-water mark {stack} B; statics + stack {} B of {ram_len}", trace.ram + stack);
+    println!("trace images: stack high-water mark {stack} B; statics + stack {} B of {ram_len}", trace + stack);
     assert!(stack < 64 * 1024, "the stack grew to {stack} bytes: something large is built on the stack");
-    assert!(trace.ram + stack <= ram_len);
+    assert!(trace + stack <= ram_len);
 }
 
 /// Decodes what the MCU sent on its UART.

@@ -8,6 +8,7 @@
 pub mod clock;
 pub mod fault;
 pub mod slot;
+pub mod trace_app;
 pub mod uart;
 
 use cortex_m_semihosting::hprintln;
