@@ -25,16 +25,6 @@
 //!    and `office hard` trial (docs/experiments/live-known-map.md): a search wants the building
 //!    covered early, not the shortest tour.
 //!
-//! 5. **Ordered for the time to cover** (one robot, [`plan`]): the greedy route's order is
-//!    improved by or-opt — a run of 1 to [`OR_OPT_MAX_SEGMENT`] consecutive waypoints moved
-//!    elsewhere in the route, kept if the route's *coverage latency* falls: the sum over the
-//!    covered cells of the path length (plus [`LEG_OVERHEAD_M`] a leg) to the first waypoint
-//!    that covers each. With the target equally likely in any covered cell, that is the
-//!    expected time to first cover it (the minimum-latency objective of a search for a
-//!    stationary target); greedy coverage per metre is its myopic ratio rule and leaves pockets
-//!    the route walks back to at the end (`hallway hard`: the lab's interior, 36 m back from
-//!    the storage door; docs/experiments/live-known-map.md). The waypoints are the same.
-//!
 //! LiDAR waypoints face the way the route arrives at them (a route follower walks on); camera
 //! waypoints face their cone. Everything is deterministic: ties go to the lower index.
 
@@ -50,12 +40,6 @@ pub const MIN_GAIN_CELLS: usize = 25;
 /// Added to every leg's path length when rating a candidate (turning, stopping): a candidate
 /// next to the robot is not worth an infinite rate.
 pub const LEG_OVERHEAD_M: f64 = 2.0;
-
-/// Or-opt moves runs of at most this many consecutive waypoints.
-pub const OR_OPT_MAX_SEGMENT: usize = 3;
-/// The most route orders or-opt evaluates: a bound on the host's work (a route of 100 camera
-/// waypoints has 30 000 moves a pass), not a tuned value.
-pub const ORDER_MAX_EVALUATIONS: usize = 20_000;
 
 const CELL_M: f64 = 0.1;
 
@@ -330,13 +314,6 @@ impl<'a> Coverage<'a> {
     /// add [`MIN_GAIN_CELLS`] from where its route is stops taking waypoints. One start gives
     /// [`plan`]'s route.
     pub fn plan_team(&self, starts: &[[f64; 2]], speeds: &[f64], covered: &[bool]) -> Result<Vec<Route>, RouteError> {
-        let (chosen, length_units, covered_n) = self.greedy(starts, speeds, covered)?;
-        Ok(chosen.iter().zip(starts).zip(&length_units).map(|((ch, &start), &units)| self.route_of(start, ch, units, covered_n)).collect())
-    }
-
-    /// Greedy coverage per metre ([`Coverage::plan_team`]): each robot's (candidate, gain)
-    /// list, its path length (units: 5 a cell) and the cells covered in all.
-    fn greedy(&self, starts: &[[f64; 2]], speeds: &[f64], covered: &[bool]) -> Result<Greedy, RouteError> {
         let mut covered = covered.to_vec();
         covered.resize(self.ok.len(), false);
         let overhead = (LEG_OVERHEAD_M / CELL_M * 5.0) as u64;
@@ -380,163 +357,26 @@ impl<'a> Coverage<'a> {
             fields[r] = self.map.dijkstra(&self.ok, self.cands[k].0);
         }
         let covered_n = covered.iter().filter(|b| **b).count();
-        Ok((chosen, length_units, covered_n))
-    }
-
-    /// The route of (candidate, gain) list `ch` from `start`, `units` long.
-    fn route_of(&self, start: [f64; 2], ch: &[(usize, usize)], units: u64, covered_n: usize) -> Route {
-        let mut waypoints = Vec::with_capacity(ch.len());
-        let mut prev = start;
-        for &(k, gain) in ch {
-            let p = self.map.centre(self.cands[k].0);
-            let heading = match self.fp {
-                Footprint::Camera { .. } => self.cands[k].1,
-                Footprint::Lidar { .. } if (p[0] - prev[0]).hypot(p[1] - prev[1]) > 1e-9 => (p[1] - prev[1]).atan2(p[0] - prev[0]),
-                Footprint::Lidar { .. } => 0.0,
-            };
-            waypoints.push(Waypoint { x: p[0], y: p[1], heading, gain });
-            prev = p;
-        }
-        Route { waypoints, coverable: self.coverable, covered: covered_n, free: self.free, length_m: units as f64 * CELL_M / 5.0 }
-    }
-
-    /// One robot's route from `start`: greedy coverage per metre, its order then improved for
-    /// the coverage latency ([`Order::improve`]). Returns the route and its latency before and
-    /// after (cell-units: cells × path units, 5 a cell).
-    pub fn plan_ordered(&self, start: [f64; 2]) -> Result<(Route, u64, u64), RouteError> {
-        let (mut chosen, _, covered_n) = self.greedy(&[start], &[1.0], &self.nothing_covered())?;
-        let ch = chosen.remove(0);
-        let from = start_cell(self.map, &self.ok, start)?;
-        let order = Order::new(self, from, &ch.iter().map(|&(k, _)| k).collect::<Vec<_>>());
-        let before = order.latency(&order.identity());
-        let (perm, after) = order.improve();
-        let (gains, units) = order.gains_and_length(&perm);
-        let ch: Vec<(usize, usize)> = perm.iter().zip(gains).map(|(&i, g)| (ch[i].0, g)).collect();
-        Ok((self.route_of(start, &ch, units, covered_n), before, after))
-    }
-}
-
-/// Greedy routes: per robot its (candidate, gain) list, per robot its path units, the cells
-/// covered in all.
-type Greedy = (Vec<Vec<(usize, usize)>>, Vec<u64>, usize);
-
-/// A route's order as a minimum-latency problem: the path length between its waypoints (and
-/// from the start) and what each covers, as bits over the cells the route covers.
-struct Order {
-    /// `dist[a][b]`: path units from waypoint `a` to `b`; index `n` is the start.
-    dist: Vec<Vec<u64>>,
-    /// Per waypoint, the cells it covers: `words` words each.
-    cells: Vec<u64>,
-    words: usize,
-    n: usize,
-    overhead: u64,
-}
-
-impl Order {
-    fn new(c: &Coverage, start: usize, ks: &[usize]) -> Order {
-        let n = ks.len();
-        let mut index = vec![u32::MAX; c.ok.len()];
-        let mut next = 0u32;
-        for &k in ks {
-            for &i in &c.cands[k].2 {
-                if index[i as usize] == u32::MAX {
-                    index[i as usize] = next;
-                    next += 1;
+        Ok(chosen
+            .iter()
+            .zip(starts)
+            .zip(&length_units)
+            .map(|((ch, &start), &units)| {
+                let mut waypoints = Vec::with_capacity(ch.len());
+                let mut prev = start;
+                for &(k, gain) in ch {
+                    let p = self.map.centre(self.cands[k].0);
+                    let heading = match self.fp {
+                        Footprint::Camera { .. } => self.cands[k].1,
+                        Footprint::Lidar { .. } if (p[0] - prev[0]).hypot(p[1] - prev[1]) > 1e-9 => (p[1] - prev[1]).atan2(p[0] - prev[0]),
+                        Footprint::Lidar { .. } => 0.0,
+                    };
+                    waypoints.push(Waypoint { x: p[0], y: p[1], heading, gain });
+                    prev = p;
                 }
-            }
-        }
-        let words = (next as usize).div_ceil(64).max(1);
-        let mut cells = vec![0u64; n * words];
-        for (w, &k) in ks.iter().enumerate() {
-            for &i in &c.cands[k].2 {
-                let b = index[i as usize] as usize;
-                cells[w * words + b / 64] |= 1 << (b % 64);
-            }
-        }
-        let at = |f: &[u32], k: usize| f[c.cands[k].0] as u64;
-        let mut dist = Vec::with_capacity(n + 1);
-        for from in ks.iter().map(|&k| c.cands[k].0).chain([start]) {
-            let f = c.map.dijkstra(&c.ok, from);
-            dist.push(ks.iter().map(|&k| at(&f, k)).collect());
-        }
-        Order { dist, cells, words, n, overhead: (LEG_OVERHEAD_M / CELL_M * 5.0) as u64 }
-    }
-
-    fn identity(&self) -> Vec<usize> {
-        (0..self.n).collect()
-    }
-
-    /// The coverage latency of visiting the waypoints in `perm`'s order: per waypoint, the
-    /// cells it covers first times the path units (with the overhead a leg) to it.
-    fn latency(&self, perm: &[usize]) -> u64 {
-        let mut covered = vec![0u64; self.words];
-        let (mut t, mut prev, mut sum) = (0u64, self.n, 0u64);
-        for &w in perm {
-            t += self.dist[prev][w].saturating_add(self.overhead);
-            let mut new = 0u64;
-            for (c, s) in covered.iter_mut().zip(&self.cells[w * self.words..(w + 1) * self.words]) {
-                new += (s & !*c).count_ones() as u64;
-                *c |= s;
-            }
-            sum = sum.saturating_add(new.saturating_mul(t));
-            prev = w;
-        }
-        sum
-    }
-
-    /// What each waypoint of `perm` covers first, and the path's length (units).
-    fn gains_and_length(&self, perm: &[usize]) -> (Vec<usize>, u64) {
-        let mut covered = vec![0u64; self.words];
-        let (mut units, mut prev, mut gains) = (0u64, self.n, Vec::with_capacity(perm.len()));
-        for &w in perm {
-            units = units.saturating_add(self.dist[prev][w]);
-            let mut new = 0usize;
-            for (c, s) in covered.iter_mut().zip(&self.cells[w * self.words..(w + 1) * self.words]) {
-                new += (s & !*c).count_ones() as usize;
-                *c |= s;
-            }
-            gains.push(new);
-            prev = w;
-        }
-        (gains, units)
-    }
-
-    /// Or-opt from the given order: every run of 1 to [`OR_OPT_MAX_SEGMENT`] waypoints moved to
-    /// every other place, in that order, a move kept when it lowers the latency; passes until
-    /// one keeps none or [`ORDER_MAX_EVALUATIONS`] orders were evaluated. The order and its
-    /// latency.
-    fn improve(&self) -> (Vec<usize>, u64) {
-        let mut perm = self.identity();
-        let mut best = self.latency(&perm);
-        let mut evaluations = 1usize;
-        loop {
-            let mut improved = false;
-            for len in 1..=OR_OPT_MAX_SEGMENT.min(self.n.saturating_sub(1)) {
-                let mut i = 0;
-                while i + len <= perm.len() {
-                    for j in 0..=perm.len() - len {
-                        if j == i {
-                            continue;
-                        }
-                        if evaluations >= ORDER_MAX_EVALUATIONS {
-                            return (perm, best);
-                        }
-                        let mut moved = perm.clone();
-                        let run: Vec<usize> = moved.drain(i..i + len).collect();
-                        moved.splice(j..j, run);
-                        evaluations += 1;
-                        let l = self.latency(&moved);
-                        if l < best {
-                            (perm, best, improved) = (moved, l, true);
-                        }
-                    }
-                    i += 1;
-                }
-            }
-            if !improved {
-                return (perm, best);
-            }
-        }
+                Route { waypoints, coverable: self.coverable, covered: covered_n, free: self.free, length_m: units as f64 * CELL_M / 5.0 }
+            })
+            .collect())
     }
 }
 
@@ -554,11 +394,11 @@ fn start_cell(map: &KnownGrid, ok: &[bool], start: [f64; 2]) -> Result<usize, Ro
 }
 
 /// The coverage route of `map` for a robot of `radius_m` starting at `start` (world x, y) with
-/// footprint `fp`: greedy coverage per metre, ordered for the coverage latency
-/// ([`Coverage::plan_ordered`]).
+/// footprint `fp`.
 pub fn plan(map: &KnownGrid, radius_m: f64, start: [f64; 2], fp: Footprint) -> Result<Route, RouteError> {
     let problem = Coverage::new(map, radius_m, start, fp)?;
-    Ok(problem.plan_ordered(start)?.0)
+    let mut routes = problem.plan_team(&[start], &[1.0], &problem.nothing_covered())?;
+    Ok(routes.remove(0))
 }
 
 #[cfg(test)]
@@ -595,52 +435,6 @@ mod tests {
         assert!(cam.waypoints[0].x < 9.0 && lidar.waypoints[0].x < 9.0);
         // Deterministic.
         assert_eq!(plan(&map, 0.35, [2.0, 2.0], Footprint::Lidar { range_m: 30.0 }).unwrap(), lidar);
-    }
-
-    #[test]
-    fn or_opt_moves_a_pocket_forward_when_that_lowers_the_coverage_latency_and_never_raises_it() {
-        // Three waypoints as a greedy route left them: `far` (100 units from the start, 50
-        // cells), `farther` (120 on, 50 cells), then `pocket` (5 units from the start, 225
-        // from `farther` and 100 from `far`, 40 cells).
-        let (far, farther, pocket) = (0, 1, 2);
-        let mut cells = vec![0u64; 3 * 2];
-        let mut set = |w: usize, from: usize, to: usize| (from..to).for_each(|b| cells[w * 2 + b / 64] |= 1 << (b % 64));
-        set(far, 0, 50);
-        set(farther, 50, 100);
-        set(pocket, 100, 140);
-        let dist = vec![vec![0, 120, 100], vec![120, 0, 225], vec![100, 225, 0], vec![100, 220, 5]];
-        let order = Order { dist, cells, words: 2, n: 3, overhead: 100 };
-        let greedy = order.latency(&order.identity());
-        // 50 × 200 + 50 × (200 + 220) + 40 × (420 + 325).
-        assert_eq!(greedy, 10_000 + 21_000 + 29_800);
-        let (perm, latency) = order.improve();
-        assert_eq!(perm, vec![pocket, far, farther], "the pocket first: 40 cells 640 units earlier outweigh 100 cells 105 units later");
-        assert_eq!(latency, order.latency(&perm));
-        assert!(latency < greedy);
-        assert_eq!(order.gains_and_length(&perm), (vec![40, 50, 50], 5 + 100 + 120));
-    }
-
-    #[test]
-    fn the_ordered_route_has_the_greedy_routes_waypoints_and_coverage_and_no_more_latency() {
-        let cells = two_rooms();
-        let map = KnownGrid { cells: &cells, side: 200, origin: [0.0, 0.0] };
-        for fp in [Footprint::Camera { range_m: 4.0, fov_rad: 90f64.to_radians() }, Footprint::Lidar { range_m: 30.0 }] {
-            let problem = Coverage::new(&map, 0.35, [2.0, 2.0], fp).unwrap();
-            let greedy = problem.plan_team(&[[2.0, 2.0]], &[1.0], &problem.nothing_covered()).unwrap().remove(0);
-            let (ordered, before, after) = problem.plan_ordered([2.0, 2.0]).unwrap();
-            assert!(after <= before, "{after} > {before}");
-            assert_eq!(ordered.covered, greedy.covered);
-            let places = |r: &Route| {
-                let mut p: Vec<(i64, i64)> =
-                    r.waypoints.iter().map(|w| ((w.x * 10.0).round() as i64, (w.y * 10.0).round() as i64)).collect();
-                p.sort_unstable();
-                p
-            };
-            assert_eq!(places(&ordered), places(&greedy));
-            // Each cell is credited to the first waypoint that covers it, in the new order.
-            assert_eq!(ordered.waypoints.iter().map(|w| w.gain).sum::<usize>(), ordered.covered);
-            assert_eq!(plan(&map, 0.35, [2.0, 2.0], fp).unwrap(), ordered);
-        }
     }
 
     #[test]
