@@ -31,8 +31,7 @@
 //!    rooms, corridors) lost on the development seeds ([`ROOM_PRECEDENCE`],
 //!    [`PROPOSAL_PRECEDENCE`] keep them selectable at build time).
 //! 5. **Commitment**: the robot goes to the tour's first task. The task being pursued (matched
-//!    across steps by its room if the goal lies on the way to the room's task now
-//!    ([`Planner::on_the_way`]), or by what it looks at within [`TASK_MATCH_CELLS`]) stays first
+//!    across steps by its room, or by what it looks at within [`TASK_MATCH_CELLS`]) stays first
 //!    unless the best tour that starts elsewhere is shorter by [`TOUR_SWITCH_UNITS`]: a tour
 //!    re-solved from a moving robot otherwise changes its first task every step.
 
@@ -380,14 +379,7 @@ impl Planner {
             (Some((c, _)), Some((cell, anchor, kind))) if c == cell => Some((anchor, kind, self.last_goal_room)),
             _ => None,
         };
-        let current_task = match pursued {
-            Some((a, kind, room)) => {
-                let (i, w) = self.find_task(a, kind, room, current.map(|(c, _)| c));
-                work += w;
-                i
-            }
-            None => None,
-        };
+        let current_task = pursued.and_then(|(a, kind, room)| self.find_task(a, kind, room, current.map(|(c, _)| c)));
 
         // Costs.
         work += self.tour_costs(pose.theta);
@@ -455,25 +447,18 @@ impl Planner {
         (first.map(|i| self.tasks[i].viewpoint(-(cost as i64))), work)
     }
 
-    /// This step's task that continues one of the last step's (`anchor`, `kind`, `room`), with
-    /// the work: a room's frontier task is the room's, whichever of its frontiers is best now, if
-    /// the goal being pursued lies on the way to it ([`Planner::on_the_way`]); otherwise a
+    /// This step's task that continues one of the last step's (`anchor`, `kind`, `room`): a
+    /// room's frontier task is the room's, whichever of its frontiers is best now; otherwise a
     /// frontier shrinks and its anchor moves as the robot nears it, so the task of the same kind
     /// whose anchor is nearest the last one (or whose viewpoint is `goal_cell`) within
     /// [`TASK_MATCH_CELLS`].
-    fn find_task(&self, a: (i32, i32), kind: TaskKind, room: Option<u8>, goal_cell: Option<(i32, i32)>) -> (Option<usize>, u32) {
+    fn find_task(&self, a: (i32, i32), kind: TaskKind, room: Option<u8>, goal_cell: Option<(i32, i32)>) -> Option<usize> {
         let goal_cell = goal_cell.unwrap_or(a);
         let frontier = |k: TaskKind| matches!(k, TaskKind::LidarFrontier | TaskKind::VisualFrontier);
-        let mut work = 0;
         if let Some(i) = self.tasks.iter().position(|t| room.is_some() && t.room == room && frontier(t.kind) && frontier(kind)) {
-            let (on_the_way, w) = self.on_the_way(goal_cell, &self.tasks[i]);
-            work += w;
-            if on_the_way {
-                return (Some(i), work);
-            }
+            return Some(i);
         }
-        let i = self
-            .tasks
+        self.tasks
             .iter()
             .enumerate()
             .filter(|(_, t)| t.kind == kind)
@@ -486,27 +471,7 @@ impl Planner {
             })
             .filter(|&(d2, _)| d2 <= TASK_MATCH_CELLS * TASK_MATCH_CELLS)
             .min()
-            .map(|(_, i)| i);
-        (i, work + self.tasks.len() as u32)
-    }
-
-    /// Whether the goal being pursued (its viewpoint `goal`) lies on the way to task `t`: going
-    /// to `t` through `goal` costs at most 2 · [`TASK_MATCH_CELLS`] more path than going straight
-    /// (the step's path distances; goal to task by [`Planner::pair_distance`]). Only then does
-    /// `t` inherit the commitment to the goal: hysteresis pays for progress made, and progress
-    /// towards the goal is progress towards `t` only if the goal is on its way. A task within
-    /// the match radius of the goal always is (triangle inequality); a region's frontier across
-    /// the room or behind the robot is not (a hallway open to a room at its full width is one
-    /// region, `crate::rooms`). Returns the work.
-    pub(crate) fn on_the_way(&self, goal: (i32, i32), t: &Task) -> (bool, u32) {
-        let to_goal = self.distance(goal.0, goal.1);
-        let to_task = self.distance(t.cell.0, t.cell.1);
-        if to_goal == UNREACHABLE || to_task == UNREACHABLE {
-            return (false, 1);
-        }
-        let (between, work) = self.pair_distance(goal, t.cell);
-        let slack = 2 * TASK_MATCH_CELLS as u64 * STEP_STRAIGHT as u64;
-        (between != u32::MAX && to_goal as u64 + between as u64 <= to_task as u64 + slack, work)
+            .map(|(_, i)| i)
     }
 
     /// What the camera would gain standing at `c`: the best heading's view
@@ -677,6 +642,3 @@ fn camera_coverage(rooms: &Rooms, r: &Room, step: &Step) -> (u32, u32, u32) {
     }
     (seen, free, work)
 }
-
-#[cfg(test)]
-mod tests;
