@@ -109,9 +109,9 @@ fn the_window_follows_a_robot_down_an_80_m_corridor() {
         let (cx, cy) = g.cell_of(m(px + 2.0), m(22.45));
         assert_eq!(ctl.lidar.get(cx, cy), Cell::Occupied, "north wall at x = {} m", px + 2.0);
     }
-    // What left the window is gone: nothing is mapped west of it, and the cells that hold the
-    // corridor now hold no trace of where it was before (the whole grid has its walls only
-    // along the corridor's rows).
+    // What left the window is out of the grid: the cells that hold the corridor now hold no
+    // trace of where it was before (the whole grid has its walls only along the corridor's
+    // rows); it is in the window's memory, tile by tile, until the window comes back.
     for y in 0..N {
         for x in 0..N {
             if ctl.lidar.get(x, y) == Cell::Occupied {
@@ -121,6 +121,12 @@ fn the_window_follows_a_robot_down_an_80_m_corridor() {
             }
         }
     }
+    let kept = ctl.memory.stats;
+    assert!(kept.kept > 0 && ctl.memory.tiles() == kept.kept as usize, "{kept:?}");
+    assert_eq!((kept.restored, kept.dropped), (0, 0), "the robot never came back; everything fitted");
+    // A reset (a new search) forgets the memory with the maps.
+    ctl.tick(90_000_000, &Inputs { command: Some(Command::Reset), ..Inputs::default() });
+    assert_eq!((ctl.memory.tiles(), ctl.memory.stats.kept), (0, 0));
 }
 
 /// The same drive twice gives the same window, maps and goal, bit for bit (integer arithmetic
