@@ -17,6 +17,14 @@ fn mapcheck(args: &[&std::ffi::OsStr]) -> (Option<i32>, String, String) {
     (out.status.code(), String::from_utf8(out.stdout).unwrap(), String::from_utf8(out.stderr).unwrap())
 }
 
+/// `lives mapcheck LOG --json` on a log of `tests/data/carmen/`, which must succeed.
+fn scored(log: &str) -> Value {
+    let log = data(log);
+    let (code, stdout, stderr) = mapcheck(&[log.as_os_str(), "--json".as_ref()]);
+    assert_eq!(code, Some(0), "{stderr}");
+    serde_json::from_str(&stdout).unwrap()
+}
+
 fn share(v: &Value) -> f64 {
     let x = v.as_f64().unwrap_or_else(|| panic!("a number: {v}"));
     assert!((0.0..=1.0).contains(&x), "a share lies in [0, 1]: {x}");
@@ -25,10 +33,7 @@ fn share(v: &Value) -> f64 {
 
 #[test]
 fn the_corrected_intel_log_is_scored_against_its_own_poses() {
-    let log = data("intel-corrected.log.gz");
-    let (code, stdout, stderr) = mapcheck(&[log.as_os_str(), "--json".as_ref()]);
-    assert_eq!(code, Some(0), "{stderr}");
-    let r: Value = serde_json::from_str(&stdout).unwrap();
+    let r = scored("intel-corrected.log.gz");
     assert_eq!(r["reference"]["kind"], "log-poses");
     assert_eq!(r["reference"]["rays_per_viewpoint"], 720);
     // Every scan of the log is a viewpoint, and the replay used all 910.
@@ -66,10 +71,7 @@ fn the_corrected_intel_log_is_scored_against_its_own_poses() {
 /// (docs/experiments/evidence-weights.md).
 #[test]
 fn the_csail_window_keeps_what_it_leaves() {
-    let log = data("csail-corrected.log.gz");
-    let (code, stdout, stderr) = mapcheck(&[log.as_os_str(), "--json".as_ref()]);
-    assert_eq!(code, Some(0), "{stderr}");
-    let r: Value = serde_json::from_str(&stdout).unwrap();
+    let r = scored("csail-corrected.log.gz");
     assert_eq!(r["replay"]["scans_used"], 406);
     assert_eq!(r["replay"]["window_shifts"], 5);
     let tiles = &r["replay"]["window_tiles"];
