@@ -222,7 +222,7 @@ pub struct ReplayReport {
     /// stray poses).
     pub trajectory_bounds: [[f64; 2]; 2],
     /// The trajectory does not fit in the grid: the grid was placed on its first pose and the
-    /// rolling window followed the laser (what left the window is forgotten).
+    /// rolling window followed the laser (what left the window was kept, [`ReplayReport::window_tiles`]).
     pub exceeds_grid: bool,
     /// Assumptions and notes.
     pub warnings: Vec<String>,
