@@ -86,6 +86,57 @@ fn the_intel_log_exported_as_a_bag_replays_into_the_same_map() {
     assert!(c_in_b >= 0.95 && b_in_c >= 0.95, "{c_in_b} {b_in_c}");
 }
 
+/// The corrected CSAIL log's time stamps stand still (2 distinct among 406 scans): a bag stamped
+/// with them would have every odometry message jump (and replay rejects such jumps), which no
+/// robot records. The export stamps it as replay plays the log, one scan per tick, and the bag
+/// replays into the CARMEN replay's map (the rolling window moving as it does).
+#[test]
+fn a_log_whose_stamps_stand_still_is_exported_one_scan_per_tick() {
+    let log = common::root().join("tests/data/carmen/csail-corrected.log.gz");
+    let dir = std::env::temp_dir().join(format!("lives-export-bag-csail-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bag = dir.join("csail.mcap");
+    let s = export_bag::export(&log, &bag, &ExportOptions::default()).unwrap();
+    assert!(s.synthetic_stamps);
+    let carmen_log = replay::read_log(&log).unwrap();
+    assert!(replay::stamps_stand_still(&carmen_log.scans).1);
+    let bag_log = replay::read_log(&bag).unwrap();
+    assert_eq!((bag_log.scans.len(), bag_log.no_odometry_yet), (403, 3));
+    assert!(!replay::stamps_stand_still(&bag_log.scans).1);
+    for (k, w) in bag_log.scans.windows(2).enumerate() {
+        assert!((w[1].t_s - w[0].t_s - 0.2).abs() < 1e-6, "scan {k}: {} then {}", w[0].t_s, w[1].t_s);
+    }
+    let opts = ReplayOptions {
+        model: None,
+        max_range_m: Some(replay::CARMEN_MAX_RANGE_M),
+        scan_matching: Some(false),
+        ..ReplayOptions::default()
+    };
+    let from_carmen = replay::replay(&log, &opts).unwrap();
+    let from_bag = replay::replay(&bag, &opts).unwrap();
+    let r = &from_bag.report;
+    assert_eq!(r.scans_used, from_carmen.report.scans_used - 3);
+    assert!(!r.warnings.iter().any(|w| w.contains("odometry_jump") && !w.contains(": 0 odometry_jump")), "{:?}", r.warnings);
+    // The grid starts on the first pose used (the bag's fourth scan), so the windows may sit a
+    // few cells apart: compare the occupied cells where they are in the world.
+    assert_eq!(r.window_shifts, from_carmen.report.window_shifts);
+    let moved = |cells: Vec<(i32, i32)>, from: &ReplayRun, to: &ReplayRun| -> Vec<(i32, i32)> {
+        let (gf, gt) = (from.controller.lidar.geom, to.controller.lidar.geom);
+        cells
+            .into_iter()
+            .map(|(x, y)| {
+                let (wx, wy) = gf.center_of(x, y);
+                gt.cell_of(wx, wy)
+            })
+            .collect()
+    };
+    let (c_occ, b_occ) = (moved(occupied(&from_carmen), &from_carmen, &from_bag), moved(occupied(&from_bag), &from_bag, &from_carmen));
+    let (c_in_b, b_in_c) = (overlap(&c_occ, &from_bag), overlap(&b_occ, &from_carmen));
+    eprintln!("occupied cells: CARMEN {} bag {}; {:.4} {:.4}", c_occ.len(), b_occ.len(), c_in_b, b_in_c);
+    assert!(c_in_b >= 0.95 && b_in_c >= 0.95, "{c_in_b} {b_in_c}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// The exported bag decodes with the ROS 2 message decoder Foxglove and rosbag2 use (the PyPI
 /// `mcap-ros2-support` package: the bag's own `ros2msg` schemas, CDR payloads), which
 /// `scripts/test.sh` installs with the `mcap` reader in `target/py-mcap` (or `LIVES_PYTHON`).

@@ -1,7 +1,8 @@
 //! `lives export-bag LOG OUT.mcap`: a ROS 2 bag (MCAP, CDR) written from a CARMEN log as a real
 //! robot would record it, to check replay on what real bags hold:
 //!
-//! - `sensor_msgs/msg/LaserScan` on `/scan` (frame `laser`), header-stamped with the log's time,
+//! - `sensor_msgs/msg/LaserScan` on `/scan` (frame `laser`), header-stamped with the log's time
+//!   (a log whose stamps stand still, as the CSAIL logs', one scan per 200 ms from its first),
 //!   `range_max` as given (default [`DEFAULT_RANGE_MAX_M`]): readings at or beyond it, and the
 //!   log's no-return readings, are `+inf` (REP 117); invalid readings are NaN; `range_min`
 //!   as given;
@@ -57,6 +58,9 @@ pub struct ExportSummary {
     pub inf_readings: usize,
     /// Readings written in all.
     pub readings: usize,
+    /// The log's stamps stood still, so the bag's advance one scan per tick from the first
+    /// ([`replay::stamps_stand_still`]).
+    pub synthetic_stamps: bool,
 }
 
 fn stamp(t_s: f64) -> Time {
@@ -107,13 +111,19 @@ pub fn export(log: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportSumm
         let header = mcap::records::MessageHeader { channel_id: id, sequence: seq, log_time: t_ns, publish_time: t_ns };
         w.write_to_known_channel(&header, bytes).map_err(|e| e.to_string())
     };
-    let mut summary = ExportSummary { scans: 0, odometry: 0, inf_readings: 0, readings: 0 };
+    let mut summary = ExportSummary { scans: 0, odometry: 0, inf_readings: 0, readings: 0, synthetic_stamps: false };
     let ns = |t_s: f64| (t_s * 1e9).round().max(0.0) as u64;
+    // A robot's bag has stamps that advance. A log whose stamps stand still (the CSAIL logs) is
+    // stamped as replay plays it: one scan per tick from its first stamp.
+    let (_, synthetic) = replay::stamps_stand_still(&data.scans);
+    summary.synthetic_stamps = synthetic;
+    let t0 = data.scans.first().map_or(0.0, |s| s.t_s);
     for (i, s) in data.scans.iter().enumerate() {
-        let t_ns = ns(s.t_s);
+        let t_s = if synthetic { t0 + i as f64 * crate::run::TICK_US as f64 * 1e-6 } else { s.t_s };
+        let t_ns = ns(t_s);
         if i == 0 {
             let tf = cdr::encode_tf_message(&[TransformStamped {
-                header: Header { stamp: stamp(s.t_s), frame_id: "base_link".into() },
+                header: Header { stamp: stamp(t_s), frame_id: "base_link".into() },
                 child_frame_id: "laser".into(),
                 transform: Transform::planar(mx, my, myaw),
             }]);
@@ -127,7 +137,7 @@ pub fn export(log: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportSumm
             let (sb, cb) = bth.sin_cos();
             let (bx, by) = (lx - (cb * mx - sb * my), ly - (sb * mx + cb * my));
             let odom = cdr::encode_odometry(&Odometry {
-                header: Header { stamp: stamp(s.t_s), frame_id: "odom".into() },
+                header: Header { stamp: stamp(t_s), frame_id: "odom".into() },
                 child_frame_id: "base_link".into(),
                 pose: Transform::planar(bx, by, bth),
             });
@@ -148,7 +158,7 @@ pub fn export(log: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportSumm
         let n = ranges.len();
         let angle_min = s.angle_min - myaw;
         let scan = LaserScan {
-            header: Header { stamp: stamp(s.t_s), frame_id: "laser".into() },
+            header: Header { stamp: stamp(t_s), frame_id: "laser".into() },
             angle_min: angle_min as f32,
             angle_max: (angle_min + s.angle_increment * (n.max(1) - 1) as f64) as f32,
             angle_increment: s.angle_increment as f32,
@@ -208,5 +218,8 @@ pub fn run_command(args: &ExportBagArgs) -> Result<std::process::ExitCode, Strin
         opts.mount[1],
         opts.mount[2]
     );
+    if s.synthetic_stamps {
+        println!("the log's time stamps do not advance: the bag's are one scan per {} ms from its first", crate::run::TICK_US / 1000);
+    }
     Ok(std::process::ExitCode::SUCCESS)
 }

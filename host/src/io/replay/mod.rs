@@ -101,6 +101,15 @@ pub struct ScanRecord {
     pub at: Location,
 }
 
+/// How many distinct time stamps `scans` hold, and whether they are too few to drive a clock:
+/// fewer distinct stamps than half the scans (the CSAIL logs print them with 6 significant
+/// digits, i.e. in steps of 10 000 s). Such a log is replayed, and exported, at one scan per
+/// [`crate::run::TICK_US`].
+pub fn stamps_stand_still(scans: &[ScanRecord]) -> (usize, bool) {
+    let distinct = 1 + scans.windows(2).filter(|w| w[1].t_s != w[0].t_s).count();
+    (distinct, scans.len() > 1 && 2 * distinct < scans.len())
+}
+
 /// Log formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]

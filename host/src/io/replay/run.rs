@@ -424,10 +424,8 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         None => None,
     };
     let mut record_error: Option<String> = None;
-    // Time stamps that do not advance (the CSAIL log prints them with 6 significant digits, i.e.
-    // in steps of 10 000 s) cannot drive the controller's clock: replay one scan per tick instead.
-    let distinct = 1 + log.scans.windows(2).filter(|w| w[1].t_s != w[0].t_s).count();
-    let synthetic_time = log.scans.len() > 1 && 2 * distinct < log.scans.len();
+    // Time stamps that do not advance cannot drive the controller's clock: one scan per tick.
+    let (distinct, synthetic_time) = super::stamps_stand_still(&log.scans);
     let mut source = LogSource::new(&log.scans, &stray, synthetic_time);
     let mut goals = Vec::new();
     let mut trajectory = Vec::new();
