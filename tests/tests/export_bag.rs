@@ -29,6 +29,19 @@ fn overlap(a: &[(i32, i32)], b: &ReplayRun) -> f64 {
     hit as f64 / a.len() as f64
 }
 
+/// The log and its bag replayed with the same range (CARMEN replay's 10 m), and the log's poses
+/// as they are (the bag's odometry is the log's corrected pose: scan matching, on for bags by
+/// default, would move them; docs/experiments/real-lidar-maps.md).
+fn replay_both(log: &std::path::Path, bag: &std::path::Path) -> (ReplayRun, ReplayRun) {
+    let opts = ReplayOptions {
+        model: None,
+        max_range_m: Some(replay::CARMEN_MAX_RANGE_M),
+        scan_matching: Some(false),
+        ..ReplayOptions::default()
+    };
+    (replay::replay(log, &opts).unwrap(), replay::replay(bag, &opts).unwrap())
+}
+
 #[test]
 fn the_intel_log_exported_as_a_bag_replays_into_the_same_map() {
     let log = common::root().join("tests/data/carmen/intel-corrected.log.gz");
@@ -59,17 +72,7 @@ fn the_intel_log_exported_as_a_bag_replays_into_the_same_map() {
             }
         }
     }
-    // The same range (CARMEN replay's 10 m) for both, and the log's poses as they are (the bag's
-    // odometry is the log's corrected pose: scan matching, on for bags by default, would move
-    // them; docs/experiments/real-lidar-maps.md).
-    let opts = ReplayOptions {
-        model: None,
-        max_range_m: Some(replay::CARMEN_MAX_RANGE_M),
-        scan_matching: Some(false),
-        ..ReplayOptions::default()
-    };
-    let from_carmen = replay::replay(&log, &opts).unwrap();
-    let from_bag = replay::replay(&bag, &opts).unwrap();
+    let (from_carmen, from_bag) = replay_both(&log, &bag);
     let r = &from_bag.report;
     assert_eq!(r.scans_used, from_carmen.report.scans_used - 3);
     assert_eq!((r.rejected.no_odometry_yet, r.scans_rejected), (3, 3), "{:?}", r.rejected);
@@ -106,14 +109,7 @@ fn a_log_whose_stamps_stand_still_is_exported_one_scan_per_tick() {
     for (k, w) in bag_log.scans.windows(2).enumerate() {
         assert!((w[1].t_s - w[0].t_s - 0.2).abs() < 1e-6, "scan {k}: {} then {}", w[0].t_s, w[1].t_s);
     }
-    let opts = ReplayOptions {
-        model: None,
-        max_range_m: Some(replay::CARMEN_MAX_RANGE_M),
-        scan_matching: Some(false),
-        ..ReplayOptions::default()
-    };
-    let from_carmen = replay::replay(&log, &opts).unwrap();
-    let from_bag = replay::replay(&bag, &opts).unwrap();
+    let (from_carmen, from_bag) = replay_both(&log, &bag);
     let r = &from_bag.report;
     assert_eq!(r.scans_used, from_carmen.report.scans_used - 3);
     assert!(!r.warnings.iter().any(|w| w.contains("odometry_jump") && !w.contains(": 0 odometry_jump")), "{:?}", r.warnings);
