@@ -29,8 +29,9 @@ pub enum Cell {
 }
 
 impl Cell {
+    /// The cell whose packed bits (its discriminant) are `b & 3`; 3 reads as unknown.
     #[inline]
-    const fn from_bits(b: u8) -> Cell {
+    pub(crate) const fn from_bits(b: u8) -> Cell {
         match b & 3 {
             1 => Cell::Free,
             2 => Cell::Occupied,

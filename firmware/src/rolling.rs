@@ -151,8 +151,9 @@ pub fn shift(maps: Maps<'_>, sx: i32, sy: i32, pool_radius: Meters) -> Option<u3
     let old = (lidar.window.moved_cells.0 / t, lidar.window.moved_cells.1 / t);
     let new = (old.0 + sx / t, old.1 + sy / t);
     let inside = |base: (i32, i32), w: (i32, i32)| (0..tiles).contains(&(w.0 - base.0)) && (0..tiles).contains(&(w.1 - base.1));
+    let window_tiles = || (0..tiles).flat_map(move |j| (0..tiles).map(move |i| (i, j)));
     let mut work = 0;
-    for (i, j) in (0..tiles).flat_map(|j| (0..tiles).map(move |i| (i, j))) {
+    for (i, j) in window_tiles() {
         let w = (old.0 + i, old.1 + j);
         if !inside(new, w) {
             work += memory.keep(lidar, visual, (i * t, j * t), w);
@@ -160,7 +161,7 @@ pub fn shift(maps: Maps<'_>, sx: i32, sy: i32, pool_radius: Meters) -> Option<u3
     }
     lidar.shift(sx, sy, geom);
     visual.grid.shift(sx, sy);
-    for (i, j) in (0..tiles).flat_map(|j| (0..tiles).map(move |i| (i, j))) {
+    for (i, j) in window_tiles() {
         let w = (new.0 + i, new.1 + j);
         if !inside(old, w) {
             work += memory.restore(lidar, visual, (i * t, j * t), w);

@@ -19,8 +19,8 @@
 //! not fit even then, it is not kept (counted in [`MemoryStats::dropped`]): what left the window
 //! first is what stays.
 //!
-//! **Coding.** One code per run: the state `s = lidar + 3 · camera` (each `0` unknown, `1` free,
-//! `2` occupied) in the high nibble, and in the low nibble `n`: a run of `n + 1` cells for
+//! **Coding.** One code per run: the state `s = lidar + 3 · camera` (each its packed bits, as
+//! [`crate::grid::PackedGrid`] stores them: `0` unknown, `1` free, `2` occupied) in the high nibble, and in the low nibble `n`: a run of `n + 1` cells for
 //! `n < 15`, or, for `n = 15`, a run of `16 + b` cells with `b` the next byte (longer runs are
 //! split). A tile is its cells in row-major order.
 
@@ -81,22 +81,6 @@ pub struct WindowMemory {
     pub stats: MemoryStats,
 }
 
-fn state_bits(c: Cell) -> u8 {
-    match c {
-        Cell::Unknown => 0,
-        Cell::Free => 1,
-        Cell::Occupied => 2,
-    }
-}
-
-fn cell_of(bits: u8) -> Cell {
-    match bits {
-        1 => Cell::Free,
-        2 => Cell::Occupied,
-        _ => Cell::Unknown,
-    }
-}
-
 /// Calls `emit(state, run)` for the runs of equal states over the tile whose lower-left cell is
 /// `(x0, y0)` in the window, row by row.
 fn runs(lidar: &LidarGrid, visual: &VisualGrid, (x0, y0): (i32, i32), mut emit: impl FnMut(u8, usize)) {
@@ -104,7 +88,7 @@ fn runs(lidar: &LidarGrid, visual: &VisualGrid, (x0, y0): (i32, i32), mut emit: 
     let mut n = 0usize;
     for i in 0..TILE_AREA as i32 {
         let (x, y) = (x0 + i % T, y0 + i / T);
-        let s = state_bits(lidar.get(x, y)) + 3 * state_bits(visual.get(x, y));
+        let s = lidar.get(x, y) as u8 + 3 * visual.get(x, y) as u8;
         if n > 0 && s != cur {
             emit(cur, n);
             n = 0;
@@ -261,7 +245,7 @@ impl WindowMemory {
             let (s, n) = (code >> 4, (code & 15) as usize);
             let run = if n < 15 { n + 1 } else { 16 + self.bytes.get(at + 1).copied().unwrap_or(0) as usize };
             at += code_len(run);
-            let (l, v) = (cell_of(s % 3), cell_of(s / 3));
+            let (l, v) = (Cell::from_bits(s % 3), Cell::from_bits(s / 3));
             for c in cell..(cell + run).min(TILE_AREA) {
                 let (x, y) = (x0 + c as i32 % T, y0 + c as i32 / T);
                 match l {

@@ -111,12 +111,11 @@ pub fn export(log: &Path, out: &Path, opts: &ExportOptions) -> Result<ExportSumm
         let header = mcap::records::MessageHeader { channel_id: id, sequence: seq, log_time: t_ns, publish_time: t_ns };
         w.write_to_known_channel(&header, bytes).map_err(|e| e.to_string())
     };
-    let mut summary = ExportSummary { scans: 0, odometry: 0, inf_readings: 0, readings: 0, synthetic_stamps: false };
-    let ns = |t_s: f64| (t_s * 1e9).round().max(0.0) as u64;
     // A robot's bag has stamps that advance. A log whose stamps stand still (the CSAIL logs) is
     // stamped as replay plays it: one scan per tick from its first stamp.
     let (_, synthetic) = replay::stamps_stand_still(&data.scans);
-    summary.synthetic_stamps = synthetic;
+    let mut summary = ExportSummary { scans: 0, odometry: 0, inf_readings: 0, readings: 0, synthetic_stamps: synthetic };
+    let ns = |t_s: f64| (t_s * 1e9).round().max(0.0) as u64;
     let t0 = data.scans.first().map_or(0.0, |s| s.t_s);
     for (i, s) in data.scans.iter().enumerate() {
         let t_s = if synthetic { t0 + i as f64 * crate::run::TICK_US as f64 * 1e-6 } else { s.t_s };
