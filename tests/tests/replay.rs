@@ -572,6 +572,50 @@ fn an_mcap_bag_replays_with_the_laser_mount_applied() {
     assert!(!run.report.goals.is_empty(), "the controller planned on the bag");
 }
 
+/// A dense scanner (2 880 beams over 360°, 0.125° apart: a SICK microScan3, an RPLidar S2, a
+/// 3D LiDAR flattened at that step): every beam reads 4 m but one, a post 1.5 m ahead.
+fn dense_bag() -> Vec<(&'static str, &'static str, u64, Vec<u8>)> {
+    const N: usize = 2880;
+    let inc = 2.0 * std::f32::consts::PI / N as f32;
+    let mut m = bag_messages(YAW_90);
+    for (_, ty, _, data) in m.iter_mut().filter(|(topic, ..)| *topic == "/scan") {
+        assert_eq!(*ty, "sensor_msgs/msg/LaserScan");
+        let mut ranges = vec![4.0f32; N];
+        ranges[N / 2] = 1.5; // angle 0: straight ahead of the laser
+        let header = cdr::decode_laser_scan(data, cdr::Wire::Cdr).unwrap().header;
+        let scan = LaserScan {
+            header,
+            angle_min: -std::f32::consts::PI,
+            angle_max: std::f32::consts::PI - inc,
+            angle_increment: inc,
+            time_increment: 0.0,
+            scan_time: 0.2,
+            range_min: 0.05,
+            range_max: 20.0,
+            ranges,
+            intensities: vec![],
+        };
+        *data = cdr::encode_laser_scan(&scan);
+    }
+    m
+}
+
+#[test]
+fn a_scanner_denser_than_the_core_takes_is_combined_and_keeps_a_post_one_beam_wide() {
+    let path = tmp("dense.mcap");
+    write_mcap(&path, &dense_bag(), 1 << 16);
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let r = &run.report;
+    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (SCANS, SCANS, 0), "{r:?}");
+    assert_eq!(r.beams_combined, [SCANS, 3], "2 880 beams, 3 to one");
+    assert!(r.warnings.iter().any(|w| w.contains("combined")), "{:?}", r.warnings);
+    // The laser at (1.5, 2.2) faces +y: the post at (1.5, 3.7), the ring at 4 m.
+    assert!(occupied_near(&run, 1.5, 3.7), "the post one beam wide is kept");
+    assert!(occupied_near(&run, 1.5 - 4.0, 2.2) && occupied_near(&run, 1.5, 2.2 - 4.0), "the ring");
+    let before = around(&run, 1.5, 3.0);
+    assert!(before.contains(&Cell::Free) && !before.contains(&Cell::Occupied), "free before the post");
+}
+
 #[test]
 fn a_replay_can_be_recorded_and_the_recording_reads_back() {
     let bag = tmp("for-record.mcap");

@@ -12,7 +12,7 @@ use host::link::{
     Link, NodeOptions, NodeProcess, NodeReport, SerialLink, Source,
 };
 use host::search::{self, PlannerChoice, SearchSpec};
-use host::sim::{Scenario, World};
+use host::sim::{LidarModel, Scenario, World};
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -216,6 +216,23 @@ fn lives_over_the_link_runs_the_nodes_classifier_and_decides_as_the_in_process_s
     // them against the simulator's truth.
     assert!(inproc.result.classifier.is_some() && r.result.classifier.is_none());
     assert_eq!(r.result, search::SearchResult { classifier: None, ..inproc.result.clone() });
+    assert_goals_came_from_the_node(&r, &n);
+}
+
+#[test]
+fn a_simulated_scanner_of_more_beams_than_a_frame_holds_searches_over_the_link_as_in_process() {
+    // The RPLidar A3 profile fires 1 600 beams, more than a scan frame holds (MAX_WIRE_BEAMS): the
+    // bridge stopped with a panic on its first scan. Its scans are now combined two beams to one
+    // (labels with them) on their way to either core, so the two runs are the same search.
+    let mut sp = short_spec(PlannerChoice::LivesGt, 3);
+    sp.sim = sp.sim.clone().with_lidar(LidarModel::RplidarA3);
+    assert!(sp.sim.beams > firmware::protocol::MAX_WIRE_BEAMS);
+    let inproc = search::run(&sp, |_| {});
+    assert!(inproc.result.found, "{:?}", inproc.result);
+    let (r, n, _, _) = mem_run(&sp, FaultConfig::default(), 0, node_opts(TimeMode::Lockstep), Duration::from_secs(120));
+    assert_eq!(r.goals, inproc.goals);
+    assert_eq!(r.trajectory, inproc.trajectory);
+    assert_eq!(r.result, inproc.result);
     assert_goals_came_from_the_node(&r, &n);
 }
 

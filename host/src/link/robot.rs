@@ -33,7 +33,6 @@ use crate::run::round3;
 use crate::search::{PlannerChoice, SearchResult};
 use firmware::protocol::{
     BaseStatus, ConfigMsg, CoreToHost, DetectionMsg, GoalMsg, HostToCore, PoseMsg, ScanMsg, StatusMsg, WireCommand, WireMode,
-    MAX_WIRE_BEAMS,
 };
 use firmware::{BinaryAngle, Config, Meters, Pose2};
 use serde_json::{json, Value};
@@ -115,12 +114,10 @@ pub struct RobotRun {
     pub log: Vec<(f64, String)>,
 }
 
-/// Encodes a planar scan ([`crate::run::range`]: REP 117, its limits travel with it). More than
-/// [`MAX_WIRE_BEAMS`] ranges are decimated (every k-th range, the increment k times larger; the
-/// core resamples onto its 897 beams anyway).
+/// Encodes a planar scan ([`crate::run::range`]: REP 117, its limits travel with it; more than
+/// [`firmware::protocol::MAX_WIRE_BEAMS`] ranges are combined to fit).
 pub(crate) fn encode_planar(angle_min: f64, angle_increment: f64, ranges: &[f32], limits: RangeLimits) -> Option<EncodedScan> {
-    let k = ranges.len().div_ceil(MAX_WIRE_BEAMS).max(1);
-    EncodedScan::new(angle_min, angle_increment * k as f64, ranges.iter().step_by(k).map(|&r| r as f64), &limits)
+    EncodedScan::new(angle_min, angle_increment, ranges.iter().map(|&r| r as f64), &limits)
 }
 
 fn encode_laser_scan(s: &LaserScan) -> Option<EncodedScan> {
@@ -751,9 +748,10 @@ pub fn run_cli(o: CliOptions) -> Result<ExitCode, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use firmware::protocol::MAX_WIRE_BEAMS;
 
     #[test]
-    fn scans_follow_ros_conventions_and_long_scans_are_decimated() {
+    fn scans_follow_ros_conventions_and_long_scans_are_combined() {
         let s = LaserScan {
             angle_min: -1.0,
             angle_increment: 0.5,
@@ -769,8 +767,8 @@ mod tests {
         assert_eq!(w.angle_increment, BinaryAngle::from_radians(0.5).unwrap());
         let long = LaserScan { ranges: vec![2.0; 2 * MAX_WIRE_BEAMS + 1], angle_increment: 0.001, ..s };
         let w = encode_laser_scan(&long).unwrap();
-        assert_eq!(w.ranges_mm.len(), MAX_WIRE_BEAMS - 366);
-        assert_eq!(w.angle_increment, BinaryAngle::from_radians(0.003).unwrap());
+        assert_eq!((w.ranges_mm.len(), w.combined), (MAX_WIRE_BEAMS - 366, 3));
+        assert_eq!(w.angle_increment.0, 3 * BinaryAngle::from_radians(0.001).unwrap().0);
     }
 
     #[test]

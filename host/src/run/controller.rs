@@ -134,6 +134,7 @@ mod tests {
                 range_min_mm: 100,
                 range_max_mm: 10_000,
                 labels: Vec::new(),
+                combined: 1,
             },
             labels: false,
             detection,

@@ -189,7 +189,9 @@ pub fn encode_sim_scan(scan: &Scan) -> EncodedScan {
         range_min_mm,
         range_max_mm,
         labels: scan.hits.iter().map(|&h| gt_label(h)).collect(),
+        combined: 1,
     }
+    .fitted()
 }
 
 /// What the base did during one controller period.

@@ -224,6 +224,10 @@ pub struct ReplayReport {
     /// The trajectory does not fit in the grid: the grid was placed on its first pose and the
     /// rolling window followed the laser (what left the window was kept, [`ReplayReport::window_tiles`]).
     pub exceeds_grid: bool,
+    /// Scans of more than the core's [`firmware::protocol::MAX_WIRE_BEAMS`] beams, combined on
+    /// the way in: `[scans, the most beams combined into one]` (`[0, 1]`: none;
+    /// [`crate::run::range::EncodedScan::fitted`]).
+    pub beams_combined: [u32; 2],
     /// Assumptions and notes.
     pub warnings: Vec<String>,
     /// The damage reading stopped at (the scans before it were replayed).
@@ -493,7 +497,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     };
     let mut brain = InProcess::restarting(ctrl, cfg.replan_interval_us);
     let Ok(_) = drive(&mut source, &mut brain, &mut [&mut watch]);
-    let LogSource { stray_pose, no_pose, bad_angles, strays, .. } = source;
+    let LogSource { stray_pose, no_pose, bad_angles, strays, combined_scans, combined_most, .. } = source;
     let mut rejected = Rejected {
         outside_grid,
         no_pose: log.no_pose as u32 + no_pose,
@@ -541,6 +545,14 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     } else {
         log.span_s.map_or(0.0, |(a, b)| b - a)
     };
+    if combined_scans > 0 {
+        warnings.push(format!(
+            "{combined_scans} scan{} had more beams than the core takes ({}): up to {combined_most} neighbouring beams \
+             were combined into one, keeping the nearest return",
+            if combined_scans == 1 { "" } else { "s" },
+            firmware::protocol::MAX_WIRE_BEAMS
+        ));
+    }
     if rejected.stray_pose > 0 {
         let more = rejected.stray_pose as usize - strays.len();
         warnings.push(format!(
@@ -615,6 +627,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         grid_size_m: size,
         trajectory_bounds: bounds.map(|p| p.map(round3)),
         exceeds_grid: exceeds,
+        beams_combined: [combined_scans, combined_most as u32],
         warnings,
         error: log.error.as_ref().map(|e| e.to_string()),
         record,

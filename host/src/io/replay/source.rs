@@ -23,6 +23,10 @@ pub(super) struct LogSource<'a> {
     pub(super) stray_pose: u32,
     pub(super) no_pose: u32,
     pub(super) bad_angles: u32,
+    /// Scans of more beams than the core takes, combined to fit ([`EncodedScan::fitted`]), and
+    /// the most beams combined into one.
+    pub(super) combined_scans: u32,
+    pub(super) combined_most: u16,
     /// The first few strays, for the warning.
     pub(super) strays: Vec<String>,
 }
@@ -42,6 +46,8 @@ impl<'a> LogSource<'a> {
             stray_pose: 0,
             no_pose: 0,
             bad_angles: 0,
+            combined_scans: 0,
+            combined_most: 1,
             strays: Vec::new(),
         }
     }
@@ -78,6 +84,10 @@ impl Source for LogSource<'_> {
                 self.bad_angles += 1;
                 continue;
             };
+            if scan.combined > 1 {
+                self.combined_scans += 1;
+                self.combined_most = self.combined_most.max(scan.combined);
+            }
             self.current = i;
             return Some(Frame {
                 t_us: now_us,
