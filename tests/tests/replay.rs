@@ -617,6 +617,43 @@ fn a_scanner_denser_than_the_core_takes_is_combined_and_keeps_a_post_one_beam_wi
 }
 
 #[test]
+fn odometry_that_tf_also_carries_is_not_merged_with_it() {
+    // A robot publishing the wheel odometry on a topic and the EKF's estimate on `tf`, both
+    // `odom` → `base_link`: the wheels have drifted 0.4 m. Merged, the laser's pose would jump
+    // between the two from one sample to the next; tf's alone are used.
+    let mut m = Vec::new();
+    for (topic, ty, t, data) in bag_messages(YAW_90) {
+        if topic != "/odom" {
+            m.push((topic, ty, t, data));
+            continue;
+        }
+        let o = cdr::decode_odometry(&data, cdr::Wire::Cdr).unwrap();
+        let mut drifted = o.clone();
+        drifted.pose.translation[0] += 0.4;
+        m.push(("/odom", ty, t, cdr::encode_odometry(&drifted)));
+        // The EKF publishes 50 ms before each wheel odometry message (and each scan).
+        let mut header = o.header.clone();
+        let ns = header.stamp.sec as i64 * 1_000_000_000 + header.stamp.nanosec as i64 - 50_000_000;
+        header.stamp = Time { sec: (ns / 1_000_000_000) as i32, nanosec: (ns % 1_000_000_000) as u32 };
+        let tf = TransformStamped { header, child_frame_id: o.child_frame_id.clone(), transform: o.pose };
+        m.push(("/tf", "tf2_msgs/msg/TFMessage", t - 50_000_000, cdr::encode_tf_message(&[tf])));
+    }
+    let path = tmp("odom-and-tf.mcap");
+    write_mcap(&path, &m, 4096);
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let r = &run.report;
+    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (SCANS, SCANS, 0), "{r:?}");
+    assert_eq!(r.trajectory_bounds, [[1.5, 2.2], [1.5, 2.2]], "every scan at tf's pose, none at the wheels' (1.9, 2.2)");
+    assert!(occupied_near(&run, 1.5, 5.2) && !occupied_near(&run, 1.9, 5.2));
+    assert_eq!(run.report.transforms_rejected.superseded, SCANS);
+    assert!(
+        run.report.warnings.iter().any(|w| w.contains("odom → base_link comes from tf and from odometry topic /odom")),
+        "{:?}",
+        run.report.warnings
+    );
+}
+
+#[test]
 fn a_replay_can_be_recorded_and_the_recording_reads_back() {
     let bag = tmp("for-record.mcap");
     write_mcap(&bag, &bag_messages(YAW_90), 4096);

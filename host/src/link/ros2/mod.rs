@@ -22,7 +22,7 @@ mod publish;
 pub mod wire;
 
 use crate::io::replay::cdr;
-use crate::io::replay::rosbag::{frame, scan_record, EdgeReject, FrameTree, PoseError, MAX_POSE_AGE_NS};
+use crate::io::replay::rosbag::{frame, scan_record, EdgeReject, EdgeSource, FrameTree, PoseError, MAX_POSE_AGE_NS};
 use crate::io::replay::Location;
 use crate::link::robot::encode_planar;
 use crate::run::range::RangeLimits;
@@ -395,8 +395,14 @@ impl Ros2Source {
                 Ok(o) => {
                     self.count("odom");
                     let t = stamp(&o.header);
-                    if let Err(name) = self.add_edge(&o.header.frame_id, &o.child_frame_id, Some(t), &o.pose) {
-                        self.reject(name, format!("{topic}: {} → {} at {} s", o.header.frame_id, o.child_frame_id, t as f64 / 1e9));
+                    match self.add_edge(&o.header.frame_id, &o.child_frame_id, Some(t), &o.pose, EdgeSource::Odometry(&topic)) {
+                        Ok(()) => {}
+                        // `tf` carries the same edge (a robot commonly publishes both): not used.
+                        Err(EdgeReject::Superseded) => self.count("odom-superseded"),
+                        Err(r) => self.reject(
+                            edge_reject_name(r),
+                            format!("{topic}: {} → {} at {} s", o.header.frame_id, o.child_frame_id, t as f64 / 1e9),
+                        ),
                     }
                 }
                 Err(e) => bad(self, e),
@@ -406,8 +412,8 @@ impl Ros2Source {
                     self.count(if i == TF { "tf" } else { "tf_static" });
                     for t in ts {
                         let at = (i == TF).then(|| stamp(&t.header));
-                        if let Err(name) = self.add_edge(&t.header.frame_id, &t.child_frame_id, at, &t.transform) {
-                            self.reject(name, format!("{topic}: {} → {}", t.header.frame_id, t.child_frame_id));
+                        if let Err(r) = self.add_edge(&t.header.frame_id, &t.child_frame_id, at, &t.transform, EdgeSource::Tf) {
+                            self.reject(edge_reject_name(r), format!("{topic}: {} → {}", t.header.frame_id, t.child_frame_id));
                         }
                     }
                 }
@@ -443,15 +449,21 @@ impl Ros2Source {
 
     /// An edge of the frame tree: a moving one's sample at `t_ns`, or a fixed one (`None`). The
     /// tree holds at most [`MAX_FRAMES`] frames and [`KEEP_NS`] of samples per moving edge.
-    fn add_edge(&mut self, parent: &str, child: &str, t_ns: Option<u64>, t: &cdr::Transform) -> Result<(), &'static str> {
+    fn add_edge(
+        &mut self,
+        parent: &str,
+        child: &str,
+        t_ns: Option<u64>,
+        t: &cdr::Transform,
+        source: EdgeSource<'_>,
+    ) -> Result<(), EdgeReject> {
         if self.tree.edges.len() >= MAX_FRAMES && !self.tree.edges.contains_key(frame(child).as_str()) {
-            return Err("too-many-frames");
+            return Err(EdgeReject::TooManyFrames);
         }
-        let r = match t_ns {
-            Some(at) => self.tree.push(parent, child, at, t),
+        match t_ns {
+            Some(at) => self.tree.push(parent, child, at, t, source),
             None => self.tree.set_static(parent, child, t),
-        };
-        r.map_err(edge_reject_name)?;
+        }?;
         if let Some(at) = t_ns {
             self.last_odom = Some(Instant::now());
             self.tree.forget_before(at.saturating_sub(KEEP_NS));
@@ -641,6 +653,8 @@ fn edge_reject_name(r: EdgeReject) -> &'static str {
         EdgeReject::Loop => "tf-loop",
         EdgeReject::Backwards => "stamp-backwards",
         EdgeReject::Jump => "odometry-jump",
+        EdgeReject::Superseded => "superseded",
+        EdgeReject::TooManyFrames => "too-many-frames",
     }
 }
 

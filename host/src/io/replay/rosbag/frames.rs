@@ -58,6 +58,21 @@ pub const MAX_JUMP_M: f64 = 1.0;
 /// The fastest a robot's frame is assumed to move, m/s (with [`MAX_JUMP_M`]).
 pub const MAX_SPEED_M_S: f64 = 10.0;
 
+/// Where a moving edge's samples come from. A robot commonly publishes one edge twice — the
+/// wheel controller's or the EKF's `nav_msgs/Odometry` topic and `tf` (`odom` → `base_link`),
+/// or two odometry topics (raw and filtered) with the same frames — and the two drift apart:
+/// merged, the laser's pose would jump between them from one sample to the next. An edge takes
+/// its samples from one source: `tf` (what the robot's own stack looked up) before any odometry
+/// topic, else the first odometry topic that carried it; the other's samples are not used
+/// ([`EdgeReject::Superseded`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum EdgeSource<'a> {
+    /// `tf` (or `tf_static`).
+    Tf,
+    /// A `nav_msgs/Odometry` topic.
+    Odometry(&'a str),
+}
+
 /// One edge of the frame tree: its parent, and the child's pose in it over time (one sample for
 /// a `tf_static` edge).
 #[derive(Clone, Debug)]
@@ -65,6 +80,8 @@ pub(crate) struct Edge {
     parent: String,
     /// From `tf_static`: holds at every time.
     fixed: bool,
+    /// The odometry topic its samples come from; `None`: `tf`.
+    topic: Option<String>,
     /// `(stamp ns, pose)`, stamps non-decreasing.
     pub(crate) samples: Vec<(u64, Iso)>,
 }
@@ -80,6 +97,11 @@ pub(crate) enum EdgeReject {
     Backwards,
     /// Its translation jumped ([`MAX_JUMP_M`], [`MAX_SPEED_M_S`]).
     Jump,
+    /// Another source carries the edge ([`EdgeSource`]): not used, and not an error.
+    Superseded,
+    /// A live tree is full (`lives ros2`'s bound on frames).
+    #[cfg_attr(not(feature = "ros2"), allow(dead_code))]
+    TooManyFrames,
 }
 
 /// Why a scan could not be placed.
@@ -154,20 +176,35 @@ impl FrameTree {
         if self.closes_loop(&parent, &child) {
             return Err(EdgeReject::Loop);
         }
-        self.edges.insert(child, Edge { parent, fixed: true, samples: vec![(0, iso)] });
+        self.edges.insert(child, Edge { parent, fixed: true, topic: None, samples: vec![(0, iso)] });
         Ok(())
     }
 
-    /// A moving edge's sample at `t_ns` (odometry or `tf`). A new parent for the child starts a
-    /// new history.
-    pub(crate) fn push(&mut self, parent: &str, child: &str, t_ns: u64, t: &Transform) -> Result<(), EdgeReject> {
+    /// A moving edge's sample at `t_ns` from `source` (odometry or `tf`). A new parent for the
+    /// child starts a new history; so does `tf` for an edge an odometry topic carried so far
+    /// ([`EdgeSource`]), whose later samples are then [`EdgeReject::Superseded`].
+    pub(crate) fn push(&mut self, parent: &str, child: &str, t_ns: u64, t: &Transform, source: EdgeSource<'_>) -> Result<(), EdgeReject> {
         let (parent, child) = (frame(parent), frame(child));
         let iso = Iso::from(t).filter(|_| parent != child).ok_or(EdgeReject::Invalid)?;
+        let topic = match source {
+            EdgeSource::Tf => None,
+            EdgeSource::Odometry(name) => Some(name),
+        };
+        let moving = self.edges.get(&child).filter(|e| e.parent == parent && !e.fixed);
+        let switch_to_tf = match moving.map(|e| e.topic.as_deref()) {
+            Some(held) if held != topic => {
+                if topic.is_some() {
+                    return Err(EdgeReject::Superseded);
+                }
+                true
+            }
+            _ => false,
+        };
         let same_parent = self.edges.get(&child).is_some_and(|e| e.parent == parent);
         if !same_parent && self.closes_loop(&parent, &child) {
             return Err(EdgeReject::Loop);
         }
-        if let Some(e) = self.edges.get_mut(&child).filter(|e| e.parent == parent && !e.fixed) {
+        if let Some(e) = self.edges.get_mut(&child).filter(|e| e.parent == parent && !e.fixed && !switch_to_tf) {
             let &(t0, last) = e.samples.last().expect("an edge has a sample");
             if t_ns < t0 {
                 return Err(EdgeReject::Backwards);
@@ -178,9 +215,15 @@ impl FrameTree {
             }
             e.samples.push((t_ns, iso));
         } else {
-            self.edges.insert(child, Edge { parent, fixed: false, samples: vec![(t_ns, iso)] });
+            self.edges.insert(child, Edge { parent, fixed: false, topic: topic.map(str::to_string), samples: vec![(t_ns, iso)] });
         }
         Ok(())
+    }
+
+    /// Where the moving edge into `child` takes its samples from: `tf`, or an odometry topic.
+    pub(crate) fn source_of(&self, child: &str) -> Option<String> {
+        let e = self.edges.get(&frame(child)).filter(|e| !e.fixed)?;
+        Some(e.topic.clone().unwrap_or_else(|| "tf".to_string()))
     }
 
     #[cfg(feature = "ros2")]
@@ -269,4 +312,7 @@ pub struct RejectedTransforms {
     pub stamp_backwards: u32,
     /// Not finite, a zero quaternion, or a frame its own parent.
     pub invalid: u32,
+    /// Odometry messages not used because `tf`, or an odometry topic before them, carries the
+    /// same edge ([`EdgeSource`]); not an error: a robot commonly publishes both.
+    pub superseded: u32,
 }

@@ -3,7 +3,7 @@
 use super::*;
 use crate::io::replay::cdr::{self, CdrError};
 use crate::io::replay::{BadRecords, Location, ReplayError, ScanRecord};
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::Path;
 
 /// What the messages gave.
@@ -76,6 +76,8 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
         Err(EdgeReject::Loop) => rej.tf_loop += 1,
         Err(EdgeReject::Backwards) => rej.stamp_backwards += 1,
         Err(EdgeReject::Jump) => rej.odometry_jump += 1,
+        Err(EdgeReject::Superseded) => rej.superseded += 1,
+        Err(EdgeReject::TooManyFrames) => rej.invalid += 1,
     };
     // tf_static describes the robot's fixed geometry: it holds for the whole bag.
     for (m, d) in &decoded {
@@ -86,20 +88,44 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
             }
         }
     }
+    // The edges `tf` carries anywhere in the bag: odometry messages of the same edge are not
+    // used, from the first on ([`EdgeSource`]; live, `tf` takes the edge over when it comes).
+    let tf_edges: HashSet<(String, String)> = decoded
+        .iter()
+        .filter(|(m, _)| m.kind == MsgType::Tf)
+        .flat_map(|(_, d)| match d {
+            Decoded::Tf(ts) => ts.iter().map(|t| (frame(&t.header.frame_id), frame(&t.child_frame_id))).collect(),
+            _ => Vec::new(),
+        })
+        .collect();
     // Every moving transform, at its stamp (a scan is placed with samples before and after it).
     let mut odom_child: Option<String> = None;
+    // (parent, child, the topic not used) → (the source used, messages not used).
+    let mut superseded: BTreeMap<(String, String, String), (String, u32)> = BTreeMap::new();
     for (m, d) in &decoded {
         match d {
             Decoded::Tf(ts) if m.kind == MsgType::Tf => {
                 for t in ts {
                     out.transforms += 1;
-                    count(tree.push(&t.header.frame_id, &t.child_frame_id, stamp_ns(&t.header, m.t_ns), &t.transform), &mut rej);
+                    let r = tree.push(&t.header.frame_id, &t.child_frame_id, stamp_ns(&t.header, m.t_ns), &t.transform, EdgeSource::Tf);
+                    count(r, &mut rej);
                 }
             }
             Decoded::Odom(o) => {
                 out.odometry += 1;
-                let r = tree.push(&o.header.frame_id, &o.child_frame_id, stamp_ns(&o.header, m.t_ns), &o.pose);
-                if r.is_ok() && odom_child.is_none() {
+                let (parent, child) = (frame(&o.header.frame_id), frame(&o.child_frame_id));
+                let by_tf = tf_edges.contains(&(parent.clone(), child.clone()));
+                let r = if by_tf {
+                    Err(EdgeReject::Superseded)
+                } else {
+                    tree.push(&parent, &child, stamp_ns(&o.header, m.t_ns), &o.pose, EdgeSource::Odometry(&m.topic))
+                };
+                if r == Err(EdgeReject::Superseded) {
+                    let by = if by_tf { "tf".to_string() } else { tree.source_of(&child).unwrap_or_default() };
+                    superseded.entry((parent, child, m.topic.clone())).or_insert((by, 0)).1 += 1;
+                }
+                // The body frame odometry moves (by this topic or by another source).
+                if matches!(r, Ok(()) | Err(EdgeReject::Superseded)) && odom_child.is_none() {
                     odom_child = Some(frame(&o.child_frame_id));
                 }
                 count(r, &mut rej);
@@ -160,6 +186,12 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
     }
     if out.scan_stamp_backwards > 0 {
         out.warnings.push(format!("{} scans stamped before the scan before them were not used", out.scan_stamp_backwards));
+    }
+    for ((parent, child, topic), (by, n)) in &superseded {
+        out.warnings.push(format!(
+            "{parent} → {child} comes from {by} and from odometry topic {topic} too: {by}'s samples are used, {topic}'s {n} \
+             are not (the two drift apart; merged, the laser's pose would jump between them)"
+        ));
     }
     if rej.invalid > 0 {
         out.warnings.push(format!("{} transforms ignored (not finite, zero quaternion, or a frame its own parent)", rej.invalid));

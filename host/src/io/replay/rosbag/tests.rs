@@ -46,13 +46,13 @@ fn upside_down_laser_negates_angles_and_ros_ranges_apply() {
 #[test]
 fn frame_tree_resolves_chains_and_refuses_cycles() {
     let mut t = FrameTree::default();
-    assert_eq!(t.push("odom", "/base_link", 1_000, &Transform::planar(2.0, 0.0, 0.0)), Ok(()));
+    assert_eq!(t.push("odom", "/base_link", 1_000, &Transform::planar(2.0, 0.0, 0.0), EdgeSource::Tf), Ok(()));
     assert_eq!(t.set_static("base_link", "laser", &Transform::planar(0.0, 1.0, 0.0)), Ok(()));
     let (p, root, depth) = t.resolve_at("laser", 1_000).unwrap();
     assert_eq!((root.as_str(), depth), ("odom", 2));
     assert!((p.t[0] - 2.0).abs() < 1e-12 && (p.t[1] - 1.0).abs() < 1e-12);
-    assert_eq!(t.push("a", "a", 1_000, &Transform::IDENTITY), Err(EdgeReject::Invalid), "a frame cannot be its own parent");
-    assert_eq!(t.push("laser", "odom", 1_000, &Transform::IDENTITY), Err(EdgeReject::Loop));
+    assert_eq!(t.push("a", "a", 1_000, &Transform::IDENTITY, EdgeSource::Tf), Err(EdgeReject::Invalid), "a frame cannot be its own parent");
+    assert_eq!(t.push("laser", "odom", 1_000, &Transform::IDENTITY, EdgeSource::Tf), Err(EdgeReject::Loop));
     assert_eq!(t.set_static("laser", "odom", &Transform::IDENTITY), Err(EdgeReject::Loop));
     // The tree is as it was: the loop was refused, not half-applied.
     assert_eq!(t.resolve_at("laser", 1_000).unwrap().1, "odom");
@@ -63,8 +63,8 @@ fn moving_edges_interpolate_to_the_stamp_and_refuse_jumps_and_backward_stamps() 
     let mut t = FrameTree::default();
     let s = 1_000_000_000u64;
     // 170° to −170°: the short way round is through 180°, not through 0°.
-    t.push("odom", "base", s, &Transform::planar(0.0, 0.0, 170f64.to_radians())).unwrap();
-    t.push("odom", "base", s + 100_000_000, &Transform::planar(0.5, 1.0, (-170f64).to_radians())).unwrap();
+    t.push("odom", "base", s, &Transform::planar(0.0, 0.0, 170f64.to_radians()), EdgeSource::Tf).unwrap();
+    t.push("odom", "base", s + 100_000_000, &Transform::planar(0.5, 1.0, (-170f64).to_radians()), EdgeSource::Tf).unwrap();
     let (p, _, _) = t.resolve_at("base", s + 25_000_000).unwrap();
     assert!((p.t[0] - 0.125).abs() < 1e-12 && (p.t[1] - 0.25).abs() < 1e-12, "{p:?}");
     let x = p.rotate([1.0, 0.0, 0.0]);
@@ -74,14 +74,39 @@ fn moving_edges_interpolate_to_the_stamp_and_refuse_jumps_and_backward_stamps() 
     assert!(t.resolve_at("base", s + 100_000_000 + MAX_POSE_AGE_NS).is_ok());
     assert_eq!(t.resolve_at("base", s + 100_000_001 + MAX_POSE_AGE_NS), Err(PoseError::Stale));
     // A 100 m jump, and a stamp going backwards, are refused; the samples around them stay.
-    assert_eq!(t.push("odom", "base", s + 120_000_000, &Transform::planar(100.5, 1.0, 0.0)), Err(EdgeReject::Jump));
-    assert_eq!(t.push("odom", "base", s + 50_000_000, &Transform::planar(0.5, 1.0, 0.0)), Err(EdgeReject::Backwards));
-    t.push("odom", "base", s + 140_000_000, &Transform::planar(0.6, 1.0, 0.0)).unwrap();
+    assert_eq!(t.push("odom", "base", s + 120_000_000, &Transform::planar(100.5, 1.0, 0.0), EdgeSource::Tf), Err(EdgeReject::Jump));
+    assert_eq!(t.push("odom", "base", s + 50_000_000, &Transform::planar(0.5, 1.0, 0.0), EdgeSource::Tf), Err(EdgeReject::Backwards));
+    t.push("odom", "base", s + 140_000_000, &Transform::planar(0.6, 1.0, 0.0), EdgeSource::Tf).unwrap();
     assert_eq!(t.edges["base"].samples.len(), 3);
     // A gap longer than the bound in the middle: a stamp in it is stale.
-    t.push("odom", "base", s + 2_000_000_000, &Transform::planar(2.0, 1.0, 0.0)).unwrap();
+    t.push("odom", "base", s + 2_000_000_000, &Transform::planar(2.0, 1.0, 0.0), EdgeSource::Tf).unwrap();
     assert_eq!(t.resolve_at("base", s + 1_000_000_000), Err(PoseError::Stale));
     assert!(t.resolve_at("base", s + 1_600_000_000).is_ok());
+}
+
+#[test]
+fn an_edge_takes_its_samples_from_one_source_tf_before_odometry_else_the_first_topic() {
+    let s = 1_000_000_000u64;
+    let x = |t: &FrameTree, at: u64| t.resolve_at("base", at).unwrap().0.t[0];
+    // Two odometry topics with the same frames (raw and filtered): the first keeps the edge.
+    let mut t = FrameTree::default();
+    t.push("odom", "base", s, &Transform::planar(1.0, 0.0, 0.0), EdgeSource::Odometry("/wheel/odom")).unwrap();
+    let r = t.push("odom", "base", s + 10, &Transform::planar(1.4, 0.0, 0.0), EdgeSource::Odometry("/odometry/filtered"));
+    assert_eq!(r, Err(EdgeReject::Superseded));
+    t.push("odom", "base", s + 20, &Transform::planar(1.0, 0.0, 0.0), EdgeSource::Odometry("/wheel/odom")).unwrap();
+    assert_eq!((x(&t, s + 10), t.source_of("base").as_deref()), (1.0, Some("/wheel/odom")));
+    // `tf` takes the edge over (a new history), and the topic is not used after it.
+    t.push("odom", "base", s + 30, &Transform::planar(2.0, 0.0, 0.0), EdgeSource::Tf).unwrap();
+    assert_eq!(t.edges["base"].samples.len(), 1, "tf starts its own history");
+    assert_eq!(
+        t.push("odom", "base", s + 40, &Transform::planar(1.0, 0.0, 0.0), EdgeSource::Odometry("/wheel/odom")),
+        Err(EdgeReject::Superseded)
+    );
+    t.push("odom", "base", s + 50, &Transform::planar(2.0, 0.0, 0.0), EdgeSource::Tf).unwrap();
+    assert_eq!((x(&t, s + 40), t.source_of("base").as_deref()), (2.0, Some("tf")));
+    // A fixed edge has no source to speak of.
+    t.set_static("base", "laser", &Transform::IDENTITY).unwrap();
+    assert_eq!(t.source_of("laser"), None);
 }
 
 #[test]
