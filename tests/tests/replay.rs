@@ -653,6 +653,70 @@ fn odometry_that_tf_also_carries_is_not_merged_with_it() {
     );
 }
 
+/// The test bag with a 3D LiDAR's `sensor_msgs/PointCloud2` on `/points` (frame `laser`) in
+/// place of (`keep_scans` false) or beside its LaserScans: a ring of points 4 m out in the
+/// horizontal plane every 0.25°, a post 1.5 m straight ahead, and a ceiling 2 m above the
+/// sensor (a ring at 3 m radius, 34° up: no part of the cut).
+fn cloud_bag(keep_scans: bool, mount_rotation: [f64; 4]) -> Vec<(&'static str, &'static str, u64, Vec<u8>)> {
+    let mut points: Vec<[f32; 3]> = (0..1440)
+        .flat_map(|i| {
+            let a = (i as f32 * 0.25).to_radians();
+            [[4.0 * a.cos(), 4.0 * a.sin(), 0.02], [3.0 * a.cos(), 3.0 * a.sin(), 2.0]]
+        })
+        .collect();
+    points.push([1.5, 0.0, -0.01]);
+    let mut m = Vec::new();
+    for (topic, ty, t, data) in bag_messages(mount_rotation) {
+        if topic == "/scan" {
+            let header = cdr::decode_laser_scan(&data, cdr::Wire::Cdr).unwrap().header;
+            m.push(("/points", "sensor_msgs/msg/PointCloud2", t, replay::rosbag::encode_xyz_cloud(&header, &points)));
+            if !keep_scans {
+                continue;
+            }
+        }
+        m.push((topic, ty, t, data));
+    }
+    m
+}
+
+#[test]
+fn a_bag_of_point_clouds_replays_as_their_planar_cuts() {
+    let path = tmp("clouds.mcap");
+    write_mcap(&path, &cloud_bag(false, YAW_90), 1 << 16);
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let r = &run.report;
+    assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (SCANS, SCANS, 0), "{r:?}");
+    assert!(r.warnings.iter().any(|w| w.contains("point clouds (/points) cut to planar scans")), "{:?}", r.warnings);
+    // The laser at (1.5, 2.2) faces +y: the post at (1.5, 3.7), the ring 4 m out.
+    assert!(occupied_near(&run, 1.5, 3.7), "the post");
+    assert!(occupied_near(&run, 1.5 - 4.0, 2.2) && occupied_near(&run, 1.5, 2.2 - 4.0), "the ring");
+    assert!(!occupied_near(&run, 1.5 - 3.0, 2.2) && !occupied_near(&run, 1.5, 2.2 - 3.0), "the ceiling is not a wall");
+}
+
+#[test]
+fn clouds_beside_laser_scans_are_not_used_and_a_tilted_cloud_is_refused_by_name() {
+    let path = tmp("clouds-and-scans.mcap");
+    write_mcap(&path, &cloud_bag(true, YAW_90), 1 << 16);
+    let both = replay::replay(&path, &no_classifier()).unwrap();
+    let r = &both.report;
+    assert_eq!((r.scans_read, r.scans_used), (SCANS, SCANS), "the LaserScans only: {r:?}");
+    assert!(
+        r.warnings.iter().any(|w| w.contains("point clouds (/points) not used: the bag's LaserScan topics (/scan) are")),
+        "{:?}",
+        r.warnings
+    );
+    assert_mounted_scan(&both);
+    // The sensor pitched 90° (x forward turned up, as a camera's optical frame is turned).
+    let pitched = [0.0, std::f64::consts::FRAC_1_SQRT_2, 0.0, std::f64::consts::FRAC_1_SQRT_2];
+    let path = tmp("tilted-clouds.mcap");
+    write_mcap(&path, &cloud_bag(false, pitched), 1 << 16);
+    let e = replay::replay(&path, &no_classifier()).err().expect("no scan to replay").to_string();
+    assert!(
+        e.ends_with(&format!("no laser scans to replay: none could be placed: {SCANS} point clouds in a frame tilted from level")),
+        "{e}"
+    );
+}
+
 #[test]
 fn a_replay_can_be_recorded_and_the_recording_reads_back() {
     let bag = tmp("for-record.mcap");

@@ -24,7 +24,7 @@
 //! | `mcap` | `rosbag::read_mcap` | every offset it reports is within the file |
 //! | `sqlite` | `rosbag::read_db3` on the bytes as a file | — |
 //! | `ros1bag` | `rosbag::read_bag1` | every offset it reports is within the file |
-//! | `cdr` | `decode_laser_scan`, `decode_odometry`, `decode_tf_message`, CDR and ROS 1 | — |
+//! | `cdr` | `decode_laser_scan`, `decode_odometry`, `decode_tf_message`, `rosbag::cut` (a `PointCloud2` to its planar scan), CDR and ROS 1 | a cut has the core's beam count |
 //! | `model` | `model::validate_blob` (geometric and `LabelPoseNet` blobs) | a blob that validates installs in a `Controller` |
 //! | `adapter` | `link::adapter::parse_line` per line | — |
 //! | `map` | `map_file::MapMeta::parse` and `PriorMap::from_meta` (YAML, then `%%IMAGE%%` and the image) | an error names the file at fault; a YAML error's line is within the file; a map that loads resamples onto a grid |
@@ -274,6 +274,9 @@ pub fn cdr_messages(data: &[u8]) {
         let _ = cdr::decode_laser_scan(data, wire);
         let _ = cdr::decode_odometry(data, wire);
         let _ = cdr::decode_tf_message(data, wire);
+        if let Ok(s) = rosbag::cut(data, wire) {
+            assert_eq!(s.ranges.len(), rosbag::CLOUD_BEAMS, "a cloud's cut has the core's beams");
+        }
     }
     // What `lives ros2` reads besides (CDR only: ROS 2's wire).
     let _ = cdr::decode_detection2d_array(data);

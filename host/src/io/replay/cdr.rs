@@ -65,6 +65,14 @@ pub enum CdrErrorKind {
         /// The count it gave.
         count: u32,
     },
+    /// The message decodes but its fields do not describe what they must (a point cloud whose
+    /// points lie beyond its data, or with no `x` field).
+    Unusable {
+        /// The field.
+        what: &'static str,
+        /// Why.
+        why: String,
+    },
 }
 
 impl fmt::Display for CdrError {
@@ -79,6 +87,7 @@ impl fmt::Display for CdrError {
             CdrErrorKind::BadCount { what, count } => {
                 write!(f, "CDR sequence {what} at byte {} claims {count} elements, more than the message holds", self.offset)
             }
+            CdrErrorKind::Unusable { what, why } => write!(f, "{what} (byte {}): {why}", self.offset),
         }
     }
 }
@@ -236,6 +245,17 @@ impl<'a> CdrReader<'a> {
             return Err(CdrError { offset: start, kind: CdrErrorKind::BadCount { what, count: n } });
         }
         Ok(n as usize)
+    }
+
+    /// A `uint8[]` sequence, borrowed.
+    pub fn bytes(&mut self, what: &'static str) -> Result<&'a [u8], CdrError> {
+        let n = self.count(what, 1)?;
+        self.take(n, what)
+    }
+
+    /// An error at the cursor: the message's `what` is not usable, for `why`.
+    pub fn unusable(&self, what: &'static str, why: String) -> CdrError {
+        self.err(CdrErrorKind::Unusable { what, why })
     }
 
     /// A `float32[]` sequence.

@@ -113,6 +113,8 @@ pub enum ReplayError {
     NoScans {
         /// The file.
         file: PathBuf,
+        /// What became of the scans it had (none, or why each was not placed).
+        why: String,
     },
     /// The log held no scan the controller could use, and bad records were skipped.
     NoGoodScans {
@@ -202,7 +204,7 @@ impl fmt::Display for ReplayError {
             ReplayError::Message { file, at, topic, error } => write!(f, "{}: {at}: message on {topic}: {error}", file.display()),
             ReplayError::Model(e) => write!(f, "classifier model: {e}"),
             ReplayError::Record { file, reason } => write!(f, "{}: cannot record: {reason}", file.display()),
-            ReplayError::NoScans { file } => write!(f, "{}: no laser scans to replay", file.display()),
+            ReplayError::NoScans { file, why } => write!(f, "{}: no laser scans to replay: {why}", file.display()),
             ReplayError::NoGoodScans { file, skipped, first } => {
                 write!(f, "{}: no laser scans to replay: {}, the first {first}", file.display(), bad_records_skipped(*skipped))
             }

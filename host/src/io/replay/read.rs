@@ -24,6 +24,8 @@ pub struct LogData {
     pub stale_pose: usize,
     /// Bag scans stamped before the scan before them.
     pub scan_stamp_backwards: usize,
+    /// Bag point clouds whose frame is tilted (not cut to a level plane).
+    pub tilted_cloud: usize,
     /// Bag transforms rejected (the scans are placed without them).
     pub transforms_rejected: rosbag::RejectedTransforms,
     /// Time span of everything time-stamped that was read, seconds.
@@ -50,6 +52,7 @@ impl LogData {
             no_odometry_yet: 0,
             stale_pose: 0,
             scan_stamp_backwards: 0,
+            tilted_cloud: 0,
             transforms_rejected: rosbag::RejectedTransforms::default(),
             span_s: None,
             sources: Vec::new(),
@@ -201,6 +204,9 @@ pub(super) fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -
     // Damaged chunks and bad rows first: they come before any message decoding in the file's
     // own order of reading.
     let mut bad_records = contents.bad;
+    for (at, topic, error) in contents.bad_clouds {
+        bad_records.add(ReplayError::Message { file: file.to_path_buf(), at, topic, error });
+    }
     bad_records.append(std::mem::take(&mut scans.bad_records));
     LogData {
         file: file.to_path_buf(),
@@ -211,6 +217,7 @@ pub(super) fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -
         no_odometry_yet: scans.no_odometry_yet,
         stale_pose: scans.stale_pose,
         scan_stamp_backwards: scans.scan_stamp_backwards,
+        tilted_cloud: scans.tilted_cloud,
         transforms_rejected: scans.transforms_rejected,
         span_s: contents.span_ns.map(|(a, b)| (a as f64 / 1e9, b as f64 / 1e9)),
         sources: contents.topics.iter().map(|(t, ty)| format!("{t} ({ty})")).collect(),
@@ -307,11 +314,13 @@ pub fn read_log(path: &Path) -> Result<LogData, ReplayError> {
                 a.no_odometry_yet += part.no_odometry_yet;
                 a.stale_pose += part.stale_pose;
                 a.scan_stamp_backwards += part.scan_stamp_backwards;
+                a.tilted_cloud += part.tilted_cloud;
                 let (t, p) = (&mut a.transforms_rejected, part.transforms_rejected);
                 t.odometry_jump += p.odometry_jump;
                 t.tf_loop += p.tf_loop;
                 t.stamp_backwards += p.stamp_backwards;
                 t.invalid += p.invalid;
+                t.superseded += p.superseded;
                 if let Some((lo, hi)) = part.span_s {
                     widen(&mut a.span_s, lo);
                     widen(&mut a.span_s, hi);

@@ -139,6 +139,9 @@ pub struct Rejected {
     pub stale_pose: u32,
     /// A bag scan stamped before the scan before it.
     pub stamp_backwards: u32,
+    /// A bag's point cloud whose frame is tilted more than
+    /// [`rosbag::MAX_CLOUD_TILT_DEG`] from level: its cut would be a slanted one.
+    pub tilted_cloud: u32,
 }
 
 /// Bad records skipped, for the report.
@@ -374,6 +377,23 @@ pub fn replay(path: &Path, opts: &ReplayOptions) -> Result<ReplayRun, ReplayErro
     replay_log(log, opts, t_start, read_s)
 }
 
+/// Why a log gave no scan to replay: what became of the ones it had.
+fn unplaced_scans(log: &LogData) -> String {
+    let counts = [
+        (log.no_pose, "in a frame no transform places"),
+        (log.no_odometry_yet, "stamped before the first odometry"),
+        (log.stale_pose, "with no odometry within 0.5 s"),
+        (log.scan_stamp_backwards, "stamped before the scan before them"),
+        (log.tilted_cloud, "point clouds in a frame tilted from level"),
+    ];
+    let said: Vec<String> = counts.iter().filter(|(n, _)| *n > 0).map(|(n, what)| format!("{n} {what}")).collect();
+    if said.is_empty() {
+        "it has none (FLASER or ROBOTLASER1 lines; LaserScan or PointCloud2 messages; VLP-16 packets)".into()
+    } else {
+        format!("none could be placed: {}", said.join(", "))
+    }
+}
+
 /// Replays a log already read ([`read_log`]); `t_start` is when reading began.
 pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: f64) -> Result<ReplayRun, ReplayError> {
     let Some(Placement { bounds, stray }) = place_grid(&log.scans) else {
@@ -384,9 +404,10 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             let (at, position) = (s.at, [s.pose[0], s.pose[1]]);
             return Err(ReplayError::PosesOutOfRange { file: log.file, scans: log.scans.len(), at, position });
         }
+        let why = unplaced_scans(&log);
         let mut bad = log.bad_records;
         return Err(if bad.first.is_empty() {
-            ReplayError::NoScans { file: log.file }
+            ReplayError::NoScans { why, file: log.file }
         } else {
             ReplayError::NoGoodScans { file: log.file, skipped: bad.total, first: Box::new(bad.first.remove(0)) }
         });
@@ -506,6 +527,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         no_odometry_yet: log.no_odometry_yet as u32,
         stale_pose: log.stale_pose as u32,
         stamp_backwards: log.scan_stamp_backwards as u32,
+        tilted_cloud: log.tilted_cloud as u32,
         ..Rejected::default()
     };
     let ctrl = brain.ctrl;
@@ -582,7 +604,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             compact(final_origin[1])
         ));
     }
-    let unplaced = log.no_pose + log.no_odometry_yet + log.stale_pose + log.scan_stamp_backwards;
+    let unplaced = log.no_pose + log.no_odometry_yet + log.stale_pose + log.scan_stamp_backwards + log.tilted_cloud;
     let scans_read = log.scans.len() as u32 + unplaced as u32;
     let scans_rejected = rejected.outside_grid
         + rejected.no_pose
@@ -591,7 +613,8 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         + rejected.stray_pose
         + rejected.no_odometry_yet
         + rejected.stale_pose
-        + rejected.stamp_backwards;
+        + rejected.stamp_backwards
+        + rejected.tilted_cloud;
     let report = ReplayReport {
         file: log.file.display().to_string(),
         format: log.format,

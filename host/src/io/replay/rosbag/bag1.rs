@@ -118,7 +118,7 @@ impl Walk {
     fn push(&self, id: u32, t_ns: u64, data: Vec<u8>, at: Location, out: &mut BagContents) {
         if let Some((topic, type_name)) = self.conns.get(&id) {
             if let Some(kind) = MsgType::of(type_name, topic) {
-                out.messages.push(BagMessage { t_ns, topic: topic.clone(), kind, wire: Wire::Ros1, data, at });
+                out.keep(BagMessage { t_ns, topic: topic.clone(), kind, wire: Wire::Ros1, data, at });
             }
         }
     }

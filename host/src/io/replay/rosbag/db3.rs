@@ -94,7 +94,7 @@ pub fn read_db3(file: &Path) -> BagContents {
                             continue;
                         }
                     };
-                    out.messages.push(BagMessage { t_ns, topic: name.clone(), kind, wire: Wire::Cdr, data, at: Location::Row(id) });
+                    out.keep(BagMessage { t_ns, topic: name.clone(), kind, wire: Wire::Cdr, data, at: Location::Row(id) });
                 }
             }
             out.saw(t_ns);

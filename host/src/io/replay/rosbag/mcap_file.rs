@@ -274,7 +274,7 @@ pub(super) fn take_record(
             if let Some((topic, type_name, enc)) = channels.get(&header.channel_id) {
                 if let (Some(kind), Some(wire)) = (MsgType::of(type_name, topic), Wire::of_encoding(enc)) {
                     let t_ns = header.log_time;
-                    out.messages.push(BagMessage { t_ns, topic: topic.clone(), kind, wire, data: data.into_owned(), at });
+                    out.keep(BagMessage { t_ns, topic: topic.clone(), kind, wire, data: data.into_owned(), at });
                 }
             }
         }

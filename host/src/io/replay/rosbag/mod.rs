@@ -1,6 +1,7 @@
 //! ROS 2 bags: MCAP (rosbag2's default storage since Iron) and sqlite3 (`.db3`, the default
 //! before), with `sensor_msgs/msg/LaserScan`, `nav_msgs/msg/Odometry` and `tf2_msgs/msg/TFMessage`
-//! on `/tf` and `/tf_static`, CDR-encoded (MCAP channels encoded `ros1` are read too); and ROS 1
+//! on `/tf` and `/tf_static` (and `sensor_msgs/msg/PointCloud2`, cut to planar scans as it is
+//! read: [`cut`]), CDR-encoded (MCAP channels encoded `ros1` are read too); and ROS 1
 //! bags (format 2.0, [`read_bag1`]) with the same three types (`tf/tfMessage` too) in ROS 1's
 //! serialisation.
 //!
@@ -35,12 +36,14 @@ use super::cdr::Wire;
 use super::{BadRecords, Location, ReplayError};
 
 mod bag1;
+mod cloud;
 mod codec;
 mod db3;
 mod frames;
 mod mcap_file;
 mod scans;
 pub use bag1::*;
+pub use cloud::*;
 pub use codec::*;
 pub use db3::*;
 pub use frames::*;
@@ -58,6 +61,8 @@ pub enum MsgType {
     Tf,
     /// `tf2_msgs/msg/TFMessage` on a `tf_static` topic.
     TfStatic,
+    /// `sensor_msgs/msg/PointCloud2`, held as the planar scan cut from it ([`cut`]).
+    PointCloud2,
 }
 
 impl MsgType {
@@ -67,6 +72,7 @@ impl MsgType {
         match type_name {
             "sensor_msgs/msg/LaserScan" | "sensor_msgs/LaserScan" => Some(MsgType::LaserScan),
             "nav_msgs/msg/Odometry" | "nav_msgs/Odometry" => Some(MsgType::Odometry),
+            "sensor_msgs/msg/PointCloud2" | "sensor_msgs/PointCloud2" => Some(MsgType::PointCloud2),
             "tf2_msgs/msg/TFMessage" | "tf2_msgs/TFMessage" | "tf/tfMessage" if topic.ends_with("tf_static") => Some(MsgType::TfStatic),
             "tf2_msgs/msg/TFMessage" | "tf2_msgs/TFMessage" | "tf/tfMessage" => Some(MsgType::Tf),
             _ => None,
@@ -85,7 +91,7 @@ pub struct BagMessage {
     pub kind: MsgType,
     /// How `data` is serialised.
     pub wire: Wire,
-    /// The serialised message.
+    /// The serialised message (for a point cloud, the CDR of the planar scan cut from it).
     pub data: Vec<u8>,
     /// Where it came from.
     pub at: Location,
@@ -108,9 +114,30 @@ pub struct BagContents {
     /// Damage whose extent is known, skipped: a chunk that does not decompress or whose records
     /// do not parse (the records after it are read), a `messages` row of the wrong type.
     pub bad: BadRecords,
+    /// Point clouds that could not be cut (`(where, topic, why)`): bad records once the file is
+    /// named.
+    pub bad_clouds: Vec<(Location, String, super::cdr::CdrError)>,
 }
 
 impl BagContents {
+    /// Keeps a message of a type replay uses; a point cloud is cut to its planar scan now, so
+    /// that a bag of clouds is held as scans.
+    fn keep(&mut self, mut m: BagMessage) {
+        if m.kind == MsgType::PointCloud2 {
+            match cut(&m.data, m.wire) {
+                Ok(scan) => {
+                    m.data = super::cdr::encode_laser_scan(&scan);
+                    m.wire = Wire::Cdr;
+                }
+                Err(e) => {
+                    self.bad_clouds.push((m.at, m.topic, e));
+                    return;
+                }
+            }
+        }
+        self.messages.push(m);
+    }
+
     fn saw(&mut self, t_ns: u64) {
         self.span_ns = Some(match self.span_ns {
             None => (t_ns, t_ns),

@@ -3,7 +3,7 @@
 use super::*;
 use crate::io::replay::cdr::{self, CdrError};
 use crate::io::replay::{BadRecords, Location, ReplayError, ScanRecord};
-use std::collections::{BTreeMap, HashMap, HashSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::path::Path;
 
 /// What the messages gave.
@@ -19,6 +19,8 @@ pub struct BagScans {
     pub stale_pose: usize,
     /// Scans whose header stamp is before the previous scan's on the same frame.
     pub scan_stamp_backwards: usize,
+    /// Scans cut from point clouds whose frame is tilted ([`MAX_CLOUD_TILT_DEG`]): not used.
+    pub tilted_cloud: usize,
     /// Transforms rejected.
     pub transforms_rejected: RejectedTransforms,
     /// Odometry messages.
@@ -33,6 +35,8 @@ pub struct BagScans {
 
 pub(crate) enum Decoded {
     Scan(cdr::LaserScan),
+    /// The planar scan cut from a `PointCloud2` ([`super::cut`]).
+    Cloud(cdr::LaserScan),
     Odom(cdr::Odometry),
     Tf(Vec<cdr::TransformStamped>),
 }
@@ -60,6 +64,7 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
     for m in &messages {
         let d: Result<Decoded, CdrError> = match m.kind {
             MsgType::LaserScan => cdr::decode_laser_scan(&m.data, m.wire).map(Decoded::Scan),
+            MsgType::PointCloud2 => cdr::decode_laser_scan(&m.data, m.wire).map(Decoded::Cloud),
             MsgType::Odometry => cdr::decode_odometry(&m.data, m.wire).map(Decoded::Odom),
             MsgType::Tf | MsgType::TfStatic => cdr::decode_tf_message(&m.data, m.wire).map(Decoded::Tf),
         };
@@ -136,8 +141,32 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
     let mut assumed: Vec<String> = Vec::new();
     let mut last_stamp: HashMap<String, u64> = HashMap::new();
     let mut first_unplaced: Vec<String> = Vec::new();
-    for (m, d) in decoded {
-        let Decoded::Scan(s) = d else { continue };
+    // A bag with a LaserScan topic maps its scans; its point clouds (often what the scans were
+    // made from) are then not used. A bag of clouds alone maps the planar cuts of its clouds.
+    let scan_topics: BTreeSet<&str> = decoded.iter().filter(|(m, _)| m.kind == MsgType::LaserScan).map(|(m, _)| m.topic.as_str()).collect();
+    let cloud_topics: BTreeSet<&str> =
+        decoded.iter().filter(|(m, _)| m.kind == MsgType::PointCloud2).map(|(m, _)| m.topic.as_str()).collect();
+    if !cloud_topics.is_empty() {
+        let clouds = cloud_topics.iter().copied().collect::<Vec<_>>().join(", ");
+        out.warnings.push(if scan_topics.is_empty() {
+            format!(
+                "point clouds ({clouds}) cut to planar scans: the points within {CLOUD_BAND_DEG}° of the sensor's horizontal \
+                 plane, nearest per beam of {CLOUD_BEAMS}, none nearer than {CLOUD_RANGE_MIN_M} m"
+            )
+        } else {
+            format!(
+                "point clouds ({clouds}) not used: the bag's LaserScan topics ({}) are",
+                scan_topics.iter().copied().collect::<Vec<_>>().join(", ")
+            )
+        });
+    }
+    let use_clouds = scan_topics.is_empty();
+    for (m, d) in &decoded {
+        let s = match d {
+            Decoded::Scan(s) => s,
+            Decoded::Cloud(s) if use_clouds => s,
+            _ => continue,
+        };
         let laser = frame(&s.header.frame_id);
         let t = stamp_ns(&s.header, m.t_ns);
         if last_stamp.get(&laser).is_some_and(|&prev| t < prev) {
@@ -161,7 +190,8 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
             }
         }
         match tree.resolve_at(&target, t) {
-            Ok((pose, _root, depth)) if depth > 0 => out.scans.push(scan_record(&s, &pose, m.t_ns, m.at)),
+            Ok((pose, _, depth)) if depth > 0 && m.kind == MsgType::PointCloud2 && tilted(&pose) => out.tilted_cloud += 1,
+            Ok((pose, _root, depth)) if depth > 0 => out.scans.push(scan_record(s, &pose, m.t_ns, m.at)),
             Ok(_) | Err(PoseError::NoPose) => out.no_pose += 1,
             Err(e) => {
                 if first_unplaced.len() < 3 {
@@ -182,6 +212,13 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
             out.stale_pose,
             MAX_POSE_AGE_NS as f64 / 1e9,
             first_unplaced.join(", ")
+        ));
+    }
+    if out.tilted_cloud > 0 {
+        out.warnings.push(format!(
+            "{} point clouds were not used: their frame is tilted more than {MAX_CLOUD_TILT_DEG}° from level (a depth \
+             camera's optical frame?), and a cut of its horizontal plane would be a slanted one",
+            out.tilted_cloud
         ));
     }
     if out.scan_stamp_backwards > 0 {
@@ -205,6 +242,11 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
     }
     out.transforms_rejected = rej;
     out
+}
+
+/// Whether a frame's z axis is farther than [`MAX_CLOUD_TILT_DEG`] from the vertical (up or down).
+fn tilted(pose: &Iso) -> bool {
+    pose.rotate([0.0, 0.0, 1.0])[2].abs() < MAX_CLOUD_TILT_DEG.to_radians().cos()
 }
 
 /// A scan in the replay's terms: the laser's planar pose and ranges by the ROS conventions.
