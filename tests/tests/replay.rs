@@ -718,6 +718,58 @@ fn clouds_beside_laser_scans_are_not_used_and_a_tilted_cloud_is_refused_by_name(
 }
 
 #[test]
+fn a_bag_directory_of_zstd_compressed_files_replays_as_the_files_would() {
+    // `ros2 bag record --compression-mode file --compression-format zstd`: each storage file
+    // compressed whole, `bag_0.db3.zstd`, beside `metadata.yaml`.
+    let dir = tmp("zstd-bag");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let db3 = tmp("plain.db3");
+    write_db3(&db3, &bag_messages(YAW_90));
+    let packed = zstd::bulk::compress(&std::fs::read(&db3).unwrap(), 3).unwrap();
+    std::fs::write(dir.join("bag_0.db3.zstd"), packed).unwrap();
+    std::fs::write(dir.join("metadata.yaml"), "rosbag2_bagfile_information:\n  compression_format: zstd\n  compression_mode: FILE\n")
+        .unwrap();
+    let run = replay::replay(&dir, &no_classifier()).unwrap();
+    assert_eq!(run.report.format, LogFormat::Ros2Sqlite3);
+    assert!(run.error.is_none(), "{:?}", run.error);
+    assert_mounted_scan(&run);
+    assert!(run.report.warnings.iter().any(|w| w.contains("decompressed (zstd")), "{:?}", run.report.warnings);
+    let plain = replay::replay(&db3, &no_classifier()).unwrap().report;
+    assert_eq!((plain.grid, plain.goals.clone()), (run.report.grid, run.report.goals.clone()));
+}
+
+#[test]
+fn a_truncated_zstd_compressed_mcap_keeps_the_scans_before_the_damage() {
+    // The dense scanner's bag with noisy ranges (346 kB that zstd cannot squeeze into one
+    // 128 kB block), in chunks of 16 kB, so the damage is not in the first block or chunk.
+    let mut m = dense_bag();
+    let mut noise = 1u32;
+    for (_, _, _, data) in m.iter_mut().filter(|(topic, ..)| *topic == "/scan") {
+        let mut s = cdr::decode_laser_scan(data, cdr::Wire::Cdr).unwrap();
+        for r in s.ranges.iter_mut().filter(|r| **r == 4.0) {
+            noise = noise.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            *r += (noise >> 16) as f32 * 1e-6;
+        }
+        *data = cdr::encode_laser_scan(&s);
+    }
+    let mcap = tmp("for-zstd.mcap");
+    write_mcap(&mcap, &m, 16 * 1024);
+    let packed = zstd::stream::encode_all(std::fs::File::open(&mcap).unwrap(), 3).unwrap();
+    let cut = tmp("cut.mcap.zstd");
+    std::fs::write(&cut, &packed[..packed.len() * 3 / 4]).unwrap();
+    let run = replay::replay(&cut, &no_classifier()).unwrap();
+    let used = run.report.scans_used;
+    assert!(used > 0 && used < SCANS, "{used}");
+    assert!(run.error.is_some(), "the MCAP's own truncation is named");
+    assert!(run.report.warnings.iter().any(|w| w.contains("zstd stream is damaged")), "{:?}", run.report.warnings);
+    // Cut inside its first block, nothing decompresses: the error says so.
+    std::fs::write(&cut, &packed[..6]).unwrap();
+    let e = replay::replay(&cut, &no_classifier()).err().expect("nothing to replay").to_string();
+    assert!(e.contains("compressed with zstd: its zstd stream is damaged after 0 decompressed bytes"), "{e}");
+}
+
+#[test]
 fn a_replay_can_be_recorded_and_the_recording_reads_back() {
     let bag = tmp("for-record.mcap");
     write_mcap(&bag, &bag_messages(YAW_90), 4096);

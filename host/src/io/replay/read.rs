@@ -266,12 +266,93 @@ pub fn detect(head: &[u8]) -> Option<LogFormat> {
     }
 }
 
+/// The first bytes of a zstd frame: rosbag2's file compression (`ros2 bag record
+/// --compression-mode file --compression-format zstd`) compresses each whole `.mcap` or `.db3`
+/// file (`bag_0.mcap.zstd`).
+pub const ZSTD_MAGIC: [u8; 4] = [0x28, 0xB5, 0x2F, 0xFD];
+
+/// A zstd-compressed file decompressed, at most [`rosbag::MAX_CHUNK_RATIO`] times its size:
+/// what it held before any damage, and the damage.
+#[cfg(feature = "zstd")]
+fn unzstd(file: &Path) -> Result<(Vec<u8>, Option<String>), ReplayError> {
+    let f = std::fs::File::open(file).map_err(io_err(file))?;
+    let limit = f.metadata().map_err(io_err(file))?.len().saturating_mul(rosbag::MAX_CHUNK_RATIO).min(rosbag::MAX_CHUNK_UNCOMPRESSED * 64);
+    let mut out = Vec::new();
+    let damage = match zstd::stream::read::Decoder::new(f) {
+        Ok(d) => match d.take(limit + 1).read_to_end(&mut out) {
+            Ok(_) if out.len() as u64 > limit => {
+                Some(format!("it decompresses to more than {limit} bytes ({} × its size)", rosbag::MAX_CHUNK_RATIO))
+            }
+            Ok(_) => None,
+            Err(e) => Some(format!("its zstd stream is damaged after {} decompressed bytes: {e}", out.len())),
+        },
+        Err(e) => return Err(ReplayError::Io { file: file.to_path_buf(), source: e }),
+    };
+    out.truncate(limit as usize);
+    Ok((out, damage))
+}
+
+/// A file rosbag2 compressed whole with zstd: its `.mcap` (read from memory) or `.db3` (written
+/// to a temporary file for SQLite) decompressed and read as such.
+fn read_zstd_file(file: &Path) -> Result<LogData, ReplayError> {
+    #[cfg(not(feature = "zstd"))]
+    {
+        Err(ReplayError::Bag {
+            file: file.to_path_buf(),
+            offset: 0,
+            reason: "compressed with zstd (rosbag2's file compression), which this `lives` was built without (rebuild with `--features zstd`, or `ros-bags`)".into(),
+        })
+    }
+    #[cfg(feature = "zstd")]
+    {
+        let (bytes, damage) = unzstd(file)?;
+        let Some(format) = detect(&bytes) else {
+            return Err(match damage {
+                Some(reason) => ReplayError::Bag { file: file.to_path_buf(), offset: 0, reason: format!("compressed with zstd: {reason}") },
+                None => ReplayError::UnknownFormat { file: file.to_path_buf() },
+            });
+        };
+        let mut log = match format {
+            LogFormat::Ros2Mcap => read_bag(file, format, Some(bytes)),
+            LogFormat::Ros2Sqlite3 => {
+                let tmp = std::env::temp_dir().join(format!(
+                    "lives-{}-{}.db3",
+                    std::process::id(),
+                    file.file_name().unwrap_or_default().to_string_lossy()
+                ));
+                std::fs::write(&tmp, &bytes).map_err(io_err(&tmp))?;
+                drop(bytes);
+                let mut log = read_bag(&tmp, format, None);
+                let _ = std::fs::remove_file(&tmp);
+                log.file = file.to_path_buf();
+                log
+            }
+            LogFormat::Carmen | LogFormat::CarmenGzip => read_carmen(file, format, bytes),
+            LogFormat::Ros1Bag | LogFormat::Vlp16 => {
+                return Err(ReplayError::Bag {
+                    file: file.to_path_buf(),
+                    offset: 0,
+                    reason: format!("a zstd-compressed {format}: decompress it first (`zstd -d`)"),
+                })
+            }
+        };
+        log.warnings.insert(0, format!("decompressed (zstd, rosbag2's file compression) before reading it as {format}"));
+        if let Some(d) = damage {
+            log.warnings.push(format!("{d}: what came before it was read"));
+        }
+        Ok(log)
+    }
+}
+
 pub(super) fn read_one(file: &Path) -> Result<LogData, ReplayError> {
     // A ROS 1 bag is streamed (camera bags are many gigabytes); the other formats are read whole.
     let mut head = Vec::with_capacity(4096);
     std::fs::File::open(file).and_then(|f| f.take(4096).read_to_end(&mut head)).map_err(io_err(file))?;
     if detect(&head) == Some(LogFormat::Ros1Bag) {
         return Ok(read_bag(file, LogFormat::Ros1Bag, None));
+    }
+    if head.starts_with(&ZSTD_MAGIC) {
+        return read_zstd_file(file);
     }
     let bytes = std::fs::read(file).map_err(io_err(file))?;
     let format = detect(&bytes).ok_or_else(|| ReplayError::UnknownFormat { file: file.to_path_buf() })?;
@@ -289,8 +370,8 @@ pub(super) fn read_one(file: &Path) -> Result<LogData, ReplayError> {
     })
 }
 
-/// Reads a log file, or a rosbag2 directory (its `.mcap` / `.db3` files in name order, stopping
-/// at the first damaged one).
+/// Reads a log file, or a rosbag2 directory (its `.mcap` / `.db3` files, or their `.zstd`
+/// compressions, in name order, stopping at the first damaged one).
 pub fn read_log(path: &Path) -> Result<LogData, ReplayError> {
     if !path.is_dir() {
         return read_one(path);
@@ -298,7 +379,7 @@ pub fn read_log(path: &Path) -> Result<LogData, ReplayError> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(path)
         .map_err(io_err(path))?
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "mcap" || e == "db3"))
+        .filter(|p| [".mcap", ".db3", ".mcap.zstd", ".db3.zstd"].iter().any(|e| p.to_string_lossy().ends_with(e)))
         .collect();
     files.sort();
     let mut all: Option<LogData> = None;
