@@ -769,6 +769,84 @@ fn a_truncated_zstd_compressed_mcap_keeps_the_scans_before_the_damage() {
     assert!(e.contains("compressed with zstd: its zstd stream is damaged after 0 decompressed bytes"), "{e}");
 }
 
+/// A map_server map (0.05 m cells, origin `origin`, 60 × 180 cells) whose occupied cells are
+/// the `walls`, `[x0, x1, y]` in metres (horizontal runs, one cell thick); free elsewhere.
+fn floor_map(dir: &Path, origin: [f64; 2], walls: &[[f64; 3]]) -> PathBuf {
+    let (w, h, res) = (60usize, 180usize, 0.05);
+    let mut px = vec![254u8; w * h];
+    for &[x0, x1, y] in walls {
+        let row = ((y - origin[1]) / res).floor() as usize;
+        for col in ((x0 - origin[0]) / res).floor() as usize..=((x1 - origin[0]) / res).floor() as usize {
+            px[(h - 1 - row) * w + col] = 0;
+        }
+    }
+    let mut pgm = format!("P5\n{w} {h}\n255\n").into_bytes();
+    pgm.extend(px);
+    std::fs::write(dir.join("floor.pgm"), pgm).unwrap();
+    let yaml = dir.join("floor.yaml");
+    std::fs::write(
+        &yaml,
+        format!(
+            "image: floor.pgm\nresolution: {res}\norigin: [{}, {}, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+            origin[0], origin[1]
+        ),
+    )
+    .unwrap();
+    yaml
+}
+
+fn floor_args(bag: &Path, map: &Path, pose: Option<&str>) -> host::measure::mapcheck::MapcheckArgs {
+    host::measure::mapcheck::MapcheckArgs {
+        file: Some(bag.to_path_buf()),
+        reference: None,
+        align: None,
+        floor_map: Some(map.to_path_buf()),
+        floor_map_pose: pose.map(str::to_string),
+        relations: None,
+        json: true,
+        png: None,
+        no_classifier: true,
+        model: None,
+        max_range: None,
+        set: Vec::new(),
+        world: None,
+        scenario: None,
+        planner: None,
+        seed: None,
+        sim: Vec::new(),
+    }
+}
+
+#[test]
+fn a_bag_is_scored_against_a_floor_map_on_the_walls_its_viewpoints_see() {
+    // The test bag's laser at (1.5, 2.2) faces +y and hits a wall 3 m ahead, x 1.35–1.59 m. The
+    // floor map has that wall (cells x 1.40–1.55 m, y 5.2 m) and one hidden behind it (y 8 m),
+    // which the robot could not see.
+    let dir = tmp("floor");
+    std::fs::create_dir_all(&dir).unwrap();
+    let bag = dir.join("bag.mcap");
+    write_mcap(&bag, &bag_messages(YAW_90), 4096);
+    let walls = [[1.41, 1.54, 5.2], [1.41, 1.54, 8.0]];
+    let (r, clean) = host::measure::mapcheck::check_log(&bag, &floor_args(&bag, &floor_map(&dir, [0.0, 0.0], &walls), None)).unwrap();
+    assert!(clean);
+    assert_eq!(r.reference.kind, "floor-map");
+    let m = &r.map;
+    // The seen wall: 2 grid cells (0.1 m) along x; the hidden one (2 more) does not count.
+    assert_eq!((m.recovered_cells, m.reference_wall_cells), (2, 2), "{m:?}");
+    assert_eq!(m.phantom_cells, 0, "{m:?}");
+    // The same map drawn 1 m to the left and placed back by --floor-map-pose: the same figures.
+    let shifted = [[0.41, 0.54, 5.2], [0.41, 0.54, 8.0]];
+    let (r2, _) =
+        host::measure::mapcheck::check_log(&bag, &floor_args(&bag, &floor_map(&dir, [0.0, 0.0], &shifted), Some("1,0,0"))).unwrap();
+    assert_eq!(r2.map, r.map);
+    // Without the pose, the map's wall is 1 m off: lost, and the grid's wall a phantom.
+    let (r3, _) = host::measure::mapcheck::check_log(&bag, &floor_args(&bag, &floor_map(&dir, [0.0, 0.0], &shifted), None)).unwrap();
+    assert_eq!(r3.map.recovered_cells, 0, "{:?}", r3.map);
+    assert_eq!(r3.map.phantom_cells, r3.map.occupied_cells);
+    let e = host::measure::mapcheck::check_log(&bag, &floor_args(&bag, &dir.join("floor.yaml"), Some("1,nan,0"))).err().unwrap();
+    assert!(e.contains("three finite numbers"), "{e}");
+}
+
 #[test]
 fn a_replay_can_be_recorded_and_the_recording_reads_back() {
     let bag = tmp("for-record.mcap");

@@ -22,6 +22,15 @@ pub struct MapcheckArgs {
     /// stamps: they place the reference in this run's frame (least squares over every match).
     #[arg(long, value_name = "POSES.txt", requires = "reference")]
     pub align: Option<PathBuf>,
+    /// Score against the building's floor map (a ROS map_server `.yaml`, e.g. the map a robot
+    /// localised in with AMCL): its occupied cells are the walls, and walls recovered counts those
+    /// the log's viewpoints could see (docs/mapcheck.md). The map is placed in the log's frame by
+    /// `--floor-map-pose` (default: the same frame, as a bag whose frame tree has `map` at its root).
+    #[arg(long, value_name = "MAP.yaml", conflicts_with_all = ["world", "reference"])]
+    pub floor_map: Option<PathBuf>,
+    /// The floor map's frame in the log's frame, `X,Y,YAW` (metres, metres, degrees).
+    #[arg(long, value_name = "X,Y,YAW", requires = "floor_map", allow_hyphen_values = true)]
+    pub floor_map_pose: Option<String>,
     /// Ground-truth relations `t1 t2 x y z roll pitch yaw` (Kümmerle et al. 2009): report the
     /// relation errors of the log's poses and of the controller's.
     #[arg(long, value_name = "FILE", conflicts_with = "world")]
@@ -105,11 +114,14 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
     let relations = args.relations.as_deref().map(|p| read_relations(p).map(|r| (p, r))).transpose()?;
     let align = args.align.as_deref().map(|p| read_poses(p).map(|r| (p, r))).transpose()?;
     let other = args.reference.as_deref().map(|p| replay::read_log(p).map_err(|e| e.to_string())).transpose()?;
+    let floor = args.floor_map.as_deref().map(|p| crate::io::map_file::PriorMap::load(p).map_err(|e| e.to_string())).transpose()?;
+    let floor_pose = args.floor_map_pose.as_deref().map(parse_pose).transpose()?.unwrap_or([0.0; 3]);
     let t0 = Instant::now();
     let log = replay::read_log(file).map_err(|e| e.to_string())?;
     let read_s = t0.elapsed().as_secs_f64();
     let log_poses: Vec<TimedPose> = log.scans.iter().map(|s| TimedPose { t_s: s.t_s, pose: s.pose }).collect();
     let own = (other.is_none()).then(|| log.scans.clone());
+    let viewpoints: Vec<[f64; 2]> = drawable(&log.scans).iter().map(|s| [s.pose[0], s.pose[1]]).collect();
     let run = replay::replay_log(log, &opts, t0, read_s).map_err(|e| e.to_string())?;
     let clean = run.bad_records.total == 0 && run.error.is_none();
     let cfg = run.controller.config();
@@ -120,6 +132,14 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
     let grid = MapGrid::of(&run.controller.lidar);
     let mut reference = Reference::new(grid.n, range);
     let (kind, ref_file, alignment) = match (&other, &align) {
+        _ if floor.is_some() => {
+            let map = floor.as_ref().expect("a floor map");
+            draw_floor_map(&mut reference, map, &floor_pose, origin);
+            let c = cell_m();
+            reference.viewpoints = viewpoints.iter().map(|p| [(p[0] - origin[0]) / c, (p[1] - origin[1]) / c]).collect();
+            reference.seen_walls_only = true;
+            ("floor-map", Some(map.file.clone()), None)
+        }
         (Some(other), Some((apath, aposes))) => {
             let index = PoseIndex::new(&run.poses);
             let pairs: Vec<([f64; 3], [f64; 3])> = aposes.iter().filter_map(|p| index.at(p.t_s).map(|q| (q, p.pose))).collect();
@@ -196,6 +216,45 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
         search: None,
     };
     Ok((report, clean))
+}
+
+/// `X,Y,YAW` (metres, metres, degrees) as `[x, y, yaw in radians]`.
+fn parse_pose(text: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("--floor-map-pose `{text}`: {e}"))?;
+    match v[..] {
+        [x, y, yaw] if v.iter().all(|v| v.is_finite()) => Ok([x, y, yaw.to_radians()]),
+        _ => Err(format!("--floor-map-pose `{text}`: three finite numbers X,Y,YAW (metres, metres, degrees)")),
+    }
+}
+
+/// Draws the occupied cells of a floor map, placed at `pose` (the map frame in the log's frame),
+/// into `reference` (grid lower-left corner `origin`): each map cell is sampled at points at
+/// most half a grid cell apart, so a map coarser than the grid marks every grid cell it covers
+/// and a finer one marks the grid cell of each of its cells.
+pub fn draw_floor_map(reference: &mut Reference, map: &crate::io::map_file::PriorMap, pose: &[f64; 3], origin: [f64; 2]) {
+    let c = cell_m();
+    let res = map.resolution_m;
+    let k = (res / (c / 2.0)).ceil().max(1.0) as usize;
+    let (sin, cos) = pose[2].sin_cos();
+    for y in 0..map.height {
+        for x in 0..map.width {
+            if map.get(x, y) != Some(crate::io::map_file::Cell3::Occupied) {
+                continue;
+            }
+            for j in 0..k {
+                for i in 0..k {
+                    let u = map.origin[0] + (x as f64 + (i as f64 + 0.5) / k as f64) * res;
+                    let v = map.origin[1] + (y as f64 + (j as f64 + 0.5) / k as f64) * res;
+                    let p = [pose[0] + cos * u - sin * v, pose[1] + sin * u + cos * v];
+                    reference.mark((p[0] - origin[0]) / c, (p[1] - origin[1]) / c);
+                }
+            }
+        }
+    }
 }
 
 /// Runs the search `spec` and scores its final LiDAR grid against the true world.
@@ -296,6 +355,10 @@ pub fn table(r: &MapcheckReport) -> String {
     let what = match r.reference.kind.as_str() {
         "log-poses" => "the log's own scans at its own poses".to_string(),
         "other-log" => format!("the scans of {} at its poses", r.reference.file.as_deref().unwrap_or("?")),
+        "floor-map" => format!(
+            "the floor map {}: its walls the viewpoints see within the clearing range score walls recovered",
+            r.reference.file.as_deref().unwrap_or("?")
+        ),
         _ => "the true world's walls and obstacles the run's noise-free rays hit".to_string(),
     };
     let _ =

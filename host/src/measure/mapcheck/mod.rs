@@ -125,6 +125,9 @@ pub struct Reference {
     pub viewpoints: Vec<[f64; 2]>,
     /// Reference returns that fell beyond the margin (not scored).
     pub beyond: u64,
+    /// Score walls recovered on the reference walls a viewpoint sees only (a floor map holds
+    /// walls the robot never came near; a log's projection holds only walls it hit).
+    pub seen_walls_only: bool,
 }
 
 impl Reference {
@@ -132,7 +135,7 @@ impl Reference {
     pub fn new(n: i32, range_m: f64) -> Self {
         let margin = (range_m.max(0.0) / cell_m()).ceil() as i32 + 3;
         let side = n + 2 * margin;
-        Reference { n, margin, side, wall: vec![false; (side * side) as usize], viewpoints: Vec::new(), beyond: 0 }
+        Reference { n, margin, side, wall: vec![false; (side * side) as usize], viewpoints: Vec::new(), beyond: 0, seen_walls_only: false }
     }
 
     fn index(&self, x: i64, y: i64) -> Option<usize> {

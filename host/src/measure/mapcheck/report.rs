@@ -58,10 +58,10 @@ pub struct Alignment {
 /// What the run was scored against.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ReferenceInfo {
-    /// `log-poses` (the log's own scans at its own poses), `other-log` (`--reference`) or
-    /// `true-world` (simulation).
+    /// `log-poses` (the log's own scans at its own poses), `other-log` (`--reference`),
+    /// `floor-map` (`--floor-map`) or `true-world` (simulation).
     pub kind: String,
-    /// The log drawn, for `log-poses` and `other-log`.
+    /// The log drawn, for `log-poses` and `other-log`; the map's YAML file for `floor-map`.
     pub file: Option<String>,
     /// Scans (logs) or true positions (simulation) the reference was drawn from; also the
     /// viewpoints of the leak.

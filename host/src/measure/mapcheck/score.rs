@@ -70,7 +70,7 @@ pub fn score_cells(grid: &MapGrid, reference: &Reference, range_m: f64, rays: us
     for y in 0..n {
         for x in 0..n {
             let class = &mut classes[(y * n + x) as usize];
-            if reference.is_wall(x, y) {
+            if reference.is_wall(x, y) && (!reference.seen_walls_only || seen(x, y)) {
                 ref_walls += 1;
                 let found = near.iter().any(|&(dx, dy)| grid.get(x + dx, y + dy) == Cell::Occupied);
                 recovered += found as u64;
