@@ -8,7 +8,8 @@ Encode with XCDR1 (ROS 2's ``CDR_LE``), see :data:`XCDR1` in ``ros2_sim_robot.py
 
 Types: builtin_interfaces Time, Duration; std_msgs Header, ColorRGBA, Bool, String;
 geometry_msgs Point, Vector3, Quaternion, Pose, PointStamped, PoseStamped, PoseWithCovariance, Twist,
-TwistWithCovariance, Transform, TransformStamped; sensor_msgs LaserScan, CompressedImage;
+TwistWithCovariance, Transform, TransformStamped; sensor_msgs LaserScan, PointField, PointCloud2,
+CompressedImage;
 nav_msgs Odometry, Path, MapMetaData, OccupancyGrid; tf2_msgs TFMessage; visualization_msgs
 UVCoordinate, MeshFile, Marker, MarkerArray; vision_msgs Point2D, Pose2D, BoundingBox2D,
 ObjectHypothesis, ObjectHypothesisWithPose, Detection2D, Detection2DArray.
@@ -39,7 +40,7 @@ def _default(t):
     return base()  # int or float: 0 or 0.0
 
 
-def _msg(pkg, name, **fields):
+def _msg(pkg, name, /, **fields):
     """The dataclass of ROS 2 message ``pkg/msg/name`` with DDS type name ``pkg::msg::dds_::name_``,
     its fields in ``.msg`` order as ``field=type`` (or ``field=(type, default)``)."""
 
@@ -89,6 +90,12 @@ LaserScan = _msg(
     time_increment=float32, scan_time=float32,
     range_min=float32, range_max=float32,
     ranges=sequence[float32], intensities=sequence[float32],
+)  # fmt: skip
+PointField = _msg("sensor_msgs", "PointField", name=str, offset=uint32, datatype=uint8, count=uint32)
+PointCloud2 = _msg(
+    "sensor_msgs", "PointCloud2", header=Header, height=uint32, width=uint32,
+    fields=sequence[PointField], is_bigendian=bool, point_step=uint32, row_step=uint32,
+    data=sequence[uint8], is_dense=bool,
 )  # fmt: skip
 CompressedImage = _msg(
     "sensor_msgs", "CompressedImage", header=Header, format=str, data=sequence[uint8]

@@ -56,6 +56,7 @@ import json
 import math
 import os
 import statistics
+import struct
 import subprocess
 import sys
 import threading
@@ -185,6 +186,7 @@ class Ros:
         self.qos = lambda rel_, dur, depth: Qos(rel_, dur, Policy.History.KeepLast(depth), *xcdr1(Policy))
         w = lambda name, typ, q: DataWriter(self.dp, self.topic(name, typ), qos=q)  # noqa: E731
         self.scan = w("scan", m.LaserScan, self.qos(be, vol, 5))
+        self.points = w("points", m.PointCloud2, self.qos(be, vol, 5))
         self.odom = w("odom", m.Odometry, self.qos(rel, vol, 10))
         self.tf = w("tf", m.TFMessage, self.qos(rel, vol, 100))
         self.tf_static = w("tf_static", m.TFMessage, self.qos(rel, tl, 1))
@@ -212,7 +214,7 @@ class Ros:
 
     def unmatched(self):
         """The endpoints `lives ros2` has not matched yet (discovery is done when none is left)."""
-        ws = {"scan": self.scan, "odom": self.odom, "tf": self.tf, "tf_static": self.tf_static,
+        ws = {"scan": self.scan, "points": self.points, "odom": self.odom, "tf": self.tf, "tf_static": self.tf_static,
               "detections": self.detections, "target": self.target, "base_blocked": self.blocked}
         missing = [n for n, w in ws.items() if not w.get_matched_subscriptions()]
         return missing + [n for n in ("plan", "lives/status") if not self.readers[n].get_matched_publications()]
@@ -227,8 +229,9 @@ def header(t_us, frame):
     return m.Header(stamp=stamp_of(t_us), frame_id=frame)
 
 
-def publish_tick(ros, v, detection_topic="detections"):
-    """Publishes one tick line's messages (the scan last)."""
+def publish_tick(ros, v, detection_topic="detections", as_cloud=False):
+    """Publishes one tick line's messages (the scan last; as a point cloud on ``points`` with
+    ``as_cloud``)."""
     t = v["t_us"]
     if v["pose"] is not None:
         x, y, _ = v["pose"]
@@ -247,7 +250,27 @@ def publish_tick(ros, v, detection_topic="detections"):
         hyp = m.ObjectHypothesisWithPose(hypothesis=m.ObjectHypothesis(class_id="target", score=1.0))
         ros.detections.write(m.Detection2DArray(header=header(t, "camera"), detections=[
             m.Detection2D(header=header(t, "camera"), results=[hyp], id="target")]))
-    ros.scan.write(scan_msg(v))
+    if as_cloud:
+        ros.points.write(cloud_msg(v))
+    else:
+        ros.scan.write(scan_msg(v))
+
+
+def cloud_msg(v):
+    """The tick's scan as a 3D LiDAR's ``sensor_msgs/PointCloud2`` in frame ``laser``: a point
+    (float32 ``x``, ``y``, ``z`` = 0) per return; no-returns and invalid readings have none."""
+    s = v["scan"]
+    invalid, no_return = HELLO["range_invalid"], HELLO["range_no_return"]
+    pts = []
+    for i, r in enumerate(s["ranges_mm"]):
+        if r in (invalid, no_return):
+            continue
+        a = s["angle_min"] + i * s["angle_increment"]
+        pts += [r / 1000.0 * math.cos(a), r / 1000.0 * math.sin(a), 0.0]
+    n = len(pts) // 3
+    fields = [m.PointField(name=c, offset=4 * k, datatype=7, count=1) for k, c in enumerate("xyz")]
+    return m.PointCloud2(header=header(v["t_us"], "laser"), height=1, width=n, fields=fields, is_bigendian=False,
+                         point_step=12, row_step=12 * n, data=list(struct.pack(f"<{3 * n}f", *pts)), is_dense=True)
 
 
 def scan_msg(v):
@@ -341,6 +364,8 @@ def main():
     ap.add_argument("--detection-topic", choices=["detections", "target"], default="detections",
                     help="where the camera's sightings go: vision_msgs/Detection2DArray on `detections`, or "
                          "geometry_msgs/PointStamped on `target`")
+    ap.add_argument("--scan-as-cloud", action="store_true",
+                    help="publish each scan as a 3D LiDAR's PointCloud2 on `points` instead of a LaserScan on `scan`")
     ap.add_argument("sim_serve_args", nargs=argparse.REMAINDER, help="-- then the arguments of `lives sim-serve`")
     args = ap.parse_args()
     rest = args.sim_serve_args[1:] if args.sim_serve_args[:1] == ["--"] else args.sim_serve_args
@@ -387,7 +412,7 @@ def main():
             stamp_ns = v["t_us"] * 1000
             sent = time.monotonic()
             sent_at[stamp_ns] = sent
-            publish_tick(ros, v, args.detection_topic)
+            publish_tick(ros, v, args.detection_topic, args.scan_as_cloud)
             a = answer(inbox, stamp_ns, args.timeout)
             latencies.append((inbox.status_at[stamp_ns] - sent) * 1000.0)
             child.stdin.write(json.dumps(a) + "\n")

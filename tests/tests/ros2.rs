@@ -188,6 +188,20 @@ fn the_simulated_robot_finds_the_target_through_ros2_as_lives_search_does() {
     }
 }
 
+/// A robot with a 3D LiDAR publishes `sensor_msgs/PointCloud2` on `points` and no LaserScan:
+/// `lives ros2` cuts each cloud to its planar scan and searches with it. (Not tick for tick
+/// `lives search`: a cloud holds no "no return" readings, so less space is cleared.)
+#[test]
+fn a_robot_with_a_point_cloud_and_no_laser_scan_is_searched_with_through_ros2() {
+    let args = ["--world", "apartment", "--seed", "1", "--planner", "lives"];
+    let (robot, run) = simulated("cloud", 14, &args, "--scan-as-cloud");
+    assert_eq!(robot["result"]["found"], true, "{robot}");
+    assert_eq!(robot["ticks"], run["ticks"], "{run}");
+    assert!(run["received"]["points"].as_u64().unwrap() > 0, "{run}");
+    assert!(run["received"].get("scan").is_none(), "{run}");
+    assert_eq!(run["rejected"], serde_json::json!({}), "{run}");
+}
+
 /// Bad input on the graph — a scan with `angle_increment` 0, ranges and intensities of
 /// different lengths, a NaN odometry pose, a scan in an unknown frame, a `tf` loop, a publisher
 /// whose QoS cannot match — is rejected by name on the status topic, and the search goes on to

@@ -22,7 +22,9 @@ mod publish;
 pub mod wire;
 
 use crate::io::replay::cdr;
-use crate::io::replay::rosbag::{frame, scan_record, EdgeReject, EdgeSource, FrameTree, PoseError, MAX_POSE_AGE_NS};
+use crate::io::replay::rosbag::{
+    self, frame, scan_record, EdgeReject, EdgeSource, FrameTree, PoseError, MAX_CLOUD_TILT_DEG, MAX_POSE_AGE_NS,
+};
 use crate::io::replay::Location;
 use crate::link::robot::encode_planar;
 use crate::run::range::RangeLimits;
@@ -113,7 +115,7 @@ impl Ros2Options {
 }
 
 /// The topics, their types and QoS: `(name, ROS type, QoS)`.
-pub const SUBSCRIBED: [(&str, &str, Qos); 7] = [
+pub const SUBSCRIBED: [(&str, &str, Qos); 8] = [
     ("scan", "sensor_msgs/msg/LaserScan", Qos::Sensor),
     // Odometry is published reliable or best effort: a best-effort reader matches both.
     ("odom", "nav_msgs/msg/Odometry", Qos::Sensor),
@@ -122,6 +124,8 @@ pub const SUBSCRIBED: [(&str, &str, Qos); 7] = [
     ("target", "geometry_msgs/msg/PointStamped", Qos::Reliable(10)),
     ("detections", "vision_msgs/msg/Detection2DArray", Qos::Reliable(10)),
     ("base_blocked", "std_msgs/msg/Bool", Qos::Reliable(10)),
+    // A 3D LiDAR's clouds, cut to planar scans (`rosbag::cut`), while no LaserScan comes.
+    ("points", "sensor_msgs/msg/PointCloud2", Qos::Sensor),
 ];
 
 /// What `lives ros2` publishes: `(name, ROS type, QoS)`.
@@ -141,6 +145,7 @@ const TF_STATIC: usize = 3;
 const TARGET: usize = 4;
 const DETECTIONS: usize = 5;
 const BLOCKED: usize = 6;
+const POINTS: usize = 7;
 
 /// The published topics, in `PUBLISHED`'s order.
 #[derive(Clone, Copy)]
@@ -179,6 +184,8 @@ struct Pending {
     scan: cdr::LaserScan,
     t_ns: u64,
     since: Instant,
+    /// Cut from a point cloud: refused if its frame is tilted.
+    cloud: bool,
 }
 
 /// The robot's ROS 2 graph as a run source.
@@ -371,23 +378,16 @@ impl Ros2Source {
             SCAN => match cdr::decode_laser_scan(buf, wire) {
                 Ok(s) => {
                     self.count("scan");
-                    self.arrived.set(Some(Instant::now()));
-                    let t_ns = stamp(&s.header);
-                    if let Some((name, detail)) = scan_problem(&s) {
-                        self.reject_scan(name, format!("{topic}: {detail}"), t_ns);
-                        return;
-                    }
-                    let laser = s.header.frame_id.clone();
-                    if self.last_scan_ns.get(&laser).is_some_and(|&p| t_ns <= p) {
-                        self.reject_scan(
-                            "scan-stamp-backwards",
-                            format!("{topic}: a scan stamped {} s, not after the one before", t_ns as f64 / 1e9),
-                            t_ns,
-                        );
-                        return;
-                    }
-                    self.last_scan_ns.insert(laser, t_ns);
-                    self.pending.push_back(Pending { scan: s, t_ns, since: Instant::now() });
+                    self.accept_scan(s, &topic, false);
+                }
+                Err(e) => bad(self, e),
+            },
+            POINTS => match rosbag::cut(buf, wire) {
+                // A robot with a LaserScan maps it (often made from these very clouds).
+                Ok(_) if self.received.borrow().contains_key("scan") => self.count("points-superseded"),
+                Ok(s) => {
+                    self.count("points");
+                    self.accept_scan(s, &topic, true);
                 }
                 Err(e) => bad(self, e),
             },
@@ -447,6 +447,27 @@ impl Ros2Source {
         }
     }
 
+    /// A scan (or a cloud's cut) in: checked, then waiting for its pose.
+    fn accept_scan(&mut self, s: cdr::LaserScan, topic: &str, cloud: bool) {
+        self.arrived.set(Some(Instant::now()));
+        let t_ns = stamp(&s.header);
+        if let Some((name, detail)) = scan_problem(&s) {
+            self.reject_scan(name, format!("{topic}: {detail}"), t_ns);
+            return;
+        }
+        let laser = s.header.frame_id.clone();
+        if self.last_scan_ns.get(&laser).is_some_and(|&p| t_ns <= p) {
+            self.reject_scan(
+                "scan-stamp-backwards",
+                format!("{topic}: a scan stamped {} s, not after the one before", t_ns as f64 / 1e9),
+                t_ns,
+            );
+            return;
+        }
+        self.last_scan_ns.insert(laser, t_ns);
+        self.pending.push_back(Pending { scan: s, t_ns, since: Instant::now(), cloud });
+    }
+
     /// An edge of the frame tree: a moving one's sample at `t_ns`, or a fixed one (`None`). The
     /// tree holds at most [`MAX_FRAMES`] frames and [`KEEP_NS`] of samples per moving edge.
     fn add_edge(
@@ -498,6 +519,11 @@ impl Ros2Source {
                 continue;
             }
             match self.tree.resolve_at(&laser, p.t_ns) {
+                Ok((pose, _, depth)) if depth > 0 && p.cloud && rosbag::tilted(&pose) => self.reject_scan(
+                    "cloud-tilted",
+                    format!("a point cloud in frame `{laser}`, tilted more than {MAX_CLOUD_TILT_DEG}° from level (scan at {at} s)"),
+                    p.t_ns,
+                ),
                 Ok((pose, root, depth)) if depth > 0 => {
                     let r = scan_record(&p.scan, &pose, p.t_ns, Location::Offset(0));
                     let Some(pose2) = Pose2::from_f64(r.pose[0], r.pose[1], r.pose[2]) else {

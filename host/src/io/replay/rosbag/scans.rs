@@ -245,7 +245,7 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
 }
 
 /// Whether a frame's z axis is farther than [`MAX_CLOUD_TILT_DEG`] from the vertical (up or down).
-fn tilted(pose: &Iso) -> bool {
+pub(crate) fn tilted(pose: &Iso) -> bool {
     pose.rotate([0.0, 0.0, 1.0])[2].abs() < MAX_CLOUD_TILT_DEG.to_radians().cos()
 }
 
