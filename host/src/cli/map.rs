@@ -43,15 +43,7 @@ pub enum MapCmd {
 }
 
 fn parse_xy(s: &str) -> Result<[f64; 2], String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("--grid-origin {s}: expected X,Y in metres"))?;
-    match v[..] {
-        [x, y] if x.is_finite() && y.is_finite() => Ok([x, y]),
-        _ => Err(format!("--grid-origin {s}: expected two finite numbers X,Y")),
-    }
+    host::overrides::finite_numbers(s).ok_or_else(|| format!("--grid-origin {s}: expected two finite numbers X,Y in metres"))
 }
 
 pub fn run(cmd: MapCmd) -> Result<ExitCode, String> {

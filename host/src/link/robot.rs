@@ -668,9 +668,8 @@ pub fn parse_lidar(s: &str) -> Result<LidarSource, String> {
 /// `--origin X,Y` (metres, finite).
 pub fn parse_origin(s: &str) -> Result<[f64; 2], String> {
     let bad = || format!("--origin {s}: expected X,Y in metres, e.g. -20,-25.6");
-    let (x, y) = s.split_once(',').ok_or_else(bad)?;
-    let (x, y): (f64, f64) = (x.trim().parse().map_err(|_| bad())?, y.trim().parse().map_err(|_| bad())?);
-    if !(x.is_finite() && y.is_finite() && x.abs() <= super::adapter::MAX_COORD_M && y.abs() <= super::adapter::MAX_COORD_M) {
+    let [x, y] = crate::overrides::finite_numbers(s).ok_or_else(bad)?;
+    if !(x.abs() <= super::adapter::MAX_COORD_M && y.abs() <= super::adapter::MAX_COORD_M) {
         return Err(bad());
     }
     Ok([x, y])

@@ -19,6 +19,19 @@ mod sim;
 pub use listing::{params_markdown, run_params, ParamsArgs};
 pub use sim::{apply_sim, get_sim, Scale, SimParam, SimValue, SIM_PARAMS};
 
+/// `N` finite numbers separated by commas (`X,Y`, `X,Y,YAW`: a command line's point or pose),
+/// white space around each allowed; `None` for anything else.
+///
+/// ```
+/// assert_eq!(host::overrides::finite_numbers::<2>(" -20, 25.6"), Some([-20.0, 25.6]));
+/// assert_eq!(host::overrides::finite_numbers::<2>("1,2,3"), None);
+/// assert_eq!(host::overrides::finite_numbers::<3>("1,nan,0"), None);
+/// ```
+pub fn finite_numbers<const N: usize>(text: &str) -> Option<[f64; N]> {
+    let v: Vec<f64> = text.split(',').map(|t| t.trim().parse::<f64>().ok().filter(|v| v.is_finite())).collect::<Option<_>>()?;
+    v.try_into().ok()
+}
+
 /// The parameters `--set` accepts, by their `--set` names, in the table's order.
 pub fn settable() -> impl Iterator<Item = (&'static str, &'static ParamInfo)> {
     PARAMS.iter().filter_map(|p| Some((p.set_name?, p)))

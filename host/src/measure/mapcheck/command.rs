@@ -220,15 +220,9 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
 
 /// `X,Y,YAW` (metres, metres, degrees) as `[x, y, yaw in radians]`.
 fn parse_pose(text: &str) -> Result<[f64; 3], String> {
-    let v: Vec<f64> = text
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| format!("--floor-map-pose `{text}`: {e}"))?;
-    match v[..] {
-        [x, y, yaw] if v.iter().all(|v| v.is_finite()) => Ok([x, y, yaw.to_radians()]),
-        _ => Err(format!("--floor-map-pose `{text}`: three finite numbers X,Y,YAW (metres, metres, degrees)")),
-    }
+    let [x, y, yaw] = crate::overrides::finite_numbers(text)
+        .ok_or_else(|| format!("--floor-map-pose `{text}`: three finite numbers X,Y,YAW (metres, metres, degrees)"))?;
+    Ok([x, y, yaw.to_radians()])
 }
 
 /// Draws the occupied cells of a floor map, placed at `pose` (the map frame in the log's frame),
