@@ -588,12 +588,8 @@ fn dense_bag() -> Vec<(&'static str, &'static str, u64, Vec<u8>)> {
             angle_min: -std::f32::consts::PI,
             angle_max: std::f32::consts::PI - inc,
             angle_increment: inc,
-            time_increment: 0.0,
-            scan_time: 0.2,
-            range_min: 0.05,
-            range_max: 20.0,
             ranges,
-            intensities: vec![],
+            ..laser_scan(0, "laser")
         };
         *data = cdr::encode_laser_scan(&scan);
     }
