@@ -708,7 +708,7 @@ fn clouds_beside_laser_scans_are_not_used_and_a_tilted_cloud_is_refused_by_name(
     write_mcap(&path, &cloud_bag(false, pitched), 1 << 16);
     let e = replay::replay(&path, &no_classifier()).err().expect("no scan to replay").to_string();
     assert!(
-        e.ends_with(&format!("no laser scans to replay: none could be placed: {SCANS} point clouds in a frame tilted from level")),
+        e.contains(&format!("no laser scans to replay: none could be placed: {SCANS} point clouds in a frame tilted from level")),
         "{e}"
     );
 }
@@ -841,6 +841,39 @@ fn a_bag_is_scored_against_a_floor_map_on_the_walls_its_viewpoints_see() {
     assert_eq!(r3.map.phantom_cells, r3.map.occupied_cells);
     let e = host::measure::mapcheck::check_log(&bag, &floor_args(&bag, &dir.join("floor.yaml"), Some("1,nan,0"))).err().unwrap();
     assert!(e.contains("three finite numbers"), "{e}");
+}
+
+/// The test bag with its odometry's child frame renamed (`base_footprint`), so that no transform
+/// joins the odometry's tree to the laser's (`base_link` → `laser`); or (`None`) without odometry.
+fn bag_with_odometry_child(child: Option<&str>) -> PathBuf {
+    let mut m = Vec::new();
+    for (topic, ty, t, data) in bag_messages(YAW_90) {
+        match (topic, child) {
+            ("/odom", None) => {}
+            ("/odom", Some(child)) => {
+                let mut o = cdr::decode_odometry(&data, cdr::Wire::Cdr).unwrap();
+                o.child_frame_id = child.into();
+                m.push((topic, ty, t, cdr::encode_odometry(&o)));
+            }
+            _ => m.push((topic, ty, t, data)),
+        }
+    }
+    let path = tmp(&format!("odometry-child-{}.mcap", child.unwrap_or("none")));
+    write_mcap(&path, &m, 4096);
+    path
+}
+
+#[test]
+fn scans_placed_by_fixed_transforms_alone_are_refused_when_odometry_moves_another_tree() {
+    // Before: all 30 scans drawn at the mount's offset (0.5, 0.2) from a made-up origin, silently.
+    let e = replay::replay(&bag_with_odometry_child(Some("base_footprint")), &no_classifier()).err().expect("nothing placed").to_string();
+    assert!(e.contains(&format!("none could be placed: {SCANS} whose frame no odometry or transform places")), "{e}");
+    assert!(e.contains("only fixed transforms place it (in `base_link`)") && e.contains("odom → base_footprint"), "{e}");
+    // A bag in which nothing moves is a sensor that stood still: placed, and said so.
+    let run = replay::replay(&bag_with_odometry_child(None), &no_classifier()).unwrap();
+    assert_eq!(run.report.scans_used, SCANS);
+    assert_eq!(run.report.trajectory_bounds, [[0.5, 0.2], [0.5, 0.2]]);
+    assert!(run.report.warnings.iter().any(|w| w.contains("a sensor that stood still")), "{:?}", run.report.warnings);
 }
 
 #[test]

@@ -380,7 +380,7 @@ pub fn replay(path: &Path, opts: &ReplayOptions) -> Result<ReplayRun, ReplayErro
 /// Why a log gave no scan to replay: what became of the ones it had.
 fn unplaced_scans(log: &LogData) -> String {
     let counts = [
-        (log.no_pose, "in a frame no transform places"),
+        (log.no_pose, "whose frame no odometry or transform places"),
         (log.no_odometry_yet, "stamped before the first odometry"),
         (log.stale_pose, "with no odometry within 0.5 s"),
         (log.scan_stamp_backwards, "stamped before the scan before them"),
@@ -389,8 +389,10 @@ fn unplaced_scans(log: &LogData) -> String {
     let said: Vec<String> = counts.iter().filter(|(n, _)| *n > 0).map(|(n, what)| format!("{n} {what}")).collect();
     if said.is_empty() {
         "it has none (FLASER or ROBOTLASER1 lines; LaserScan or PointCloud2 messages; VLP-16 packets)".into()
-    } else {
+    } else if log.warnings.is_empty() {
         format!("none could be placed: {}", said.join(", "))
+    } else {
+        format!("none could be placed: {} ({})", said.join(", "), log.warnings.join("; "))
     }
 }
 

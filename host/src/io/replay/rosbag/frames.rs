@@ -226,10 +226,22 @@ impl FrameTree {
         Some(e.topic.clone().unwrap_or_else(|| "tf".to_string()))
     }
 
-    #[cfg(feature = "ros2")]
+    /// The frames moving edges move (`odom → base_footprint`), sorted.
+    pub(crate) fn moving_children(&self) -> Vec<String> {
+        let mut v: Vec<String> = self.edges.iter().filter(|(_, e)| !e.fixed).map(|(c, e)| format!("{} → {c}", e.parent)).collect();
+        v.sort();
+        v
+    }
+
+    /// Whether any edge moves (odometry or `tf`).
+    pub(crate) fn has_moving_edges(&self) -> bool {
+        self.edges.values().any(|e| !e.fixed)
+    }
+
     /// The newest stamp of the first moving edge from `f` up (the odometry that places it), if
     /// any: a live source waits for it to reach a scan's stamp before placing the scan (as tf2's
-    /// message filter waits for the transform at the scan's time).
+    /// message filter waits for the transform at the scan's time); replay refuses a scan with
+    /// none in a bag whose odometry moves another tree.
     pub(crate) fn moving_until(&self, f: &str) -> Option<u64> {
         let mut cur = frame(f);
         for _ in 0..=64 {

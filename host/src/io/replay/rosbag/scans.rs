@@ -161,6 +161,15 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
         });
     }
     let use_clouds = scan_topics.is_empty();
+    // A bag in which nothing moves is a sensor that stood still: its scans are placed at their
+    // fixed poses (a warning says so). One whose odometry moves does not place a scan by fixed
+    // transforms alone.
+    let moving = tree.has_moving_edges();
+    if !moving && !decoded.iter().all(|(m, _)| m.kind != MsgType::LaserScan && m.kind != MsgType::PointCloud2) {
+        out.warnings
+            .push("no odometry or moving tf in the bag: every scan is placed at its frame's fixed pose (a sensor that stood still)".into());
+    }
+    let mut unconnected: Vec<String> = Vec::new();
     for (m, d) in &decoded {
         let s = match d {
             Decoded::Scan(s) => s,
@@ -189,7 +198,22 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
                 target = child.clone();
             }
         }
+        let fixed_only = tree.moving_until(&target).is_none();
         match tree.resolve_at(&target, t) {
+            // Only fixed transforms place it while odometry moves another tree: drawn at its
+            // mount's offset from a made-up origin, every scan would sit in one place.
+            Ok((_, root, depth)) if depth > 0 && fixed_only && moving => {
+                out.no_pose += 1;
+                if !unconnected.contains(&target) {
+                    out.warnings.push(format!(
+                        "scans in frame `{target}` (topic {}) were not used: only fixed transforms place it (in `{root}`), and the \
+                         odometry moves frames not connected to it ({}); a transform between the two trees is missing",
+                        m.topic,
+                        tree.moving_children().join(", ")
+                    ));
+                    unconnected.push(target.clone());
+                }
+            }
             Ok((pose, _, depth)) if depth > 0 && m.kind == MsgType::PointCloud2 && tilted(&pose) => out.tilted_cloud += 1,
             Ok((pose, _root, depth)) if depth > 0 => out.scans.push(scan_record(s, &pose, m.t_ns, m.at)),
             Ok(_) | Err(PoseError::NoPose) => out.no_pose += 1,
