@@ -478,6 +478,14 @@ fn write_mcap(path: &Path, messages: &[(&str, &str, u64, Vec<u8>)], chunk_size: 
     write_mcap_with(path, messages, opts);
 }
 
+/// `messages` written to an MCAP bag named `name` (64 kB chunks) and replayed without a
+/// classifier.
+fn replayed(name: &str, messages: &[(&str, &str, u64, Vec<u8>)]) -> ReplayRun {
+    let path = tmp(name);
+    write_mcap(&path, messages, 1 << 16);
+    replay::replay(&path, &no_classifier()).unwrap()
+}
+
 /// `messages` (topic, type, time, CDR bytes) written with `opts`, one channel per topic.
 fn write_mcap_with(path: &Path, messages: &[(&str, &str, u64, Vec<u8>)], opts: mcap::WriteOptions) {
     let mut w = opts.create(std::io::BufWriter::new(std::fs::File::create(path).unwrap())).unwrap();
@@ -598,9 +606,7 @@ fn dense_bag() -> Vec<(&'static str, &'static str, u64, Vec<u8>)> {
 
 #[test]
 fn a_scanner_denser_than_the_core_takes_is_combined_and_keeps_a_post_one_beam_wide() {
-    let path = tmp("dense.mcap");
-    write_mcap(&path, &dense_bag(), 1 << 16);
-    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let run = replayed("dense.mcap", &dense_bag());
     let r = &run.report;
     assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (SCANS, SCANS, 0), "{r:?}");
     assert_eq!(r.beams_combined, [SCANS, 3], "2 880 beams, 3 to one");
@@ -634,9 +640,7 @@ fn odometry_that_tf_also_carries_is_not_merged_with_it() {
         let tf = TransformStamped { header, child_frame_id: o.child_frame_id.clone(), transform: o.pose };
         m.push(("/tf", "tf2_msgs/msg/TFMessage", t - 50_000_000, cdr::encode_tf_message(&[tf])));
     }
-    let path = tmp("odom-and-tf.mcap");
-    write_mcap(&path, &m, 4096);
-    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let run = replayed("odom-and-tf.mcap", &m);
     let r = &run.report;
     assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (SCANS, SCANS, 0), "{r:?}");
     assert_eq!(r.trajectory_bounds, [[1.5, 2.2], [1.5, 2.2]], "every scan at tf's pose, none at the wheels' (1.9, 2.2)");
@@ -677,9 +681,7 @@ fn cloud_bag(keep_scans: bool, mount_rotation: [f64; 4]) -> Vec<(&'static str, &
 
 #[test]
 fn a_bag_of_point_clouds_replays_as_their_planar_cuts() {
-    let path = tmp("clouds.mcap");
-    write_mcap(&path, &cloud_bag(false, YAW_90), 1 << 16);
-    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let run = replayed("clouds.mcap", &cloud_bag(false, YAW_90));
     let r = &run.report;
     assert_eq!((r.scans_read, r.scans_used, r.scans_rejected), (SCANS, SCANS, 0), "{r:?}");
     assert!(r.warnings.iter().any(|w| w.contains("point clouds (/points) cut to planar scans")), "{:?}", r.warnings);
@@ -691,9 +693,7 @@ fn a_bag_of_point_clouds_replays_as_their_planar_cuts() {
 
 #[test]
 fn clouds_beside_laser_scans_are_not_used_and_a_tilted_cloud_is_refused_by_name() {
-    let path = tmp("clouds-and-scans.mcap");
-    write_mcap(&path, &cloud_bag(true, YAW_90), 1 << 16);
-    let both = replay::replay(&path, &no_classifier()).unwrap();
+    let both = replayed("clouds-and-scans.mcap", &cloud_bag(true, YAW_90));
     let r = &both.report;
     assert_eq!((r.scans_read, r.scans_used), (SCANS, SCANS), "the LaserScans only: {r:?}");
     assert!(

@@ -226,4 +226,42 @@ mod tests {
         assert_eq!(s.ranges.iter().filter(|r| r.is_finite()).count(), 120);
         assert!(s.ranges.iter().all(|&r| r.is_nan() || (r - 4.0).abs() < 1e-4 || r == 1.5));
     }
+
+    #[test]
+    fn a_ros1_cloud_cuts_as_its_cdr_twin_does() {
+        // ROS 1's serialisation (a ROS 1 bag's `velodyne_points`): no encapsulation, no
+        // alignment, a `seq` in the header, strings without NUL.
+        let pts = [[3.0f32, 0.0, 0.05], [0.0, 5.0, 0.1], [0.0, 4.0, 1.0]];
+        let mut b = Vec::new();
+        let u32s = |b: &mut Vec<u8>, v: u32| b.extend(v.to_le_bytes());
+        let text = |b: &mut Vec<u8>, t: &str| {
+            b.extend((t.len() as u32).to_le_bytes());
+            b.extend(t.as_bytes());
+        };
+        for v in [7, 5, 0] {
+            u32s(&mut b, v); // seq, stamp
+        }
+        text(&mut b, "velodyne");
+        for v in [1, pts.len() as u32, 3] {
+            u32s(&mut b, v); // height, width, fields
+        }
+        for (k, name) in ["x", "y", "z"].iter().enumerate() {
+            text(&mut b, name);
+            u32s(&mut b, 4 * k as u32);
+            b.push(FLOAT32);
+            u32s(&mut b, 1);
+        }
+        b.push(0);
+        for v in [12, 12 * pts.len() as u32, 12 * pts.len() as u32] {
+            u32s(&mut b, v); // point_step, row_step, data's length
+        }
+        b.extend(pts.iter().flatten().flat_map(|v| v.to_le_bytes()));
+        b.push(1);
+        let ros1 = cut(&b, Wire::Ros1).unwrap();
+        let cdr = cut(&encode_xyz_cloud(&head(), &pts), Wire::Cdr).unwrap();
+        assert_eq!(ros1.header, cdr.header);
+        assert_eq!(ros1.ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>(), cdr.ranges.iter().map(|r| r.to_bits()).collect::<Vec<_>>());
+        assert_eq!(ros1.ranges.iter().filter(|r| r.is_finite()).count(), 2, "the point 14° up is not in the cut");
+        assert!(cut(&b[..b.len() - 1], Wire::Ros1).is_err());
+    }
 }
