@@ -46,7 +46,8 @@ enum Cmd {
     /// List the controller parameters `--set` accepts, with their defaults.
     Params(host::overrides::ParamsArgs),
     /// Replay a recorded log through the controller (no base to move): CARMEN logs (FLASER,
-    /// ROBOTLASER1, ODOM; plain or gzip), ROS 2 bags (MCAP or sqlite3), ROS 1 bags and VLP-16
+    /// ROBOTLASER1, ODOM; plain or gzip), ROS 2 bags (MCAP or sqlite3, or zstd-compressed files)
+    /// and ROS 1 bags with LaserScan or a 3D LiDAR's PointCloud2 (cut to a plane), and VLP-16
     /// captures (docs/replay.md).
     Replay(host::io::replay::ReplayArgs),
     /// Score a LiDAR map against a reference: walls recovered, phantom walls, free-space leak

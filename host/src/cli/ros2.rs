@@ -10,7 +10,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 /// Joins a ROS 2 graph over DDS (no ROS installation) and searches with the robot on it:
-/// subscribes to `scan`, `odom`, `tf`, `tf_static`, `target`, `detections` and `base_blocked`;
+/// subscribes to `scan` (or a 3D LiDAR's `points`), `odom`, `tf`, `tf_static`, `target`, `detections` and `base_blocked`;
 /// publishes `goal_pose`, `plan`, `lives/status`, `lives/lidar_map`, `lives/camera_map` and
 /// `lives/markers` (docs/ros2.md). The domain is `ROS_DOMAIN_ID`; `ROS_LOCALHOST_ONLY=1` or
 /// `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST` keep it on this machine.

@@ -6,8 +6,8 @@ use std::path::PathBuf;
 /// `lives replay FILE` arguments.
 #[derive(clap::Args, Debug)]
 pub struct ReplayArgs {
-    /// The log: a CARMEN log (plain or .gz), an MCAP or sqlite3 (.db3) ROS 2 bag, a ROS 1 bag, a VLP-16
-    /// capture, or a bag directory.
+    /// The log: a CARMEN log (plain or .gz), an MCAP or sqlite3 (.db3) ROS 2 bag (or either
+    /// compressed with zstd), a ROS 1 bag, a VLP-16 capture, or a bag directory.
     pub file: PathBuf,
     /// Write a picture of the maps, labels, trajectory and goals here.
     #[arg(long)]
