@@ -379,10 +379,11 @@ pub fn replay(path: &Path, opts: &ReplayOptions) -> Result<ReplayRun, ReplayErro
 
 /// Why a log gave no scan to replay: what became of the ones it had.
 fn unplaced_scans(log: &LogData) -> String {
+    let stale = format!("with no odometry within {} s", rosbag::MAX_POSE_AGE_NS as f64 / 1e9);
     let counts = [
         (log.no_pose, "whose frame no odometry or transform places"),
         (log.no_odometry_yet, "stamped before the first odometry"),
-        (log.stale_pose, "with no odometry within 0.5 s"),
+        (log.stale_pose, stale.as_str()),
         (log.scan_stamp_backwards, "stamped before the scan before them"),
         (log.tilted_cloud, "point clouds in a frame tilted from level"),
     ];

@@ -382,9 +382,9 @@ impl Ros2Source {
                 }
                 Err(e) => bad(self, e),
             },
+            // A robot with a LaserScan maps it (often made from these very clouds): not cut.
+            POINTS if self.received.borrow().contains_key("scan") => self.count("points-superseded"),
             POINTS => match rosbag::cut(buf, wire) {
-                // A robot with a LaserScan maps it (often made from these very clouds).
-                Ok(_) if self.received.borrow().contains_key("scan") => self.count("points-superseded"),
                 Ok(s) => {
                     self.count("points");
                     self.accept_scan(s, &topic, true);

@@ -165,7 +165,8 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
     // fixed poses (a warning says so). One whose odometry moves does not place a scan by fixed
     // transforms alone.
     let moving = tree.has_moving_edges();
-    if !moving && !decoded.iter().all(|(m, _)| m.kind != MsgType::LaserScan && m.kind != MsgType::PointCloud2) {
+    let has_scans = !scan_topics.is_empty() || !cloud_topics.is_empty();
+    if !moving && has_scans {
         out.warnings
             .push("no odometry or moving tf in the bag: every scan is placed at its frame's fixed pose (a sensor that stood still)".into());
     }
