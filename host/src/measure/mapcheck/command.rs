@@ -120,7 +120,7 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
     let log = replay::read_log(file).map_err(|e| e.to_string())?;
     let read_s = t0.elapsed().as_secs_f64();
     let log_poses: Vec<TimedPose> = log.scans.iter().map(|s| TimedPose { t_s: s.t_s, pose: s.pose }).collect();
-    let own = (other.is_none()).then(|| log.scans.clone());
+    let own_scans = if other.is_none() { log.scans.clone() } else { Vec::new() };
     let viewpoints: Vec<[f64; 2]> = drawable(&log.scans).iter().map(|s| [s.pose[0], s.pose[1]]).collect();
     let run = replay::replay_log(log, &opts, t0, read_s).map_err(|e| e.to_string())?;
     let clean = run.bad_records.total == 0 && run.error.is_none();
@@ -165,13 +165,18 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
             ("other-log", Some(other.file.display().to_string()), Some(a))
         }
         (None, _) => {
-            let own = own.unwrap_or_default();
-            project_scans(&mut reference, &drawable(&own), &[0.0, 0.0, 0.0], origin, min_range, range);
+            project_scans(&mut reference, &drawable(&own_scans), &[0.0, 0.0, 0.0], origin, min_range, range);
             ("log-poses", Some(file.display().to_string()), None)
         }
         (Some(_), None) => return Err("--reference needs --align POSES.txt (its poses keyed by this log's time stamps)".into()),
     };
     let (map, classes) = score_cells(&grid, &reference, range, RAYS);
+    let own_rays = (kind != "other-log").then(|| {
+        let rays = own_rays_map(grid.n, &drawable(&own_scans), &[0.0, 0.0, 0.0], origin, min_range, range);
+        let (m, own_classes) = score_cells(&rays, &reference, range, RAYS);
+        let shared = classes.iter().zip(&own_classes).filter(|(a, b)| **a == CellClass::Leak && **b == CellClass::Leak).count();
+        OwnRays { free_cells: m.free_cells, leak_cells: m.leak_cells, free_space_leak: m.free_space_leak, grid_leaks_shared: shared as u64 }
+    });
     if let Some(p) = &args.png {
         write_png(p, grid.n, &classes)?;
     }
@@ -211,6 +216,7 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
         grid_size_m: grid.n as f64 * cell_m(),
         clearing_range_m: range,
         map,
+        own_rays,
         relations,
         replay: Some(run.report),
         search: None,
@@ -303,6 +309,7 @@ pub fn check_search(spec: &SearchSpec, png: Option<&Path>) -> Result<MapcheckRep
         grid_size_m: grid.n as f64 * c,
         clearing_range_m: range,
         map,
+        own_rays: None,
         relations: None,
         replay: None,
         search: Some(run.result),
@@ -384,6 +391,17 @@ pub fn table(r: &MapcheckReport) -> String {
     let _ =
         writeln!(s, "  {:<18} {:>8}   {} of {} occupied cells", "phantom walls", pct(m.phantom_walls), m.phantom_cells, m.occupied_cells);
     let _ = writeln!(s, "  {:<18} {:>8}   {} of {} free cells", "free-space leak", pct(m.free_space_leak), m.leak_cells, m.free_cells);
+    if let Some(o) = &r.own_rays {
+        let _ = writeln!(
+            s,
+            "  {:<18} {:>8}   {} of the {} cells the log's own beams crossed leak against this reference ({} of the grid's leak cells among them)",
+            "the rays' own leak",
+            pct(o.free_space_leak),
+            o.leak_cells,
+            o.free_cells,
+            o.grid_leaks_shared
+        );
+    }
     if let Some(rel) = &r.relations {
         let _ = writeln!(s, "  relations {} ({} relations): translation (m) and rotation (°), mean ± std", rel.file, rel.relations);
         relation_rows(&mut s, "  ", 18, 2, [Some(&rel.log_poses), Some(&rel.controller), rel.align_poses.as_ref()]);

@@ -196,44 +196,52 @@ impl Reference {
             if !(o[0].is_finite() && o[1].is_finite()) {
                 continue;
             }
-            let (x0, y0) = (o[0].floor() as i64, o[1].floor() as i64);
+            let own = (o[0].floor() as i64, o[1].floor() as i64);
             for d in &dirs {
-                let (sx, sy) = (if d[0] > 0.0 { 1 } else { -1 }, if d[1] > 0.0 { 1 } else { -1 });
-                let step = |dc: f64| if dc.abs() > 1e-12 { 1.0 / dc.abs() } else { f64::INFINITY };
-                let first = |oc: f64, c: i64, dc: f64| {
-                    if dc > 1e-12 {
-                        ((c + 1) as f64 - oc) / dc
-                    } else if dc < -1e-12 {
-                        (oc - c as f64) / -dc
-                    } else {
-                        f64::INFINITY
-                    }
-                };
-                let (tdx, tdy) = (step(d[0]), step(d[1]));
-                let (mut tmx, mut tmy) = (first(o[0], x0, d[0]), first(o[1], y0, d[1]));
-                let (mut x, mut y) = (x0, y0);
-                while let Some(i) = self.index(x, y) {
+                walk_ray(*o, *d, len, |x, y| {
+                    let Some(i) = self.index(x, y) else { return false };
                     vis[i] = true;
-                    if self.wall[i] && (x, y) != (x0, y0) {
-                        break;
-                    }
-                    if tmx < tmy {
-                        if tmx > len {
-                            break;
-                        }
-                        x += sx;
-                        tmx += tdx;
-                    } else {
-                        if tmy > len {
-                            break;
-                        }
-                        y += sy;
-                        tmy += tdy;
-                    }
-                }
+                    !self.wall[i] || (x, y) == own
+                });
             }
         }
         vis
+    }
+}
+
+/// Visits the cells a ray from `o` (cell units) in direction `d` (a unit vector) crosses, in
+/// order, out to `len` cells (Amanatides–Woo: every cell it enters, so it cannot slip between two
+/// diagonal cells), while `visit(x, y)` returns true.
+pub fn walk_ray(o: [f64; 2], d: [f64; 2], len: f64, mut visit: impl FnMut(i64, i64) -> bool) {
+    let (x0, y0) = (o[0].floor() as i64, o[1].floor() as i64);
+    let (sx, sy) = (if d[0] > 0.0 { 1 } else { -1 }, if d[1] > 0.0 { 1 } else { -1 });
+    let step = |dc: f64| if dc.abs() > 1e-12 { 1.0 / dc.abs() } else { f64::INFINITY };
+    let first = |oc: f64, c: i64, dc: f64| {
+        if dc > 1e-12 {
+            ((c + 1) as f64 - oc) / dc
+        } else if dc < -1e-12 {
+            (oc - c as f64) / -dc
+        } else {
+            f64::INFINITY
+        }
+    };
+    let (tdx, tdy) = (step(d[0]), step(d[1]));
+    let (mut tmx, mut tmy) = (first(o[0], x0, d[0]), first(o[1], y0, d[1]));
+    let (mut x, mut y) = (x0, y0);
+    while visit(x, y) {
+        if tmx < tmy {
+            if tmx > len {
+                break;
+            }
+            x += sx;
+            tmx += tdx;
+        } else {
+            if tmy > len {
+                break;
+            }
+            y += sy;
+            tmy += tdy;
+        }
     }
 }
 

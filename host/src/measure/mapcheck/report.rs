@@ -3,6 +3,7 @@
 use super::*;
 use crate::io::replay::{self, ReplayReport, ScanRecord};
 use crate::search::SearchResult;
+use firmware::Cell;
 use serde::Serialize;
 
 /// The relations part of the report.
@@ -90,6 +91,9 @@ pub struct MapcheckReport {
     pub clearing_range_m: f64,
     /// The figures.
     pub map: MapScores,
+    /// The log's own rays scored the same way (a log against its own poses or a floor map):
+    /// what the data itself leaks (see [`OwnRays`]).
+    pub own_rays: Option<OwnRays>,
     /// `--relations`.
     pub relations: Option<RelationsReport>,
     /// The replay (logs).
@@ -119,6 +123,76 @@ pub fn project_scans(reference: &mut Reference, scans: &[&ScanRecord], to_grid: 
             reference.mark((p[0] - origin[0]) / c, (p[1] - origin[1]) / c);
         }
     }
+}
+
+/// The leak of the log's own rays: every cell a beam crossed on its way to its return (or out to
+/// the clearing range when it returned nothing) free, every return's cell occupied, no evidence,
+/// scored against the same reference. A free cell of this map that leaks is a cell some beam
+/// crossed although every viewpoint's view of it meets a reference wall first: a beam that passed
+/// where another scan saw a surface (a door, a person, glass, a chair since moved) or, against a
+/// floor map, through a wall the map draws. No grid built from these rays can avoid such a leak
+/// without refusing what its beams saw, so this is the floor the reference sets for the figure.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct OwnRays {
+    /// Cells the rays crossed (free in this map).
+    pub free_cells: u64,
+    /// Of which leak.
+    pub leak_cells: u64,
+    /// `leak_cells / free_cells`.
+    pub free_space_leak: Option<f64>,
+    /// Leak cells of the controller's grid that are leak cells of this map too.
+    pub grid_leaks_shared: u64,
+}
+
+/// The map of the log's own rays ([`OwnRays`]) on an `n`-cell grid, by the core's range rule: a
+/// return below the scan's `range_max` and the clearing range `max_range` ends in an occupied cell
+/// and frees the cells before it; `+inf` and readings at or beyond `range_max` free cells out to
+/// the nearer of `range_max` and `max_range`, a return beyond `max_range` out to `max_range`;
+/// NaN, `-inf` and readings below `min_range` or the scan's `range_min` draw nothing. Unlike the
+/// core's grid, nothing stops a ray: no evidence, every beam counted.
+pub fn own_rays_map(n: i32, scans: &[&ScanRecord], to_grid: &Rigid, origin: [f64; 2], min_range: f64, max_range: f64) -> MapGrid {
+    let c = cell_m();
+    let mut g = MapGrid::new(n);
+    let mut hits = Vec::new();
+    let inside = |x: i64, y: i64| x >= 0 && y >= 0 && x < n as i64 && y < n as i64;
+    for s in scans {
+        let pose = compose(to_grid, &s.pose);
+        if !pose.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        let o = [(pose[0] - origin[0]) / c, (pose[1] - origin[1]) / c];
+        let [scan_min, scan_max] = s.range_limits_m;
+        let scan_max = if scan_max > 0.0 { scan_max } else { f64::INFINITY };
+        for (i, &r) in s.ranges_m.iter().enumerate() {
+            let r = r as f64;
+            if r.is_nan() || r < min_range || r < scan_min {
+                continue;
+            }
+            // As the core: nothing within the scan's range_max clears out to the nearer of it
+            // and the clearing range; a return beyond the clearing range clears to it.
+            let ret = r < scan_max && r < max_range;
+            let a = pose[2] + s.angle_min + i as f64 * s.angle_increment;
+            let d = [a.cos(), a.sin()];
+            let len = if ret { r } else { scan_max.min(max_range) } / c;
+            let end = ((o[0] + len * d[0]).floor() as i64, (o[1] + len * d[1]).floor() as i64);
+            walk_ray(o, d, len, |x, y| {
+                if ret && (x, y) == end {
+                    return false;
+                }
+                if inside(x, y) && g.get(x as i32, y as i32) == Cell::Unknown {
+                    g.set(x as i32, y as i32, Cell::Free);
+                }
+                true
+            });
+            if ret && inside(end.0, end.1) {
+                hits.push(end);
+            }
+        }
+    }
+    for (x, y) in hits {
+        g.set(x as i32, y as i32, Cell::Occupied);
+    }
+    g
 }
 
 /// The scans of a log that draw a reference: finite poses that are not strays

@@ -222,3 +222,58 @@ fn bad_relation_and_pose_lines_name_the_file_and_line() {
     assert!(read_poses(&missing).unwrap_err().starts_with(&format!("{}: ", missing.display())));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+fn scan_at(pose: [f64; 3], ranges: &[f32]) -> crate::io::replay::ScanRecord {
+    crate::io::replay::ScanRecord {
+        t_s: 0.0,
+        pose,
+        angle_min: 0.0,
+        angle_increment: std::f64::consts::FRAC_PI_2,
+        ranges_m: ranges.to_vec(),
+        range_limits_m: [0.1, 2.5],
+        at: crate::io::replay::Location::Line(1),
+    }
+}
+
+#[test]
+fn the_rays_own_map_follows_the_core_range_rule() {
+    // At (1.05, 2.05) m: east a return at 1.0 m, north nothing within range_max (2.5 m), west
+    // NaN, south below range_min. The grid's origin is (0, 0), cells of 0.1 m.
+    let s = scan_at([1.05, 2.05, 0.0], &[1.0, f32::INFINITY, f32::NAN, 0.05]);
+    let g = own_rays_map(N, &[&s], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 3.0);
+    // East: cells 10..=19 of row 20 free, the return's cell (20, 20) occupied.
+    assert!((10..20).all(|x| g.get(x, 20) == Cell::Free));
+    assert_eq!(g.get(20, 20), Cell::Occupied);
+    assert_eq!(g.get(21, 20), Cell::Unknown);
+    // North: free out to range_max, 2.5 m (row 45 is outside the 40-cell grid: up to 39).
+    assert!((21..40).all(|y| g.get(10, y) == Cell::Free));
+    // West and south: nothing.
+    assert_eq!((g.get(9, 20), g.get(10, 19)), (Cell::Unknown, Cell::Unknown));
+    assert_eq!(g.cells.iter().filter(|c| **c != Cell::Unknown).count(), 10 + 1 + 19);
+    // A clearing range of 0.5 m: the return beyond it clears to it and marks nothing, and so
+    // does nothing-within-range_max.
+    let g = own_rays_map(N, &[&s], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 0.5);
+    assert_eq!(g.cells.iter().filter(|c| **c == Cell::Occupied).count(), 0);
+    assert!((10..=15).all(|x| g.get(x, 20) == Cell::Free) && g.get(16, 20) == Cell::Unknown);
+}
+
+#[test]
+fn a_beam_through_a_wall_another_scan_saw_is_the_datas_own_leak() {
+    // A door 2 m wide at column 20: other scans saw it closed (returns on rows 10..=29), this
+    // one sees it open (a return at 2.0 m east, the wall behind). From the viewpoint the closed
+    // door hides the room behind it, so this beam's cells 21..=29 are free in the rays' own map
+    // and, but for the two within 0.2 m of the door, leak: the floor the reference sets.
+    let open = scan_at([1.05, 2.05, 0.0], &[2.0]);
+    let mut reference = Reference::new(N, 3.0);
+    project_scans(&mut reference, &[&open], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 3.0);
+    for y in 10..30 {
+        reference.mark_cell(20, y);
+    }
+    assert!(reference.is_wall(30, 20) && reference.viewpoints.len() == 1);
+    let g = own_rays_map(N, &[&open], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 3.0);
+    assert_eq!((g.get(20, 20), g.get(29, 20), g.get(30, 20)), (Cell::Free, Cell::Free, Cell::Occupied));
+    let s = score(&g, &reference, 3.0, RAYS);
+    // Free: 10..=29 of row 20. Visible: up to the door (20), and within 0.2 m 21 and 22. Leaks:
+    // 23..=29.
+    assert_eq!((s.free_cells, s.leak_cells), (20, 7));
+}
