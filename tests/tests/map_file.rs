@@ -132,8 +132,8 @@ fn an_origin_of_nan_is_an_error() {
 }
 
 #[test]
-fn a_rotated_origin_is_an_error_saying_the_grid_is_axis_aligned() {
-    bad("yaw", &GOOD_YAML.replace("[0.0, 0.0, 0.0]", "[0.0, 0.0, 0.5]"), Some(PGM_2X2), "m.yaml", &["`origin`", "axis-aligned"]);
+fn an_origin_of_infinite_yaw_is_an_error() {
+    bad("inf-yaw", &GOOD_YAML.replace("[0.0, 0.0, 0.0]", "[0.0, 0.0, .inf]"), Some(PGM_2X2), "m.yaml", &[":3: `origin`: yaw is inf"]);
 }
 
 #[test]

@@ -835,6 +835,15 @@ fn a_bag_is_scored_against_a_floor_map_on_the_walls_its_viewpoints_see() {
     let (r2, _) =
         host::measure::mapcheck::check_log(&bag, &floor_args(&bag, &floor_map(&dir, [0.0, 0.0], &shifted), Some("1,0,0"))).unwrap();
     assert_eq!(r2.map, r.map);
+    // The same image with its origin turned 0.3 rad (map_server's yaw), placed back by a pose
+    // turned −0.3 rad: the same figures.
+    let yaml = floor_map(&dir, [0.0, 0.0], &walls);
+    let text = std::fs::read_to_string(&yaml).unwrap().replace("origin: [0, 0, 0.0]", "origin: [0, 0, 0.3]");
+    assert!(text.contains("0.3]"), "{text}");
+    std::fs::write(&yaml, text).unwrap();
+    let pose = format!("0,0,{}", (-0.3f64).to_degrees());
+    let (r4, _) = host::measure::mapcheck::check_log(&bag, &floor_args(&bag, &yaml, Some(&pose))).unwrap();
+    assert_eq!(r4.map, r.map);
     // Without the pose, the map's wall is 1 m off: lost, and the grid's wall a phantom.
     let (r3, _) = host::measure::mapcheck::check_log(&bag, &floor_args(&bag, &floor_map(&dir, [0.0, 0.0], &shifted), None)).unwrap();
     assert_eq!(r3.map.recovered_cells, 0, "{:?}", r3.map);

@@ -97,7 +97,7 @@ pub fn run(cmd: MapCmd) -> Result<ExitCode, String> {
                 say!("{v}");
             } else {
                 say!(
-                    "{}: {} x {} cells at {} m ({:.1} x {:.1} m), origin ({}, {}); {} occupied, {} free, {} unknown; fits the controller's grid ({side:.1} m square from ({}, {}))",
+                    "{}: {} x {} cells at {} m ({:.1} x {:.1} m), origin ({}, {}){}; {} occupied, {} free, {} unknown; fits the controller's grid ({side:.1} m square from ({}, {}))",
                     map.file,
                     map.width,
                     map.height,
@@ -106,6 +106,7 @@ pub fn run(cmd: MapCmd) -> Result<ExitCode, String> {
                     map.height as f64 * map.resolution_m,
                     map.origin[0],
                     map.origin[1],
+                    if map.origin[2] == 0.0 { String::new() } else { format!(" turned {:.2}°", map.origin[2].to_degrees()) },
                     n.occupied,
                     n.free,
                     n.unknown,

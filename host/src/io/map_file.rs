@@ -32,7 +32,9 @@ pub struct PriorMap {
     pub file: String,
     /// The side of a cell, metres.
     pub resolution_m: f64,
-    /// The lower-left corner of the lower-left cell, metres, and the yaw (always 0 here).
+    /// The pose of the lower-left cell's lower-left corner in the map frame: x, y (metres) and
+    /// yaw (radians, counter-clockwise; map_server's `origin`). The image's rows and columns run
+    /// along the axes turned by the yaw ([`PriorMap::world`]).
     pub origin: [f64; 3],
     /// Cells in x (the image's columns).
     pub width: usize,
@@ -198,15 +200,6 @@ impl MapMeta {
             }
             Some(v) => return Err(err("origin", format!("expected [x, y, yaw], found {}", value_text(v)))),
         };
-        if origin[2].abs() > 1e-9 {
-            return Err(err(
-                "origin",
-                format!(
-                    "a yaw of {} rad: the controller's grid is axis-aligned, so a map must be too (rotate the image, and give yaw 0)",
-                    origin[2]
-                ),
-            ));
-        }
         let negate = match get("negate") {
             None => false,
             Some(Value::Bool(b)) => *b,
@@ -369,16 +362,35 @@ impl PriorMap {
 
     /// The cell containing the point `p` (metres), if inside the map.
     pub fn at(&self, p: [f64; 2]) -> Option<Cell3> {
-        let fx = ((p[0] - self.origin[0]) / self.resolution_m).floor();
-        let fy = ((p[1] - self.origin[1]) / self.resolution_m).floor();
-        if !(fx >= 0.0 && fy >= 0.0 && fx < self.width as f64 && fy < self.height as f64) {
-            return None;
-        }
-        self.get(fx as usize, fy as usize)
+        self.cell_at(p).and_then(|(x, y)| self.get(x, y))
     }
 
-    /// Axis-aligned `[min, max]` corners (metres) of the cells that are not unknown, or `None`
-    /// when every cell is unknown.
+    /// The column and row of the cell containing the point `p` (metres), if inside the map.
+    pub fn cell_at(&self, p: [f64; 2]) -> Option<(usize, usize)> {
+        let l = self.local(p);
+        let fx = (l[0] / self.resolution_m).floor();
+        let fy = (l[1] / self.resolution_m).floor();
+        (fx >= 0.0 && fy >= 0.0 && fx < self.width as f64 && fy < self.height as f64).then_some((fx as usize, fy as usize))
+    }
+
+    /// The point `l` of the image's frame (metres from the lower-left cell's lower-left corner,
+    /// along its rows and columns) in the map frame: turned by the origin's yaw, then moved to
+    /// the origin.
+    pub fn world(&self, l: [f64; 2]) -> [f64; 2] {
+        let (s, c) = self.origin[2].sin_cos();
+        [self.origin[0] + c * l[0] - s * l[1], self.origin[1] + s * l[0] + c * l[1]]
+    }
+
+    /// The inverse of [`PriorMap::world`].
+    pub fn local(&self, p: [f64; 2]) -> [f64; 2] {
+        let (s, c) = self.origin[2].sin_cos();
+        let d = [p[0] - self.origin[0], p[1] - self.origin[1]];
+        [c * d[0] + s * d[1], -s * d[0] + c * d[1]]
+    }
+
+    /// Axis-aligned `[min, max]` corners (metres, in the map frame) of the box of cells that are
+    /// not unknown (of its four corners, turned by the origin's yaw), or `None` when every cell
+    /// is unknown.
     pub fn known_bounds(&self) -> Option<[[f64; 2]; 2]> {
         let (mut lo, mut hi) = ([usize::MAX; 2], [0usize; 2]);
         for (i, c) in self.cells.iter().enumerate() {
@@ -390,10 +402,16 @@ impl PriorMap {
         }
         (lo[0] != usize::MAX).then(|| {
             let r = self.resolution_m;
-            [
-                [self.origin[0] + lo[0] as f64 * r, self.origin[1] + lo[1] as f64 * r],
-                [self.origin[0] + hi[0] as f64 * r, self.origin[1] + hi[1] as f64 * r],
-            ]
+            let corners =
+                [[lo[0], lo[1]], [hi[0], lo[1]], [lo[0], hi[1]], [hi[0], hi[1]]].map(|[x, y]| self.world([x as f64 * r, y as f64 * r]));
+            let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for p in corners {
+                for k in 0..2 {
+                    a[k] = a[k].min(p[k]);
+                    b[k] = b[k].max(p[k]);
+                }
+            }
+            [a, b]
         })
     }
 
@@ -423,15 +441,10 @@ impl PriorMap {
         // The map cell under each grid cell's centre (a map coarser than the grid).
         for gy in 0..n {
             let cy = grid_origin[1] + (gy as f64 + 0.5) * cell;
-            let my = ((cy - self.origin[1]) / res).floor();
-            if !(my >= 0.0 && my < self.height as f64) {
-                continue;
-            }
             for gx in 0..n {
                 let cx = grid_origin[0] + (gx as f64 + 0.5) * cell;
-                let mx = ((cx - self.origin[0]) / res).floor();
-                if mx >= 0.0 && mx < self.width as f64 {
-                    grid[gy * n + gx] = self.cells[my as usize * self.width + mx as usize];
+                if let Some((mx, my)) = self.cell_at([cx, cy]) {
+                    grid[gy * n + gx] = self.cells[my * self.width + mx];
                 }
             }
         }
@@ -442,7 +455,7 @@ impl PriorMap {
             if c == Cell3::Unknown {
                 continue;
             }
-            let p = [self.origin[0] + ((i % self.width) as f64 + 0.5) * res, self.origin[1] + ((i / self.width) as f64 + 0.5) * res];
+            let p = self.world([((i % self.width) as f64 + 0.5) * res, ((i / self.width) as f64 + 0.5) * res]);
             let g = [((p[0] - grid_origin[0]) * cells_per_m).floor(), ((p[1] - grid_origin[1]) * cells_per_m).floor()];
             if g.iter().all(|v| *v >= 0.0 && *v < n as f64) {
                 let k = g[1] as usize * n + g[0] as usize;

@@ -46,7 +46,7 @@ fn bad_yaml_is_an_error_naming_the_file_and_the_key() {
         ("image: m.pgm\nresolution: .inf\norigin: [0, 0, 0]\n", "`resolution`: inf"),
         ("image: m.pgm\nresolution: 0.1\norigin: [.nan, 0, 0]\n", "m.yaml:3: `origin`: x is NaN"),
         ("image: m.pgm\nresolution: 0.1\norigin: [0, 0]\n", "`origin`: expected [x, y, yaw]"),
-        ("image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0.3]\n", "axis-aligned"),
+        ("image: m.pgm\nresolution: 0.1\norigin: [0, 0, .inf]\n", "`origin`: yaw is inf"),
         ("image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0]\noccupied_thresh: 1.5\n", "`occupied_thresh`: 1.5 is outside [0, 1]"),
         ("image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0]\nfree_thresh: 0.7\n", "`free_thresh`: 0.7 is not below occupied_thresh 0.65"),
         ("image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0]\nmode: raw\n", "`mode`: raw maps"),
@@ -140,6 +140,39 @@ fn resampling_keeps_a_fine_maps_walls_and_spreads_a_coarse_maps_cells() {
     let coarse = map_of("image: m.pgm\nresolution: 0.2\norigin: [0, 0, 0]\n", &pgm(1, 1, &[0])).unwrap();
     let g = coarse.to_grid(10.0, 4, [0.0, 0.0]).unwrap();
     assert_eq!(g.iter().filter(|c| **c == Cell3::Occupied).count(), 4);
+}
+
+#[test]
+fn a_rotated_origin_turns_the_image_about_its_lower_left_corner() {
+    // 3 x 1 cells of 0.1 m, the first occupied, yaw 90°: the row runs up the y axis from
+    // (1, 2), so the occupied cell's centre is at (1 - 0.05, 2.05) and the last cell's at
+    // (0.95, 2.25).
+    let m = map_of("image: m.pgm\nresolution: 0.1\norigin: [1.0, 2.0, 1.5707963267948966]\n", &pgm(3, 1, &[0, 254, 254])).unwrap();
+    assert_eq!(m.at([0.95, 2.05]), Some(Cell3::Occupied));
+    assert_eq!(m.at([0.95, 2.25]), Some(Cell3::Free));
+    assert_eq!(m.at([1.05, 2.05]), None, "east of the origin is outside the turned map");
+    assert_eq!(m.cell_at([0.95, 2.15]), Some((1, 0)));
+    let w = m.world(m.local([0.3, -0.7]));
+    assert!((w[0] - 0.3).abs() < 1e-12 && (w[1] + 0.7).abs() < 1e-12);
+    let b = m.known_bounds().unwrap();
+    assert!(
+        (b[0][0] - 0.9).abs() < 1e-9 && (b[1][0] - 1.0).abs() < 1e-9 && (b[0][1] - 2.0).abs() < 1e-9 && (b[1][1] - 2.3).abs() < 1e-9,
+        "{b:?}"
+    );
+    // On a grid of 0.1 m from (0.5, 1.5): the occupied cell is grid cell (4, 5), the free ones
+    // (4, 6) and (4, 7), nothing else.
+    let g = m.to_grid(10.0, 8, [0.5, 1.5]).unwrap();
+    let at = |x: usize, y: usize| g[y * 8 + x];
+    assert_eq!((at(4, 5), at(4, 6), at(4, 7)), (Cell3::Occupied, Cell3::Free, Cell3::Free));
+    assert_eq!(g.iter().filter(|c| **c != Cell3::Unknown).count(), 3);
+    // At 30°, a 0.05 m map's wall lands in the grid cells its centres fall in.
+    let m = map_of("image: m.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.5235987755982988]\n", &pgm(20, 1, &[0; 20])).unwrap();
+    let g = m.to_grid(10.0, 16, [-0.4, -0.4]).unwrap();
+    for i in 0..20 {
+        let p = m.world([(i as f64 + 0.5) * 0.05, 0.025]);
+        let (x, y) = (((p[0] + 0.4) * 10.0).floor() as usize, ((p[1] + 0.4) * 10.0).floor() as usize);
+        assert_eq!(g[y * 16 + x], Cell3::Occupied, "map cell {i} at {p:?}");
+    }
 }
 
 #[test]

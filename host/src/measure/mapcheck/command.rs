@@ -247,8 +247,8 @@ pub fn draw_floor_map(reference: &mut Reference, map: &crate::io::map_file::Prio
             }
             for j in 0..k {
                 for i in 0..k {
-                    let u = map.origin[0] + (x as f64 + (i as f64 + 0.5) / k as f64) * res;
-                    let v = map.origin[1] + (y as f64 + (j as f64 + 0.5) / k as f64) * res;
+                    let [u, v] =
+                        map.world([(x as f64 + (i as f64 + 0.5) / k as f64) * res, (y as f64 + (j as f64 + 0.5) / k as f64) * res]);
                     let p = [pose[0] + cos * u - sin * v, pose[1] + sin * u + cos * v];
                     reference.mark((p[0] - origin[0]) / c, (p[1] - origin[1]) / c);
                 }
