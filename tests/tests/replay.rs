@@ -580,6 +580,50 @@ fn an_mcap_bag_replays_with_the_laser_mount_applied() {
     assert!(!run.report.goals.is_empty(), "the controller planned on the bag");
 }
 
+/// One scanner published on two topics (raw and filtered, every second scan filtered): the
+/// topic with more messages is used, once; a second scanner in a frame of its own is used too.
+#[test]
+fn a_scanner_published_on_two_topics_is_integrated_once() {
+    let mut m = bag_messages(YAW_90);
+    for i in (0..SCANS).step_by(2) {
+        let t = 10_000_000_000 + i as u64 * 200_000_000;
+        m.push(("/scan_filtered", "sensor_msgs/msg/LaserScan", t + 1_500_000, cdr::encode_laser_scan(&laser_scan(i, "laser"))));
+    }
+    m.sort_by_key(|(_, _, t, _)| *t);
+    let run = replayed("two-topics.mcap", &m);
+    let r = &run.report;
+    assert_eq!((r.scans_read, r.scans_used, r.rejected.duplicate_topic), (SCANS + SCANS / 2, SCANS, SCANS / 2), "{r:?}");
+    let note = r.warnings.iter().find(|w| w.contains("frame `laser`")).unwrap_or_else(|| panic!("{:?}", r.warnings));
+    assert!(note.contains("topics /scan and /scan_filtered (15)") && note.contains("/scan's 30 messages are used"), "{note}");
+    // The same map as the bag without the second topic.
+    let single = replayed("one-topic.mcap", &bag_messages(YAW_90));
+    assert_same_grid(&run, &single);
+    // A second scanner in its own frame (`rear`, mounted as `laser` is): both are used.
+    let mut m = bag_messages(YAW_90);
+    for i in 0..SCANS {
+        let t = 10_000_000_000 + i as u64 * 200_000_000;
+        m.push(("/scan_rear", "sensor_msgs/msg/LaserScan", t + 1_500_000, cdr::encode_laser_scan(&laser_scan(i, "rear"))));
+    }
+    let rear = cdr::encode_tf_message(&[TransformStamped {
+        header: Header { stamp: Time::default(), frame_id: "base_link".into() },
+        child_frame_id: "rear".into(),
+        transform: Transform { translation: MOUNT, rotation: YAW_90 },
+    }]);
+    m.push(("/tf_static", "tf2_msgs/msg/TFMessage", 10_000_000_000 + 2_500_000, rear));
+    m.sort_by_key(|(_, _, t, _)| *t);
+    let run = replayed("two-scanners.mcap", &m);
+    assert_eq!((run.report.scans_used, run.report.rejected.duplicate_topic), (2 * SCANS, 0), "{:?}", run.report);
+}
+
+/// Two replays' LiDAR grids hold the same cells.
+fn assert_same_grid(a: &ReplayRun, b: &ReplayRun) {
+    let n = firmware::capacity::GRID_CELLS as i32;
+    let differ =
+        (0..n).flat_map(|y| (0..n).map(move |x| (x, y))).filter(|&(x, y)| a.controller.lidar.get(x, y) != b.controller.lidar.get(x, y));
+    assert_eq!(differ.count(), 0);
+    assert!(a.controller.lidar.grid.count(Cell::Occupied) > 0);
+}
+
 /// A dense scanner (2 880 beams over 360°, 0.125° apart: a SICK microScan3, an RPLidar S2, a
 /// 3D LiDAR flattened at that step): every beam reads 4 m but one, a post 1.5 m ahead.
 fn dense_bag() -> Vec<(&'static str, &'static str, u64, Vec<u8>)> {

@@ -26,6 +26,8 @@ pub struct LogData {
     pub scan_stamp_backwards: usize,
     /// Bag point clouds whose frame is tilted (not cut to a level plane).
     pub tilted_cloud: usize,
+    /// Bag scans of a second topic in a frame another topic scans.
+    pub duplicate_topic: usize,
     /// Bag transforms rejected (the scans are placed without them).
     pub transforms_rejected: rosbag::RejectedTransforms,
     /// Time span of everything time-stamped that was read, seconds.
@@ -53,6 +55,7 @@ impl LogData {
             stale_pose: 0,
             scan_stamp_backwards: 0,
             tilted_cloud: 0,
+            duplicate_topic: 0,
             transforms_rejected: rosbag::RejectedTransforms::default(),
             span_s: None,
             sources: Vec::new(),
@@ -218,6 +221,7 @@ pub(super) fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -
         stale_pose: scans.stale_pose,
         scan_stamp_backwards: scans.scan_stamp_backwards,
         tilted_cloud: scans.tilted_cloud,
+        duplicate_topic: scans.duplicate_topic,
         transforms_rejected: scans.transforms_rejected,
         span_s: contents.span_ns.map(|(a, b)| (a as f64 / 1e9, b as f64 / 1e9)),
         sources: contents.topics.iter().map(|(t, ty)| format!("{t} ({ty})")).collect(),
@@ -396,6 +400,7 @@ pub fn read_log(path: &Path) -> Result<LogData, ReplayError> {
                 a.stale_pose += part.stale_pose;
                 a.scan_stamp_backwards += part.scan_stamp_backwards;
                 a.tilted_cloud += part.tilted_cloud;
+                a.duplicate_topic += part.duplicate_topic;
                 let (t, p) = (&mut a.transforms_rejected, part.transforms_rejected);
                 t.odometry_jump += p.odometry_jump;
                 t.tf_loop += p.tf_loop;

@@ -142,6 +142,9 @@ pub struct Rejected {
     /// A bag's point cloud whose frame is tilted more than
     /// [`rosbag::MAX_CLOUD_TILT_DEG`] from level: its cut would be a slanted one.
     pub tilted_cloud: u32,
+    /// A bag scan of a second topic in a frame another topic scans (one scanner published
+    /// twice): the topic with the most messages is used.
+    pub duplicate_topic: u32,
 }
 
 /// Bad records skipped, for the report.
@@ -386,6 +389,7 @@ fn unplaced_scans(log: &LogData) -> String {
         (log.stale_pose, stale.as_str()),
         (log.scan_stamp_backwards, "stamped before the scan before them"),
         (log.tilted_cloud, "point clouds in a frame tilted from level"),
+        (log.duplicate_topic, "of a second topic in a frame another topic scans"),
     ];
     let said: Vec<String> = counts.iter().filter(|(n, _)| *n > 0).map(|(n, what)| format!("{n} {what}")).collect();
     if said.is_empty() {
@@ -531,6 +535,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         stale_pose: log.stale_pose as u32,
         stamp_backwards: log.scan_stamp_backwards as u32,
         tilted_cloud: log.tilted_cloud as u32,
+        duplicate_topic: log.duplicate_topic as u32,
         ..Rejected::default()
     };
     let ctrl = brain.ctrl;
@@ -607,7 +612,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             compact(final_origin[1])
         ));
     }
-    let unplaced = log.no_pose + log.no_odometry_yet + log.stale_pose + log.scan_stamp_backwards + log.tilted_cloud;
+    let unplaced = log.no_pose + log.no_odometry_yet + log.stale_pose + log.scan_stamp_backwards + log.tilted_cloud + log.duplicate_topic;
     let scans_read = log.scans.len() as u32 + unplaced as u32;
     let scans_rejected = rejected.outside_grid
         + rejected.no_pose
@@ -617,7 +622,8 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
         + rejected.no_odometry_yet
         + rejected.stale_pose
         + rejected.stamp_backwards
-        + rejected.tilted_cloud;
+        + rejected.tilted_cloud
+        + rejected.duplicate_topic;
     let report = ReplayReport {
         file: log.file.display().to_string(),
         format: log.format,

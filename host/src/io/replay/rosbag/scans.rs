@@ -21,6 +21,9 @@ pub struct BagScans {
     pub scan_stamp_backwards: usize,
     /// Scans cut from point clouds whose frame is tilted ([`MAX_CLOUD_TILT_DEG`]): not used.
     pub tilted_cloud: usize,
+    /// Scans (or clouds) of a second topic in a frame another topic already scans: not used
+    /// ([`one_topic_per_frame`]).
+    pub duplicate_topic: usize,
     /// Transforms rejected.
     pub transforms_rejected: RejectedTransforms,
     /// Odometry messages.
@@ -161,6 +164,15 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
         });
     }
     let use_clouds = scan_topics.is_empty();
+    let kind = if use_clouds { MsgType::PointCloud2 } else { MsgType::LaserScan };
+    let (dropped_topics, notes) = one_topic_per_frame(decoded.iter().filter(|(m, _)| m.kind == kind).map(|(m, d)| {
+        let header = match d {
+            Decoded::Scan(s) | Decoded::Cloud(s) => Some(frame(&s.header.frame_id)),
+            _ => None,
+        };
+        (m.topic.as_str(), header.unwrap_or_default())
+    }));
+    out.warnings.extend(notes);
     // A bag in which nothing moves is a sensor that stood still: its scans are placed at their
     // fixed poses (a warning says so). One whose odometry moves does not place a scan by fixed
     // transforms alone.
@@ -177,6 +189,10 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
             Decoded::Cloud(s) if use_clouds => s,
             _ => continue,
         };
+        if dropped_topics.contains(m.topic.as_str()) {
+            out.duplicate_topic += 1;
+            continue;
+        }
         let laser = frame(&s.header.frame_id);
         let t = stamp_ns(&s.header, m.t_ns);
         if last_stamp.get(&laser).is_some_and(|&prev| t < prev) {
@@ -293,4 +309,35 @@ pub(crate) fn scan_record(s: &cdr::LaserScan, pose: &Iso, t_ns: u64, at: Locatio
         range_limits_m: [s.range_min as f64, s.range_max as f64],
         at,
     }
+}
+
+/// Which scan topics not to use, and a note for each: of several topics whose messages share one
+/// frame (one scanner published twice, e.g. raw and filtered, or at two rates), the one with the
+/// most messages is used (on a tie, the first by name) and the others are not — integrated
+/// together, every return would count twice and the evidence grid would trust the scanner
+/// double. Topics in frames of their own (a robot's front and rear scanners) are all used.
+/// `messages` gives each message's topic and frame.
+pub(crate) fn one_topic_per_frame<'a>(messages: impl Iterator<Item = (&'a str, String)>) -> (BTreeSet<&'a str>, Vec<String>) {
+    let mut per_frame: BTreeMap<String, BTreeMap<&'a str, usize>> = BTreeMap::new();
+    for (topic, frame) in messages {
+        *per_frame.entry(frame).or_default().entry(topic).or_default() += 1;
+    }
+    let (mut dropped, mut notes) = (BTreeSet::new(), Vec::new());
+    for (frame, topics) in &per_frame {
+        if topics.len() < 2 {
+            continue;
+        }
+        // Most messages first, then by name.
+        let mut order: Vec<(&str, usize)> = topics.iter().map(|(t, n)| (*t, *n)).collect();
+        order.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+        let (kept, n) = order[0];
+        let others: Vec<String> = order[1..].iter().map(|(t, k)| format!("{t} ({k})")).collect();
+        dropped.extend(order[1..].iter().map(|(t, _)| *t));
+        notes.push(format!(
+            "topics {kept} and {} all scan in frame `{frame}` (one scanner published twice?): {kept}'s {n} messages are used, \
+             not the others' (integrated together, every return would count twice)",
+            others.join(", ")
+        ));
+    }
+    (dropped, notes)
 }
