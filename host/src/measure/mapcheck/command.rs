@@ -121,7 +121,7 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
     let read_s = t0.elapsed().as_secs_f64();
     let log_poses: Vec<TimedPose> = log.scans.iter().map(|s| TimedPose { t_s: s.t_s, pose: s.pose }).collect();
     let own_scans = if other.is_none() { log.scans.clone() } else { Vec::new() };
-    let viewpoints: Vec<[f64; 2]> = drawable(&log.scans).iter().map(|s| [s.pose[0], s.pose[1]]).collect();
+    let viewpoints: Vec<([f64; 2], f64)> = drawable(&log.scans).iter().map(|s| ([s.pose[0], s.pose[1]], reach(s))).collect();
     let run = replay::replay_log(log, &opts, t0, read_s).map_err(|e| e.to_string())?;
     let clean = run.bad_records.total == 0 && run.error.is_none();
     let cfg = run.controller.config();
@@ -136,7 +136,8 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
             let map = floor.as_ref().expect("a floor map");
             draw_floor_map(&mut reference, map, &floor_pose, origin);
             let c = cell_m();
-            reference.viewpoints = viewpoints.iter().map(|p| [(p[0] - origin[0]) / c, (p[1] - origin[1]) / c]).collect();
+            reference.viewpoints = viewpoints.iter().map(|(p, _)| [(p[0] - origin[0]) / c, (p[1] - origin[1]) / c]).collect();
+            reference.reach_m = viewpoints.iter().map(|(_, r)| *r).collect();
             reference.seen_walls_only = true;
             ("floor-map", Some(map.file.clone()), None)
         }
@@ -357,7 +358,7 @@ pub fn table(r: &MapcheckReport) -> String {
         "log-poses" => "the log's own scans at its own poses".to_string(),
         "other-log" => format!("the scans of {} at its poses", r.reference.file.as_deref().unwrap_or("?")),
         "floor-map" => format!(
-            "the floor map {}: its walls the viewpoints see within the clearing range score walls recovered",
+            "the floor map {}: its walls the viewpoints see (within the clearing range and the scanner's range_max) score walls recovered",
             r.reference.file.as_deref().unwrap_or("?")
         ),
         _ => "the true world's walls and obstacles the run's noise-free rays hit".to_string(),

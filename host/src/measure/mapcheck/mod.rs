@@ -123,6 +123,9 @@ pub struct Reference {
     wall: Vec<bool>,
     /// Viewpoints, cell units in the grid's frame.
     pub viewpoints: Vec<[f64; 2]>,
+    /// How far each viewpoint's scanner reaches, metres (its scan's `range_max`), by index; a
+    /// viewpoint without one reaches the clearing range.
+    pub reach_m: Vec<f64>,
     /// Reference returns that fell beyond the margin (not scored).
     pub beyond: u64,
     /// Score walls recovered on the reference walls a viewpoint sees only (a floor map holds
@@ -135,7 +138,16 @@ impl Reference {
     pub fn new(n: i32, range_m: f64) -> Self {
         let margin = (range_m.max(0.0) / cell_m()).ceil() as i32 + 3;
         let side = n + 2 * margin;
-        Reference { n, margin, side, wall: vec![false; (side * side) as usize], viewpoints: Vec::new(), beyond: 0, seen_walls_only: false }
+        Reference {
+            n,
+            margin,
+            side,
+            wall: vec![false; (side * side) as usize],
+            viewpoints: Vec::new(),
+            reach_m: Vec::new(),
+            beyond: 0,
+            seen_walls_only: false,
+        }
     }
 
     fn index(&self, x: i64, y: i64) -> Option<usize> {
@@ -180,7 +192,7 @@ impl Reference {
     }
 
     /// The cells the viewpoints see: [`RAYS`]-style rays, `rays` of them over 360° from each
-    /// viewpoint out to `range_m`, visiting every cell each crosses (Amanatides–Woo) and stopping
+    /// viewpoint out to the nearer of `range_m` and its reach ([`Reference::reach_m`]), visiting every cell each crosses (Amanatides–Woo) and stopping
     /// after the first reference wall cell. A wall in the viewpoint's own cell does not stop them
     /// (the robot stands there).
     pub fn visible(&self, range_m: f64, rays: usize) -> Vec<bool> {
@@ -192,10 +204,11 @@ impl Reference {
                 [a.cos(), a.sin()]
             })
             .collect();
-        for o in &self.viewpoints {
+        for (k, o) in self.viewpoints.iter().enumerate() {
             if !(o[0].is_finite() && o[1].is_finite()) {
                 continue;
             }
+            let len = self.reach_m.get(k).map_or(len, |r| len.min(r / cell_m()));
             let own = (o[0].floor() as i64, o[1].floor() as i64);
             for d in &dirs {
                 walk_ray(*o, *d, len, |x, y| {

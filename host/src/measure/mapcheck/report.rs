@@ -113,6 +113,7 @@ pub fn project_scans(reference: &mut Reference, scans: &[&ScanRecord], to_grid: 
             continue;
         }
         reference.viewpoints.push([(pose[0] - origin[0]) / c, (pose[1] - origin[1]) / c]);
+        reference.reach_m.push(reach(s));
         for (i, &r) in s.ranges_m.iter().enumerate() {
             let r = r as f64;
             if !(r.is_finite() && r >= min_range && r < max_range) {
@@ -193,6 +194,17 @@ pub fn own_rays_map(n: i32, scans: &[&ScanRecord], to_grid: &Rigid, origin: [f64
         g.set(x as i32, y as i32, Cell::Occupied);
     }
     g
+}
+
+/// How far a scan's scanner sees: its `range_max` (a limit that is not a positive number: no
+/// limit).
+pub fn reach(s: &ScanRecord) -> f64 {
+    let m = s.range_limits_m[1];
+    if m > 0.0 {
+        m
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// The scans of a log that draw a reference: finite poses that are not strays

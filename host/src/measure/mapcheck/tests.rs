@@ -95,6 +95,22 @@ fn free_space_behind_a_wall_leaks() {
     // column 22 lie within 0.2 m of (20, 20); columns 23..=28 leak.
     let s = score(&g, &open, 1.0, RAYS);
     assert_eq!(s.leak_cells, 6);
+    // The same with the clearing range at 3 m and the viewpoint's scanner reaching 1 m (its
+    // range_max): the nearer of the two.
+    open.reach_m.push(1.0);
+    assert_eq!(score(&g, &open, 3.0, RAYS).leak_cells, 6);
+}
+
+#[test]
+fn a_floor_maps_wall_beyond_the_scanners_reach_is_not_counted_as_seen() {
+    // A floor map's wall at column 20, 9.5 cells from the viewpoint: seen by a scanner that
+    // reaches 3 m, not by one that reaches 0.5 m, whatever the clearing range.
+    let mut r = wall_reference(20);
+    r.seen_walls_only = true;
+    let g = MapGrid::new(N);
+    assert!(score(&g, &r, 3.0, RAYS).reference_wall_cells > 0);
+    r.reach_m.push(0.5);
+    assert_eq!(score(&g, &r, 3.0, RAYS).reference_wall_cells, 0);
 }
 
 #[test]
