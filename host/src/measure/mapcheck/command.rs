@@ -174,9 +174,22 @@ pub fn check_log(file: &Path, args: &MapcheckArgs) -> Result<(MapcheckReport, bo
     let (map, classes) = score_cells(&grid, &reference, range, RAYS);
     let own_rays = (kind != "other-log").then(|| {
         let rays = own_rays_map(grid.n, &drawable(&own_scans), &[0.0, 0.0, 0.0], origin, min_range, range);
-        let (m, own_classes) = score_cells(&rays, &reference, range, RAYS);
+        let (m, own_classes) = score_cells(&rays.grid, &reference, range, RAYS);
         let shared = classes.iter().zip(&own_classes).filter(|(a, b)| **a == CellClass::Leak && **b == CellClass::Leak).count();
-        OwnRays { free_cells: m.free_cells, leak_cells: m.leak_cells, free_space_leak: m.free_space_leak, grid_leaks_shared: shared as u64 }
+        let lost: Vec<usize> = (0..classes.len()).filter(|&i| classes[i] == CellClass::Lost).collect();
+        let through = |i: usize| rays.crossed_scans[i] > rays.hit_scans[i];
+        let seen_through = lost.iter().filter(|&&i| through(i)).count();
+        let n = grid.n as usize;
+        let walls_seen_through = (0..n * n).filter(|&i| reference.is_wall((i % n) as i32, (i / n) as i32) && through(i)).count();
+        OwnRays {
+            free_cells: m.free_cells,
+            leak_cells: m.leak_cells,
+            free_space_leak: m.free_space_leak,
+            grid_leaks_shared: shared as u64,
+            lost_walls: lost.len() as u64,
+            lost_walls_seen_through: seen_through as u64,
+            walls_seen_through: walls_seen_through as u64,
+        }
     });
     if let Some(p) = &args.png {
         write_png(p, grid.n, &classes)?;
@@ -401,6 +414,16 @@ pub fn table(r: &MapcheckReport) -> String {
             o.leak_cells,
             o.free_cells,
             o.grid_leaks_shared
+        );
+        let _ = writeln!(
+            s,
+            "  {:<18} {:>8}   of the {} reference wall cells lost, {} are cells the log's own beams crossed in more scans than they ended in ({} of all {})",
+            "walls seen through",
+            pct(share(o.lost_walls_seen_through, o.lost_walls)),
+            o.lost_walls,
+            o.lost_walls_seen_through,
+            o.walls_seen_through,
+            m.reference_wall_cells
         );
     }
     if let Some(rel) = &r.relations {

@@ -143,6 +143,27 @@ pub struct OwnRays {
     pub free_space_leak: Option<f64>,
     /// Leak cells of the controller's grid that are leak cells of this map too.
     pub grid_leaks_shared: u64,
+    /// Reference walls the grid lost (no occupied cell within 0.2 m).
+    pub lost_walls: u64,
+    /// Of which the log's own beams crossed in more scans than they ended in: a surface that
+    /// was there for a while (a person, a door, a chair since moved) or that beams pass (glass),
+    /// which an occupancy map lets go.
+    pub lost_walls_seen_through: u64,
+    /// For comparison, every reference wall cell inside the grid (lost or not) that the log's
+    /// beams crossed in more scans than they ended in.
+    pub walls_seen_through: u64,
+}
+
+/// The log's own rays ([`own_rays_map`]): the map, and per cell (row-major) the scans whose
+/// returns ended in it and the scans whose beams crossed it without one ending there.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OwnRaysMap {
+    /// Every crossed cell free, every return's cell occupied.
+    pub grid: MapGrid,
+    /// Scans with a return in the cell.
+    pub hit_scans: Vec<u32>,
+    /// Scans whose beams crossed the cell and none ended in it.
+    pub crossed_scans: Vec<u32>,
 }
 
 /// The map of the log's own rays ([`OwnRays`]) on an `n`-cell grid, by the core's range rule: a
@@ -150,13 +171,23 @@ pub struct OwnRays {
 /// and frees the cells before it; `+inf` and readings at or beyond `range_max` free cells out to
 /// the nearer of `range_max` and `max_range`, a return beyond `max_range` out to `max_range`;
 /// NaN, `-inf` and readings below `min_range` or the scan's `range_min` draw nothing. Unlike the
-/// core's grid, nothing stops a ray: no evidence, every beam counted.
-pub fn own_rays_map(n: i32, scans: &[&ScanRecord], to_grid: &Rigid, origin: [f64; 2], min_range: f64, max_range: f64) -> MapGrid {
+/// core's grid, nothing stops a ray: no evidence, every beam counted. Per cell it counts the
+/// scans that hit it and those that crossed it without hitting it (the core's rule: one update
+/// per cell per scan, the hit first).
+pub fn own_rays_map(n: i32, scans: &[&ScanRecord], to_grid: &Rigid, origin: [f64; 2], min_range: f64, max_range: f64) -> OwnRaysMap {
     let c = cell_m();
     let mut g = MapGrid::new(n);
+    let area = (n * n) as usize;
+    let (mut hit_scans, mut crossed_scans) = (vec![0u32; area], vec![0u32; area]);
+    // The last scan (1-based) that hit or crossed each cell.
+    let (mut last_hit, mut last_cross) = (vec![0u32; area], vec![0u32; area]);
     let mut hits = Vec::new();
+    let mut crossed = Vec::new();
     let inside = |x: i64, y: i64| x >= 0 && y >= 0 && x < n as i64 && y < n as i64;
-    for s in scans {
+    let index = |x: i64, y: i64| (y * n as i64 + x) as usize;
+    for (k, s) in scans.iter().enumerate() {
+        let scan = k as u32 + 1;
+        crossed.clear();
         let pose = compose(to_grid, &s.pose);
         if !pose.iter().all(|v| v.is_finite()) {
             continue;
@@ -180,20 +211,37 @@ pub fn own_rays_map(n: i32, scans: &[&ScanRecord], to_grid: &Rigid, origin: [f64
                 if ret && (x, y) == end {
                     return false;
                 }
-                if inside(x, y) && g.get(x as i32, y as i32) == Cell::Unknown {
-                    g.set(x as i32, y as i32, Cell::Free);
+                if inside(x, y) {
+                    if g.get(x as i32, y as i32) == Cell::Unknown {
+                        g.set(x as i32, y as i32, Cell::Free);
+                    }
+                    let i = index(x, y);
+                    if last_cross[i] != scan {
+                        last_cross[i] = scan;
+                        crossed.push(i);
+                    }
                 }
                 true
             });
             if ret && inside(end.0, end.1) {
                 hits.push(end);
+                let i = index(end.0, end.1);
+                if last_hit[i] != scan {
+                    last_hit[i] = scan;
+                    hit_scans[i] += 1;
+                }
+            }
+        }
+        for &i in &crossed {
+            if last_hit[i] != scan {
+                crossed_scans[i] += 1;
             }
         }
     }
     for (x, y) in hits {
         g.set(x as i32, y as i32, Cell::Occupied);
     }
-    g
+    OwnRaysMap { grid: g, hit_scans, crossed_scans }
 }
 
 /// How far a scan's scanner sees: its `range_max` (a limit that is not a positive number: no

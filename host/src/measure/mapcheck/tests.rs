@@ -256,7 +256,7 @@ fn the_rays_own_map_follows_the_core_range_rule() {
     // At (1.05, 2.05) m: east a return at 1.0 m, north nothing within range_max (2.5 m), west
     // NaN, south below range_min. The grid's origin is (0, 0), cells of 0.1 m.
     let s = scan_at([1.05, 2.05, 0.0], &[1.0, f32::INFINITY, f32::NAN, 0.05]);
-    let g = own_rays_map(N, &[&s], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 3.0);
+    let g = own_rays_map(N, &[&s], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 3.0).grid;
     // East: cells 10..=19 of row 20 free, the return's cell (20, 20) occupied.
     assert!((10..20).all(|x| g.get(x, 20) == Cell::Free));
     assert_eq!(g.get(20, 20), Cell::Occupied);
@@ -268,7 +268,7 @@ fn the_rays_own_map_follows_the_core_range_rule() {
     assert_eq!(g.cells.iter().filter(|c| **c != Cell::Unknown).count(), 10 + 1 + 19);
     // A clearing range of 0.5 m: the return beyond it clears to it and marks nothing, and so
     // does nothing-within-range_max.
-    let g = own_rays_map(N, &[&s], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 0.5);
+    let g = own_rays_map(N, &[&s], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 0.5).grid;
     assert_eq!(g.cells.iter().filter(|c| **c == Cell::Occupied).count(), 0);
     assert!((10..=15).all(|x| g.get(x, 20) == Cell::Free) && g.get(16, 20) == Cell::Unknown);
 }
@@ -286,10 +286,30 @@ fn a_beam_through_a_wall_another_scan_saw_is_the_datas_own_leak() {
         reference.mark_cell(20, y);
     }
     assert!(reference.is_wall(30, 20) && reference.viewpoints.len() == 1);
-    let g = own_rays_map(N, &[&open], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 3.0);
+    let g = own_rays_map(N, &[&open], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 3.0).grid;
     assert_eq!((g.get(20, 20), g.get(29, 20), g.get(30, 20)), (Cell::Free, Cell::Free, Cell::Occupied));
     let s = score(&g, &reference, 3.0, RAYS);
     // Free: 10..=29 of row 20. Visible: up to the door (20), and within 0.2 m 21 and 22. Leaks:
     // 23..=29.
     assert_eq!((s.free_cells, s.leak_cells), (20, 7));
+}
+
+#[test]
+fn the_rays_own_map_counts_the_scans_that_hit_and_that_crossed_a_cell() {
+    // A door at (20, 20): closed in one scan (its return at 1.0 m), open in two (returns at
+    // 2.0 m, the wall behind). One beam of each scan, one update per cell per scan.
+    let closed = scan_at([1.05, 2.05, 0.0], &[1.0]);
+    let open = scan_at([1.05, 2.05, 0.0], &[2.0]);
+    let m = own_rays_map(N, &[&closed, &open, &open], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 3.0);
+    let at = |x: usize, y: usize| (m.hit_scans[y * N as usize + x], m.crossed_scans[y * N as usize + x]);
+    assert_eq!(at(20, 20), (1, 2), "the door: hit once, crossed twice (seen through)");
+    assert_eq!(at(30, 20), (2, 0), "the wall behind it");
+    assert_eq!(at(15, 20), (0, 3), "the floor before it");
+    assert_eq!(at(25, 20), (0, 2));
+    // Two beams of one scan (east and north, 1 m each) both leave the robot's cell (10, 20):
+    // it counts once per scan; each beam's end is hit once per scan.
+    let two = scan_at([1.05, 2.05, 0.0], &[1.0, 1.0]);
+    let m = own_rays_map(N, &[&two, &two], &[0.0, 0.0, 0.0], [0.0, 0.0], 0.1, 3.0);
+    let at = |x: usize, y: usize| (m.hit_scans[y * N as usize + x], m.crossed_scans[y * N as usize + x]);
+    assert_eq!((at(10, 20), at(20, 20), at(10, 30)), ((0, 2), (2, 0), (2, 0)));
 }
