@@ -106,7 +106,7 @@ pub fn run(cmd: MapCmd) -> Result<ExitCode, String> {
                     map.height as f64 * map.resolution_m,
                     map.origin[0],
                     map.origin[1],
-                    if map.origin[2] == 0.0 { String::new() } else { format!(" turned {:.2}°", map.origin[2].to_degrees()) },
+                    if map.origin[2] == 0.0 { String::new() } else { format!(" turned {:.2}°", map.origin[2].sin().atan2(map.origin[2].cos()).to_degrees()) },
                     n.occupied,
                     n.free,
                     n.unknown,
