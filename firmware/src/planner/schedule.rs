@@ -164,6 +164,18 @@ pub struct ScheduleStats {
     pub pursued: bool,
 }
 
+/// Whether task `t` looks the way the goal being pursued looks (`goal_heading`), as a task that
+/// continues it by place must: a frontier task's view is one of four headings from a viewpoint
+/// at the frontier, and a frontier at the goal's viewpoint whose best view now faces another way
+/// looks at something else (what the goal looked at has been seen); it is a new choice, not the
+/// goal's own frontier (within half a quarter turn). Other kinds, or no heading known: always.
+fn looks_alike(t: &Task, goal_heading: Option<BinaryAngle>) -> bool {
+    match (t.kind, goal_heading) {
+        (TaskKind::LidarFrontier | TaskKind::VisualFrontier, Some(h)) => quarter_turns(t.heading, h) <= 4,
+        _ => true,
+    }
+}
+
 fn quarter_turns(a: BinaryAngle, b: BinaryAngle) -> u32 {
     // |a − b| in units of a quarter turn, rounded up to 1/8 of one.
     let d = (a - b).unsigned_abs() as u64; // 2^32 = a full turn
@@ -393,7 +405,7 @@ impl Planner {
         };
         let current_task = match pursued {
             Some((a, kind, room)) => {
-                let (i, w) = self.find_task(a, kind, room, current.map(|(c, _)| c));
+                let (i, w) = self.find_task(a, kind, room, current);
                 work += w;
                 i
             }
@@ -470,14 +482,16 @@ impl Planner {
     /// the work: a room's frontier task is the room's, whichever of its frontiers is best now, if
     /// the goal being pursued lies on the way to it ([`Planner::on_the_way`]); otherwise a
     /// frontier shrinks and its anchor moves as the robot nears it, so the task of the same kind
-    /// whose anchor is nearest the last one (or whose viewpoint is `goal_cell`) within
-    /// [`TASK_MATCH_CELLS`].
-    fn find_task(&self, a: (i32, i32), kind: TaskKind, room: Option<u8>, goal_cell: Option<(i32, i32)>) -> (Option<usize>, u32) {
-        let goal_cell = goal_cell.unwrap_or(a);
+    /// whose anchor is nearest the last one (or whose viewpoint is the goal's) within
+    /// [`TASK_MATCH_CELLS`] and, for a frontier, that looks the way the goal looks
+    /// ([`looks_alike`]).
+    fn find_task(&self, a: (i32, i32), kind: TaskKind, room: Option<u8>, goal: Option<((i32, i32), BinaryAngle)>) -> (Option<usize>, u32) {
+        let goal_heading = goal.map(|(_, h)| h);
+        let goal_cell = goal.map_or(a, |(c, _)| c);
         let frontier = |k: TaskKind| matches!(k, TaskKind::LidarFrontier | TaskKind::VisualFrontier);
         let mut work = 0;
         if let Some(i) = self.tasks.iter().position(|t| room.is_some() && t.room == room && frontier(t.kind) && frontier(kind)) {
-            let (on_the_way, w) = self.on_the_way(goal_cell, &self.tasks[i]);
+            let (on_the_way, w) = self.continues(goal_cell, goal_heading, &self.tasks[i]);
             work += w;
             if on_the_way {
                 return (Some(i), work);
@@ -487,7 +501,7 @@ impl Planner {
             .tasks
             .iter()
             .enumerate()
-            .filter(|(_, t)| t.kind == kind)
+            .filter(|(_, t)| t.kind == kind && looks_alike(t, goal_heading))
             .map(|(i, t)| {
                 (
                     ((t.anchor.0 - a.0).pow(2) + (t.anchor.1 - a.1).pow(2))
@@ -503,8 +517,9 @@ impl Planner {
 
     /// The index in the task pool of the pursued goal's own frontier when the best frontier of
     /// the goal's region (`best_in_room`, pool from `n_props` on) does not lie on the way through
-    /// the goal: the pool's frontier of the goal's kind whose anchor is nearest the goal's last
-    /// anchor (or whose viewpoint is the goal's), within [`TASK_MATCH_CELLS`]; `None` if the
+    /// the goal: the pool's frontier of the goal's kind that looks the way the goal looks
+    /// ([`looks_alike`]) whose anchor is nearest the goal's last anchor (or whose viewpoint is
+    /// the goal's), within [`TASK_MATCH_CELLS`]; `None` if the
     /// region's best is on the way, is that frontier, or there is none. Returns the work.
     fn pursued_frontier(
         &self,
@@ -513,8 +528,8 @@ impl Planner {
         best_in_room: &[i64; crate::capacity::MAX_ROOMS + 1],
     ) -> (Option<usize>, u32) {
         let frontier = |k: TaskKind| matches!(k, TaskKind::LidarFrontier | TaskKind::VisualFrontier);
-        let (goal, a, kind, room) = match (current, self.last_goal, self.last_goal_room) {
-            (Some((c, _)), Some((cell, anchor, kind)), Some(room)) if c == cell && frontier(kind) => (cell, anchor, kind, room),
+        let (goal, heading, a, kind, room) = match (current, self.last_goal, self.last_goal_room) {
+            (Some((c, h)), Some((cell, anchor, kind)), Some(room)) if c == cell && frontier(kind) => (cell, h, anchor, kind, room),
             _ => return (None, 0),
         };
         let pool = &self.task_pool[n_props..];
@@ -523,7 +538,7 @@ impl Planner {
         else {
             return (None, work);
         };
-        let (on_the_way, w) = self.on_the_way(goal, &pool[best]);
+        let (on_the_way, w) = self.continues(goal, Some(heading), &pool[best]);
         work += w;
         if on_the_way {
             return (None, work);
@@ -532,7 +547,7 @@ impl Planner {
         let own = pool
             .iter()
             .enumerate()
-            .filter(|(_, t)| t.kind == kind)
+            .filter(|(_, t)| t.kind == kind && looks_alike(t, Some(heading)))
             .map(|(i, t)| {
                 (((t.anchor.0 - a.0).pow(2) + (t.anchor.1 - a.1).pow(2)).min((t.cell.0 - goal.0).pow(2) + (t.cell.1 - goal.1).pow(2)), i)
             })
@@ -540,6 +555,19 @@ impl Planner {
             .min()
             .map(|(_, i)| i);
         (own.filter(|&i| i != best).map(|i| n_props + i), work)
+    }
+
+    /// Whether a region's frontier task `t` continues the goal being pursued (its viewpoint
+    /// `goal`, its heading): the goal lies on the way to it ([`Planner::on_the_way`]), and a task
+    /// standing within [`TASK_MATCH_CELLS`] of the goal looks the way the goal looks
+    /// ([`looks_alike`]; at the goal's place a view the other way is a new choice). Returns the
+    /// work.
+    fn continues(&self, goal: (i32, i32), heading: Option<BinaryAngle>, t: &Task) -> (bool, u32) {
+        let near = (t.cell.0 - goal.0).pow(2) + (t.cell.1 - goal.1).pow(2) <= TASK_MATCH_CELLS * TASK_MATCH_CELLS;
+        if near && !looks_alike(t, heading) {
+            return (false, 1);
+        }
+        self.on_the_way(goal, t)
     }
 
     /// Whether the goal being pursued (its viewpoint `goal`) lies on the way to task `t`: going

@@ -61,13 +61,13 @@ fn a_regions_other_frontier_continues_the_pursuit_only_if_the_goal_is_on_its_way
     planner.tasks.clear();
     planner.tasks.push(west).unwrap();
     planner.tasks.push(frontier_task((120, 60), Some(2))).unwrap();
-    assert_eq!(planner.find_task(goal, TaskKind::LidarFrontier, Some(1), Some(goal)).0, None);
+    assert_eq!(planner.find_task(goal, TaskKind::LidarFrontier, Some(1), Some((goal, BinaryAngle::ZERO))).0, None);
     // Region 1's best frontier beyond the goal continues it (the room's next gap).
     planner.tasks[0] = east;
-    assert_eq!(planner.find_task(goal, TaskKind::LidarFrontier, Some(1), Some(goal)).0, Some(0));
+    assert_eq!(planner.find_task(goal, TaskKind::LidarFrontier, Some(1), Some((goal, BinaryAngle::ZERO))).0, Some(0));
     // The goal's own frontier, its anchor moved by less than the match radius, whatever its region.
     planner.tasks[0] = Task { anchor: (210, 65), ..frontier_task(goal, None) };
-    assert_eq!(planner.find_task(goal, TaskKind::LidarFrontier, Some(1), Some(goal)).0, Some(0));
+    assert_eq!(planner.find_task(goal, TaskKind::LidarFrontier, Some(1), Some((goal, BinaryAngle::ZERO))).0, Some(0));
 }
 
 #[test]
@@ -93,6 +93,14 @@ fn the_goals_own_frontier_stays_a_task_when_its_regions_best_is_not_on_the_way()
     planner.task_pool.push(with_utility(frontier_task((40, 65), Some(1)), 10)).unwrap();
     planner.task_pool.push(with_utility(own, 5)).unwrap();
     assert_eq!(planner.pursued_frontier(0, current, &best).0, Some(1));
+    // A frontier at the goal's place whose best view now faces the other way is not the goal's
+    // own: nothing kept, and the match by place does not continue the goal with it.
+    planner.task_pool[1] = with_utility(Task { heading: BinaryAngle::from_degrees(180), ..own }, 5);
+    assert_eq!(planner.pursued_frontier(0, current, &best).0, None);
+    planner.tasks.clear();
+    planner.tasks.push(planner.task_pool[1]).unwrap();
+    assert_eq!(planner.find_task(goal, TaskKind::LidarFrontier, Some(1), current).0, None);
+    planner.task_pool[1] = with_utility(own, 5);
     // Not pursuing anything (the controller's goal is elsewhere): nothing kept.
     assert_eq!(planner.pursued_frontier(0, Some(((100, 65), BinaryAngle::ZERO)), &best).0, None);
 
