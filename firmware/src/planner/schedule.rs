@@ -31,7 +31,10 @@
 //!    rooms, corridors) lost on the development seeds ([`ROOM_PRECEDENCE`],
 //!    [`PROPOSAL_PRECEDENCE`] keep them selectable at build time).
 //! 5. **Commitment**: the robot goes to the tour's first task. The task being pursued (matched
-//!    across steps by its room, or by what it looks at within [`TASK_MATCH_CELLS`]) stays first
+//!    across steps by its room if the goal lies on the way to the room's task now
+//!    ([`Planner::on_the_way`]), or by what it looks at within [`TASK_MATCH_CELLS`]: when the
+//!    room's best frontier is not on the way, the goal's own frontier stays a task, so the
+//!    commitment is refreshed, not transferred, [`Planner::pursued_frontier`]) stays first
 //!    unless the best tour that starts elsewhere is shorter by [`TOUR_SWITCH_UNITS`]: a tour
 //!    re-solved from a moving robot otherwise changes its first task every step.
 
@@ -161,6 +164,18 @@ pub struct ScheduleStats {
     pub pursued: bool,
 }
 
+/// Whether task `t` looks the way the goal being pursued looks (`goal_heading`), as a task that
+/// continues it by place must: a frontier task's view is one of four headings from a viewpoint
+/// at the frontier, and a frontier at the goal's viewpoint whose best view now faces another way
+/// looks at something else (what the goal looked at has been seen); it is a new choice, not the
+/// goal's own frontier (within half a quarter turn). Other kinds, or no heading known: always.
+fn looks_alike(t: &Task, goal_heading: Option<BinaryAngle>) -> bool {
+    match (t.kind, goal_heading) {
+        (TaskKind::LidarFrontier | TaskKind::VisualFrontier, Some(h)) => quarter_turns(t.heading, h) <= 4,
+        _ => true,
+    }
+}
+
 fn quarter_turns(a: BinaryAngle, b: BinaryAngle) -> u32 {
     // |a − b| in units of a quarter turn, rounded up to 1/8 of one.
     let d = (a - b).unsigned_abs() as u64; // 2^32 = a full turn
@@ -271,11 +286,20 @@ impl Planner {
             }
             work += 1;
         }
+        // The goal being pursued is refreshed, not transferred: when its region's best frontier
+        // does not lie on the way through it ([`Planner::on_the_way`]), the goal's own frontier
+        // (matched by place, as [`Planner::find_task`] does) stays a task beside the region's
+        // best, so the match by place can continue it.
+        let (keep, w) = self.pursued_frontier(n_props, current, &best_in_room);
+        work += w;
         let mut taken = [false; crate::capacity::MAX_ROOMS + 1];
         let mut k = 0;
         self.task_pool.retain(|t| {
             k += 1;
             if k <= n_props {
+                return true;
+            }
+            if keep == Some(k - 1) {
                 return true;
             }
             match t.room {
@@ -379,7 +403,14 @@ impl Planner {
             (Some((c, _)), Some((cell, anchor, kind))) if c == cell => Some((anchor, kind, self.last_goal_room)),
             _ => None,
         };
-        let current_task = pursued.and_then(|(a, kind, room)| self.find_task(a, kind, room, current.map(|(c, _)| c)));
+        let current_task = match pursued {
+            Some((a, kind, room)) => {
+                let (i, w) = self.find_task(a, kind, room, current);
+                work += w;
+                i
+            }
+            None => None,
+        };
 
         // Costs.
         work += self.tour_costs(pose.theta);
@@ -447,21 +478,30 @@ impl Planner {
         (first.map(|i| self.tasks[i].viewpoint(-(cost as i64))), work)
     }
 
-    /// This step's task that continues one of the last step's (`anchor`, `kind`, `room`): a
-    /// room's frontier task is the room's, whichever of its frontiers is best now; otherwise a
+    /// This step's task that continues one of the last step's (`anchor`, `kind`, `room`), with
+    /// the work: a room's frontier task is the room's, whichever of its frontiers is best now, if
+    /// the goal being pursued lies on the way to it ([`Planner::on_the_way`]); otherwise a
     /// frontier shrinks and its anchor moves as the robot nears it, so the task of the same kind
-    /// whose anchor is nearest the last one (or whose viewpoint is `goal_cell`) within
-    /// [`TASK_MATCH_CELLS`].
-    fn find_task(&self, a: (i32, i32), kind: TaskKind, room: Option<u8>, goal_cell: Option<(i32, i32)>) -> Option<usize> {
-        let goal_cell = goal_cell.unwrap_or(a);
+    /// whose anchor is nearest the last one (or whose viewpoint is the goal's) within
+    /// [`TASK_MATCH_CELLS`] and, for a frontier, that looks the way the goal looks
+    /// ([`looks_alike`]).
+    fn find_task(&self, a: (i32, i32), kind: TaskKind, room: Option<u8>, goal: Option<((i32, i32), BinaryAngle)>) -> (Option<usize>, u32) {
+        let goal_heading = goal.map(|(_, h)| h);
+        let goal_cell = goal.map_or(a, |(c, _)| c);
         let frontier = |k: TaskKind| matches!(k, TaskKind::LidarFrontier | TaskKind::VisualFrontier);
+        let mut work = 0;
         if let Some(i) = self.tasks.iter().position(|t| room.is_some() && t.room == room && frontier(t.kind) && frontier(kind)) {
-            return Some(i);
+            let (on_the_way, w) = self.continues(goal_cell, goal_heading, &self.tasks[i]);
+            work += w;
+            if on_the_way {
+                return (Some(i), work);
+            }
         }
-        self.tasks
+        let i = self
+            .tasks
             .iter()
             .enumerate()
-            .filter(|(_, t)| t.kind == kind)
+            .filter(|(_, t)| t.kind == kind && looks_alike(t, goal_heading))
             .map(|(i, t)| {
                 (
                     ((t.anchor.0 - a.0).pow(2) + (t.anchor.1 - a.1).pow(2))
@@ -471,7 +511,82 @@ impl Planner {
             })
             .filter(|&(d2, _)| d2 <= TASK_MATCH_CELLS * TASK_MATCH_CELLS)
             .min()
-            .map(|(_, i)| i)
+            .map(|(_, i)| i);
+        (i, work + self.tasks.len() as u32)
+    }
+
+    /// The index in the task pool of the pursued goal's own frontier when the best frontier of
+    /// the goal's region (`best_in_room`, pool from `n_props` on) does not lie on the way through
+    /// the goal: the pool's frontier of the goal's kind that looks the way the goal looks
+    /// ([`looks_alike`]) whose anchor is nearest the goal's last anchor (or whose viewpoint is
+    /// the goal's), within [`TASK_MATCH_CELLS`]; `None` if the
+    /// region's best is on the way, is that frontier, or there is none. Returns the work.
+    fn pursued_frontier(
+        &self,
+        n_props: usize,
+        current: Option<((i32, i32), BinaryAngle)>,
+        best_in_room: &[i64; crate::capacity::MAX_ROOMS + 1],
+    ) -> (Option<usize>, u32) {
+        let frontier = |k: TaskKind| matches!(k, TaskKind::LidarFrontier | TaskKind::VisualFrontier);
+        let (goal, heading, a, kind, room) = match (current, self.last_goal, self.last_goal_room) {
+            (Some((c, h)), Some((cell, anchor, kind)), Some(room)) if c == cell && frontier(kind) => (cell, h, anchor, kind, room),
+            _ => return (None, 0),
+        };
+        let pool = &self.task_pool[n_props..];
+        let mut work = pool.len() as u32;
+        let Some(best) = pool.iter().position(|t| frontier(t.kind) && t.room == Some(room) && t.utility == best_in_room[room as usize])
+        else {
+            return (None, work);
+        };
+        let (on_the_way, w) = self.continues(goal, Some(heading), &pool[best]);
+        work += w;
+        if on_the_way {
+            return (None, work);
+        }
+        work += pool.len() as u32;
+        let own = pool
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.kind == kind && looks_alike(t, Some(heading)))
+            .map(|(i, t)| {
+                (((t.anchor.0 - a.0).pow(2) + (t.anchor.1 - a.1).pow(2)).min((t.cell.0 - goal.0).pow(2) + (t.cell.1 - goal.1).pow(2)), i)
+            })
+            .filter(|&(d2, _)| d2 <= TASK_MATCH_CELLS * TASK_MATCH_CELLS)
+            .min()
+            .map(|(_, i)| i);
+        (own.filter(|&i| i != best).map(|i| n_props + i), work)
+    }
+
+    /// Whether a region's frontier task `t` continues the goal being pursued (its viewpoint
+    /// `goal`, its heading): the goal lies on the way to it ([`Planner::on_the_way`]), and a task
+    /// standing within [`TASK_MATCH_CELLS`] of the goal looks the way the goal looks
+    /// ([`looks_alike`]; at the goal's place a view the other way is a new choice). Returns the
+    /// work.
+    fn continues(&self, goal: (i32, i32), heading: Option<BinaryAngle>, t: &Task) -> (bool, u32) {
+        let near = (t.cell.0 - goal.0).pow(2) + (t.cell.1 - goal.1).pow(2) <= TASK_MATCH_CELLS * TASK_MATCH_CELLS;
+        if near && !looks_alike(t, heading) {
+            return (false, 1);
+        }
+        self.on_the_way(goal, t)
+    }
+
+    /// Whether the goal being pursued (its viewpoint `goal`) lies on the way to task `t`: going
+    /// to `t` through `goal` costs at most 2 · [`TASK_MATCH_CELLS`] more path than going straight
+    /// (the step's path distances; goal to task by [`Planner::pair_distance`]). Only then does
+    /// `t` inherit the commitment to the goal: hysteresis pays for progress made, and progress
+    /// towards the goal is progress towards `t` only if the goal is on its way. A task within
+    /// the match radius of the goal always is (triangle inequality); a region's frontier across
+    /// the room or behind the robot is not (a hallway open to a room at its full width is one
+    /// region, `crate::rooms`). Returns the work.
+    pub(crate) fn on_the_way(&self, goal: (i32, i32), t: &Task) -> (bool, u32) {
+        let to_goal = self.distance(goal.0, goal.1);
+        let to_task = self.distance(t.cell.0, t.cell.1);
+        if to_goal == UNREACHABLE || to_task == UNREACHABLE {
+            return (false, 1);
+        }
+        let (between, work) = self.pair_distance(goal, t.cell);
+        let slack = 2 * TASK_MATCH_CELLS as u64 * STEP_STRAIGHT as u64;
+        (between != u32::MAX && to_goal as u64 + between as u64 <= to_task as u64 + slack, work)
     }
 
     /// What the camera would gain standing at `c`: the best heading's view
@@ -642,3 +757,6 @@ fn camera_coverage(rooms: &Rooms, r: &Room, step: &Step) -> (u32, u32, u32) {
     }
     (seen, free, work)
 }
+
+#[cfg(test)]
+mod tests;
