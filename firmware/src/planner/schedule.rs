@@ -176,6 +176,32 @@ fn looks_alike(t: &Task, goal_heading: Option<BinaryAngle>) -> bool {
     }
 }
 
+/// Whether a task of kind `k` is a frontier of either map.
+fn is_frontier(k: TaskKind) -> bool {
+    matches!(k, TaskKind::LidarFrontier | TaskKind::VisualFrontier)
+}
+
+/// The match by place: of `tasks`, the one of `kind` that looks the way the goal looks
+/// ([`looks_alike`]) whose anchor is nearest `anchor` (or whose viewpoint is nearest
+/// `goal_cell`), within [`TASK_MATCH_CELLS`].
+fn match_by_place(
+    tasks: &[Task],
+    kind: TaskKind,
+    anchor: (i32, i32),
+    goal_cell: (i32, i32),
+    heading: Option<BinaryAngle>,
+) -> Option<usize> {
+    let d2 = |p: (i32, i32), q: (i32, i32)| (p.0 - q.0).pow(2) + (p.1 - q.1).pow(2);
+    tasks
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t.kind == kind && looks_alike(t, heading))
+        .map(|(i, t)| (d2(t.anchor, anchor).min(d2(t.cell, goal_cell)), i))
+        .filter(|&(d, _)| d <= TASK_MATCH_CELLS * TASK_MATCH_CELLS)
+        .min()
+        .map(|(_, i)| i)
+}
+
 fn quarter_turns(a: BinaryAngle, b: BinaryAngle) -> u32 {
     // |a − b| in units of a quarter turn, rounded up to 1/8 of one.
     let d = (a - b).unsigned_abs() as u64; // 2^32 = a full turn
@@ -488,30 +514,15 @@ impl Planner {
     fn find_task(&self, a: (i32, i32), kind: TaskKind, room: Option<u8>, goal: Option<((i32, i32), BinaryAngle)>) -> (Option<usize>, u32) {
         let goal_heading = goal.map(|(_, h)| h);
         let goal_cell = goal.map_or(a, |(c, _)| c);
-        let frontier = |k: TaskKind| matches!(k, TaskKind::LidarFrontier | TaskKind::VisualFrontier);
         let mut work = 0;
-        if let Some(i) = self.tasks.iter().position(|t| room.is_some() && t.room == room && frontier(t.kind) && frontier(kind)) {
+        if let Some(i) = self.tasks.iter().position(|t| room.is_some() && t.room == room && is_frontier(t.kind) && is_frontier(kind)) {
             let (on_the_way, w) = self.continues(goal_cell, goal_heading, &self.tasks[i]);
             work += w;
             if on_the_way {
                 return (Some(i), work);
             }
         }
-        let i = self
-            .tasks
-            .iter()
-            .enumerate()
-            .filter(|(_, t)| t.kind == kind && looks_alike(t, goal_heading))
-            .map(|(i, t)| {
-                (
-                    ((t.anchor.0 - a.0).pow(2) + (t.anchor.1 - a.1).pow(2))
-                        .min((t.cell.0 - goal_cell.0).pow(2) + (t.cell.1 - goal_cell.1).pow(2)),
-                    i,
-                )
-            })
-            .filter(|&(d2, _)| d2 <= TASK_MATCH_CELLS * TASK_MATCH_CELLS)
-            .min()
-            .map(|(_, i)| i);
+        let i = match_by_place(&self.tasks, kind, a, goal_cell, goal_heading);
         (i, work + self.tasks.len() as u32)
     }
 
@@ -527,14 +538,13 @@ impl Planner {
         current: Option<((i32, i32), BinaryAngle)>,
         best_in_room: &[i64; crate::capacity::MAX_ROOMS + 1],
     ) -> (Option<usize>, u32) {
-        let frontier = |k: TaskKind| matches!(k, TaskKind::LidarFrontier | TaskKind::VisualFrontier);
         let (goal, heading, a, kind, room) = match (current, self.last_goal, self.last_goal_room) {
-            (Some((c, h)), Some((cell, anchor, kind)), Some(room)) if c == cell && frontier(kind) => (cell, h, anchor, kind, room),
+            (Some((c, h)), Some((cell, anchor, kind)), Some(room)) if c == cell && is_frontier(kind) => (cell, h, anchor, kind, room),
             _ => return (None, 0),
         };
         let pool = &self.task_pool[n_props..];
         let mut work = pool.len() as u32;
-        let Some(best) = pool.iter().position(|t| frontier(t.kind) && t.room == Some(room) && t.utility == best_in_room[room as usize])
+        let Some(best) = pool.iter().position(|t| is_frontier(t.kind) && t.room == Some(room) && t.utility == best_in_room[room as usize])
         else {
             return (None, work);
         };
@@ -544,16 +554,7 @@ impl Planner {
             return (None, work);
         }
         work += pool.len() as u32;
-        let own = pool
-            .iter()
-            .enumerate()
-            .filter(|(_, t)| t.kind == kind && looks_alike(t, Some(heading)))
-            .map(|(i, t)| {
-                (((t.anchor.0 - a.0).pow(2) + (t.anchor.1 - a.1).pow(2)).min((t.cell.0 - goal.0).pow(2) + (t.cell.1 - goal.1).pow(2)), i)
-            })
-            .filter(|&(d2, _)| d2 <= TASK_MATCH_CELLS * TASK_MATCH_CELLS)
-            .min()
-            .map(|(_, i)| i);
+        let own = match_by_place(pool, kind, a, goal, Some(heading));
         (own.filter(|&i| i != best).map(|i| n_props + i), work)
     }
 
