@@ -88,6 +88,32 @@ impl PackedGrid {
         Cell::from_bits(self.bytes[i >> 2] >> ((i & 3) * 2))
     }
 
+    /// Which of the `N` cells `(x + k, y)`, `k` in `0..N` (at most 12), are occupied: bit `2k` set
+    /// if cell `(x + k, y)` is, odd bits clear. Read from the packed bytes in one word where
+    /// the run lies inside the grid; out-of-bounds cells are not occupied.
+    #[inline]
+    pub fn occupied_span<const N: usize>(&self, x: i32, y: i32) -> u32 {
+        const { assert!(N >= 1 && N <= 12) };
+        let even = 0x5555_5555u32 & ((1u64 << (2 * N)) - 1) as u32;
+        if let (Some(i), true) = (Self::index(x, y), x.checked_add(N as i32 - 1).is_some_and(|e| (e as usize) < GRID_CELLS)) {
+            // Cells i .. i + N: 2N bits after at most 6 from byte i / 4, within 4 bytes.
+            let b = i >> 2;
+            let mut word = [0u8; 4];
+            let end = (b + 4).min(self.bytes.len());
+            word[..end - b].copy_from_slice(&self.bytes[b..end]);
+            let codes = u32::from_le_bytes(word) >> ((i & 3) * 2);
+            // Occupied is code 2: high bit set, low bit clear.
+            return (codes >> 1) & !codes & even;
+        }
+        let mut m = 0;
+        for k in 0..N as i32 {
+            if self.get(x.saturating_add(k), y) == Cell::Occupied {
+                m |= 1 << (2 * k);
+            }
+        }
+        m
+    }
+
     /// Sets the cell at `(x, y)`; returns false when out of bounds.
     #[inline]
     pub fn set(&mut self, x: i32, y: i32, c: Cell) -> bool {

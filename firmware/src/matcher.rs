@@ -109,6 +109,20 @@ pub trait Occupancy {
     /// Is cell `(x, y)` occupied?
     fn occupied(&self, x: i32, y: i32) -> bool;
 
+    /// Which of the [`SPAN`] cells `(x + k, y)`, `k` in `0..SPAN`, are occupied, spread two bits
+    /// a cell: bit `2k` is set if cell `(x + k, y)` is occupied, every odd bit is clear (the
+    /// packed grid's own layout, so that a grid can answer from its bytes).
+    #[inline]
+    fn occupied_span(&self, x: i32, y: i32) -> u32 {
+        let mut m = 0;
+        for k in 0..SPAN as i32 {
+            if self.occupied(x.saturating_add(k), y) {
+                m |= 1 << (2 * k);
+            }
+        }
+        m
+    }
+
     /// How surely cell `(x, y)` holds an obstacle, 0 ..= [`LEVEL_MAX`] (the sub-cell refinement
     /// interpolates it): by default [`LEVEL_MAX`] if occupied, else 0.
     #[inline]
@@ -124,10 +138,19 @@ pub trait Occupancy {
 /// The highest [`Occupancy::level`]: the LiDAR grid's highest evidence.
 pub const LEVEL_MAX: u32 = crate::grid::EVIDENCE_MAX as u32;
 
+/// Cells a row read of [`Occupancy::occupied_span`] covers: the coarse window's translations
+/// and a neighbour on either side.
+pub const SPAN: usize = 2 * MATCH_WINDOW_CELLS as usize + 3;
+
 impl Occupancy for LidarGrid {
     #[inline]
     fn occupied(&self, x: i32, y: i32) -> bool {
         self.get(x, y) == Cell::Occupied
+    }
+
+    #[inline]
+    fn occupied_span(&self, x: i32, y: i32) -> u32 {
+        self.grid.occupied_span::<SPAN>(x, y)
     }
 
     /// The cell's evidence if it is occupied (a wall many scans drew counts more than one drawn
@@ -205,6 +228,39 @@ fn point_score(map: &impl Occupancy, x: i32, y: i32) -> u32 {
     } else {
         0
     }
+}
+
+/// Side of the coarse search's window of translations.
+const WINDOW: usize = (2 * MATCH_WINDOW_CELLS + 1) as usize;
+
+/// The coarse score of `cells` shifted by every translation of the window at once:
+/// `scores[dy + W][dx + W] = Σ point_score(cell + (dx, dy))` (W = [`MATCH_WINDOW_CELLS`]). The
+/// same sums as scoring each translation on its own, but each point reads the `(2W + 3)²` cells
+/// around it once, as bit rows, instead of up to five cells per translation.
+fn window_scores(map: &impl Occupancy, cells: &[(i32, i32)]) -> [[u32; WINDOW]; WINDOW] {
+    const R: i32 = MATCH_WINDOW_CELLS + 1;
+    let mut scores = [[0u32; WINDOW]; WINDOW];
+    for &(cx, cy) in cells {
+        // rows[j] bit 2i: cell (cx − R + i, cy − R + j) is occupied.
+        let x0 = cx.saturating_sub(R);
+        let rows: [u32; SPAN] = core::array::from_fn(|j| map.occupied_span(x0, cy.saturating_add(j as i32 - R)));
+        for (j, line) in scores.iter_mut().enumerate() {
+            // Row j + 1 of `rows` is the shift dy = j − W; bit 2(i + 1) the shift dx = i − W.
+            let hit = rows[j + 1];
+            let near = (hit << 2) | (hit >> 2) | rows[j] | rows[j + 2];
+            for (i, s) in line.iter_mut().enumerate() {
+                let bit = 1 << (2 * i + 2);
+                *s += if hit & bit != 0 {
+                    HIT_SCORE
+                } else if near & bit != 0 {
+                    NEAR_SCORE
+                } else {
+                    0
+                };
+            }
+        }
+    }
+    scores
 }
 
 /// Point `(px, py)` of a frame at `(x, y)` whose heading has sine `s` and cosine `c`, in the
@@ -561,14 +617,12 @@ impl ScanMatcher {
                 let (wx, wy) = place_point(predicted.x, predicted.y, sn, cs, self.points[i].0, self.points[i].1);
                 self.cells[i] = geom.cell_of(wx, wy);
             }
+            let scores = window_scores(map, &self.cells[..n]);
             for ty in 0..(2 * MATCH_WINDOW_CELLS + 1) {
                 for tx in 0..(2 * MATCH_WINDOW_CELLS + 1) {
                     let dx = if tx % 2 == 0 { tx / 2 } else { -(tx + 1) / 2 };
                     let dy = if ty % 2 == 0 { ty / 2 } else { -(ty + 1) / 2 };
-                    let mut s = 0u32;
-                    for &(cx, cy) in &self.cells[..n] {
-                        s += point_score(map, cx.saturating_add(dx), cy.saturating_add(dy));
-                    }
+                    let s = scores[(dy + MATCH_WINDOW_CELLS) as usize][(dx + MATCH_WINDOW_CELLS) as usize];
                     work += n as u32;
                     let v = value(s, n, 2 * dx, 2 * dy, 4 * k, w);
                     if best.is_none() {

@@ -191,3 +191,92 @@ fn worst_case_work_is_bounded() {
     let _ = m.match_scan(&r, &geom(), &pose(13_000, 12_500, 0), &full, mm(10_000), Motion::UNKNOWN);
     assert!(m.stats.last_work <= FIELD_WORST_CASE_WORK && m.stats.last_work > MATCH_MAX_POINTS as u32 * 25 * 49, "{:?}", m.stats);
 }
+
+/// A deterministic xorshift for the property tests below.
+fn xorshift(s: &mut u64) -> u64 {
+    *s ^= *s << 13;
+    *s ^= *s >> 7;
+    *s ^= *s << 17;
+    *s
+}
+
+#[test]
+fn the_window_scores_are_the_sums_of_each_translation_scored_on_its_own() {
+    // A random map with a third of the cells occupied near the grid's edges and corners too,
+    // both through the default row read (`Room`) and the packed grid's (`LidarGrid`).
+    let mut s = 0x9e37_79b9_7f4a_7c15u64;
+    let mut r = empty();
+    let mut lidar = LidarGrid::new(geom());
+    let n = GRID_CELLS as i32;
+    for y in (0..12).chain(n / 2 - 6..n / 2 + 6).chain(n - 12..n) {
+        for x in (0..12).chain(n / 2 - 6..n / 2 + 6).chain(n - 12..n) {
+            if xorshift(&mut s).is_multiple_of(3) {
+                r.set(x, y);
+                lidar.grid.set(x, y, Cell::Occupied);
+            } else if xorshift(&mut s).is_multiple_of(2) {
+                lidar.grid.set(x, y, Cell::Free);
+            }
+        }
+    }
+    let mut cells = Vec::new();
+    for _ in 0..MATCH_MAX_POINTS {
+        let pick = |v: u64| -> i32 {
+            match v % 4 {
+                0 => (v / 4 % 16) as i32 - 4,
+                1 => n / 2 - 8 + (v / 4 % 16) as i32,
+                2 => n - 12 + (v / 4 % 16) as i32,
+                _ => [i32::MIN, i32::MAX, -100_000, 100_000][(v / 4 % 4) as usize],
+            }
+        };
+        cells.push((pick(xorshift(&mut s)), pick(xorshift(&mut s))));
+    }
+    let naive = |map: &dyn Fn(i32, i32) -> bool, dx: i32, dy: i32| -> u32 {
+        cells
+            .iter()
+            .map(|&(cx, cy)| {
+                let (x, y) = (cx.saturating_add(dx), cy.saturating_add(dy));
+                let occ = |x: i64, y: i64| i32::try_from(x).ok().zip(i32::try_from(y).ok()).is_some_and(|(x, y)| map(x, y));
+                let (x, y) = (x as i64, y as i64);
+                if occ(x, y) {
+                    HIT_SCORE
+                } else if occ(x + 1, y) || occ(x - 1, y) || occ(x, y + 1) || occ(x, y - 1) {
+                    NEAR_SCORE
+                } else {
+                    0
+                }
+            })
+            .sum()
+    };
+    let from_room = window_scores(&r, &cells);
+    let from_grid = window_scores(&lidar, &cells);
+    let w = MATCH_WINDOW_CELLS;
+    let mut total = 0;
+    for dy in -w..=w {
+        for dx in -w..=w {
+            let want = naive(&|x, y| r.occupied(x, y), dx, dy);
+            assert_eq!(from_room[(dy + w) as usize][(dx + w) as usize], want, "shift ({dx}, {dy})");
+            assert_eq!(from_grid[(dy + w) as usize][(dx + w) as usize], want, "shift ({dx}, {dy}), packed grid");
+            total += want;
+        }
+    }
+    assert!(total > 1000, "the map and the cells overlap: {total}");
+}
+
+#[test]
+fn a_packed_row_read_agrees_with_reading_each_cell() {
+    let mut s = 7u64;
+    let mut lidar = LidarGrid::new(geom());
+    let n = GRID_CELLS as i32;
+    for y in [0, 1, n / 2, n - 2, n - 1] {
+        for x in 0..n {
+            let c = [Cell::Unknown, Cell::Free, Cell::Occupied][(xorshift(&mut s) % 3) as usize];
+            lidar.grid.set(x, y, c);
+        }
+    }
+    for y in [-1, 0, 1, n / 2, n - 2, n - 1, n] {
+        for x in (-12..20).chain(n / 2 - 10..n / 2 + 10).chain(n - 14..n + 2) {
+            let want = (0..SPAN as i32).filter(|&k| lidar.occupied(x + k, y)).fold(0u32, |m, k| m | 1 << (2 * k));
+            assert_eq!(lidar.occupied_span(x, y), want, "row at ({x}, {y})");
+        }
+    }
+}
