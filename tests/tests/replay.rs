@@ -384,6 +384,104 @@ fn robotlaser1_lines_replay_exactly_like_the_flaser_lines_they_restate() {
     assert!(ra.grid.occupied > 500 && !ra.goals.is_empty(), "{:?}", ra.grid);
 }
 
+/// The first 200 FLASER lines of the Intel log as CARMEN's newer logger writes a robot without
+/// poses in its laser lines: `RAWLASER1` (with `remission_mode` when `header` is 7, without when
+/// 6) and, at each scan's stamp, an `ODOM` line with the robot's pose, the laser sitting at
+/// `mount` (forward, left, turn) on it, given by `PARAM` lines.
+fn as_rawlaser1(flaser: &[&str], mount: [f64; 3], header: usize) -> String {
+    let [fx, fy, fa] = mount;
+    let mut out = vec![
+        format!("PARAM robot_frontlaser_offset {fx} nohost 0"),
+        format!("PARAM robot_frontlaser_side_offset {fy} nohost 0"),
+        format!("PARAM robot_frontlaser_angular_offset {fa} nohost 0"),
+    ];
+    for l in flaser {
+        let t: Vec<&str> = l.split_whitespace().collect();
+        let n: usize = t[1].parse().unwrap();
+        let p: Vec<f64> = t[2 + n..5 + n].iter().map(|v| v.parse().unwrap()).collect();
+        let th = p[2] - fa;
+        let (x, y) = (p[0] - (fx * th.cos() - fy * th.sin()), p[1] - (fx * th.sin() + fy * th.cos()));
+        let (ts, host, lts) = (t[8 + n], t[9 + n], t[10 + n]);
+        out.push(format!("ODOM {x} {y} {th} 0 0 0 {ts} {host} {lts}"));
+        let mode = if header == 7 { " 0" } else { "" };
+        out.push(format!(
+            "RAWLASER1 0 {} {} {} 80.0 0.01{mode} {n} {} 0 {ts} {host} {lts}",
+            -std::f64::consts::FRAC_PI_2,
+            std::f64::consts::PI,
+            std::f64::consts::PI / 180.0,
+            t[2..2 + n].join(" ")
+        ));
+    }
+    out.join("\n")
+}
+
+#[test]
+fn rawlaser1_lines_placed_by_odom_replay_like_the_flaser_lines_they_restate() {
+    let text = gunzip(&carmen("intel-corrected.log.gz"));
+    let flaser: Vec<&str> = text.lines().filter(|l| l.starts_with("FLASER")).take(200).collect();
+    let a = tmp("flaser-200.log");
+    std::fs::write(&a, flaser.join("\n")).unwrap();
+    let ra = replay::replay(&a, &no_classifier()).unwrap().report;
+    for (mount, header) in [([0.0, 0.0, 0.0], 7), ([0.25, -0.1, 0.3], 6)] {
+        let b = tmp(&format!("rawlaser1-{header}.log"));
+        std::fs::write(&b, as_rawlaser1(&flaser, mount, header)).unwrap();
+        let rb = replay::replay(&b, &no_classifier()).unwrap().report;
+        assert_eq!(rb.sources, vec!["ODOM".to_string(), "RAWLASER1".to_string()], "{:?}", rb.warnings);
+        assert_eq!((ra.scans_used, rb.scans_used), (200, 200));
+        assert_eq!(ra.grid, rb.grid, "mount {mount:?}");
+        assert_eq!(ra.goals, rb.goals);
+        assert_eq!(rb.warnings.iter().any(|w| w.contains("origin, facing forward")), mount == [0.0; 3], "{:?}", rb.warnings);
+    }
+    assert!(ra.grid.occupied > 500 && !ra.goals.is_empty(), "{:?}", ra.grid);
+    // The logger also writes each scan with its pose (ROBOTLASER1, here FLASER): those are
+    // mapped, the RAWLASER1 repeats counted, not integrated twice.
+    let both = format!("{}\n{}", flaser.join("\n"), as_rawlaser1(&flaser, [0.0; 3], 7));
+    let c = tmp("flaser-and-rawlaser1.log");
+    std::fs::write(&c, both).unwrap();
+    let rc = replay::replay(&c, &no_classifier()).unwrap().report;
+    assert_eq!((rc.scans_used, rc.grid, &rc.goals), (200, ra.grid, &ra.goals));
+    assert!(rc.warnings.iter().any(|w| w.contains("200 RAWLASER1 lines repeat")), "{:?}", rc.warnings);
+}
+
+#[test]
+fn rawlaser1_scans_without_odometry_around_them_are_counted_not_placed_at_the_origin() {
+    let text = gunzip(&carmen("intel-corrected.log.gz"));
+    let flaser: Vec<&str> = text.lines().filter(|l| l.starts_with("FLASER")).take(100).collect();
+    let log = as_rawlaser1(&flaser, [0.0; 3], 7);
+    let lines: Vec<&str> = log.lines().collect();
+    // The first 10 scans lose their ODOM line (before the first odometry); scans 50–59 too,
+    // a gap of 2 s (more than 0.5 s from the nearest odometry); and one ODOM line jumps 100 m.
+    let mut kept = Vec::new();
+    let (mut scan, mut jumped) = (0, false);
+    for l in lines {
+        if l.starts_with("RAWLASER1") {
+            scan += 1;
+        }
+        if l.starts_with("ODOM") && (scan < 10 || (50..60).contains(&scan)) {
+            continue;
+        }
+        if l.starts_with("ODOM") && scan == 80 && !jumped {
+            jumped = true;
+            let t: Vec<&str> = l.split_whitespace().collect();
+            let x: f64 = t[1].parse().unwrap();
+            kept.push(format!("ODOM {} {}", x + 100.0, t[2..].join(" ")));
+            continue;
+        }
+        kept.push(l.to_string());
+    }
+    let path = tmp("rawlaser1-gaps.log");
+    std::fs::write(&path, kept.join("\n")).unwrap();
+    let run = replay::replay(&path, &no_classifier()).unwrap();
+    let r = &run.report;
+    assert_eq!(r.rejected.no_odometry_yet, 10, "{:?}", r.rejected);
+    assert!(r.rejected.stale_pose >= 8, "{:?}", r.rejected);
+    assert_eq!(r.transforms_rejected.odometry_jump, 1, "{:?}", r.transforms_rejected);
+    assert_eq!(r.scans_used + r.rejected.no_odometry_yet + r.rejected.stale_pose, 100);
+    assert!(r.warnings.iter().any(|w| w.contains("before the first ODOM line")), "{:?}", r.warnings);
+    // No scan was drawn at the origin or 100 m off: every grid cell it marked is near the others.
+    assert!(r.grid.occupied > 200, "{:?}", r.grid);
+}
+
 #[test]
 fn time_stamps_that_do_not_advance_are_replaced_by_the_core_tick() {
     // As in the CSAIL log, whose stamps are printed as `1.13486e+09`.

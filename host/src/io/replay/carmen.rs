@@ -10,10 +10,19 @@
 //! - `ROBOTLASER1 type start_angle fov resolution max_range accuracy remission_mode n r1..rn
 //!   n_rem rem1..rem_n_rem laser_x laser_y laser_θ robot_x robot_y robot_θ tv rv fwd_safety
 //!   side_safety turn_axis ts host ts`: a scan with its own angles and the laser's pose.
-//! - `ODOM x y θ tv rv accel ts host ts`: the robot's pose (counted and timed; the scans carry
-//!   their own laser pose, which is what the map is built from).
+//! - `RAWLASER1 type start_angle fov resolution max_range accuracy [remission_mode] n r1..rn
+//!   n_rem rem1..rem_n_rem ts host ts`: the front laser's scan without a pose (what CARMEN's
+//!   logger writes beside `ROBOTLASER1`, and all some logs have); older loggers leave out
+//!   `remission_mode`, and the counts tell which. `RAWLASER2`–`RAWLASER4` (the rear and other
+//!   lasers) are read too, and replay counts them.
+//! - `ODOM x y θ tv rv accel ts host ts`: the robot's odometry (replay places `RAWLASER1` scans
+//!   with it, interpolated to their stamps; the other scans carry their own laser pose).
+//! - `PARAM robot_frontlaser_offset|robot_frontlaser_side_offset|robot_frontlaser_angular_offset
+//!   value ts host ts`: where the front laser sits on the robot (metres forward, metres left,
+//!   radians), for `RAWLASER1` scans.
 //!
-//! `#` lines, `PARAM` lines and other message types (`NEFF`, `RLASER`, `TRUEPOS`, …) are skipped.
+//! `#` lines, other `PARAM` lines and other message types (`NEFF`, `RLASER`, `TRUEPOS`, …) are
+//! skipped.
 //! Ranges at or beyond the laser's maximum (80 m for `FLASER`, whose line has no maximum, the SICK
 //! LMS's "no return" value being ≈ 81.9 m; the line's own `max_range` for `ROBOTLASER1`) become
 //! `+inf` (no return), zero or negative ranges NaN (invalid): the ROS conventions the rest of
@@ -45,6 +54,10 @@ pub enum LineKind {
     RobotLaser1,
     /// `ODOM`.
     Odom,
+    /// `RAWLASER1` … `RAWLASER4`.
+    RawLaser(u8),
+    /// `PARAM` (the front laser's mount).
+    Param,
 }
 
 impl fmt::Display for LineKind {
@@ -53,6 +66,11 @@ impl fmt::Display for LineKind {
             LineKind::Flaser => "FLASER",
             LineKind::RobotLaser1 => "ROBOTLASER1",
             LineKind::Odom => "ODOM",
+            LineKind::RawLaser(1) => "RAWLASER1",
+            LineKind::RawLaser(2) => "RAWLASER2",
+            LineKind::RawLaser(3) => "RAWLASER3",
+            LineKind::RawLaser(_) => "RAWLASER4",
+            LineKind::Param => "PARAM",
         })
     }
 }
@@ -79,11 +97,48 @@ pub struct CarmenScan {
     pub range_max_m: f64,
 }
 
+/// A `RAWLASERn` scan: no pose in the line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RawScan {
+    /// Which laser, 1 (front) to 4.
+    pub laser: u8,
+    /// `ipc_timestamp`, seconds.
+    pub t_s: f64,
+    /// First beam's angle in the laser frame, radians.
+    pub angle_min: f64,
+    /// Angle between beams, radians.
+    pub angle_increment: f64,
+    /// Ranges, metres: `+inf` no return, NaN invalid.
+    pub ranges_m: Vec<f32>,
+    /// The line's `max_range`, metres.
+    pub range_max_m: f64,
+}
+
+/// Where the front laser sits on the robot, from a `PARAM` line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MountField {
+    /// `robot_frontlaser_offset`: metres forward.
+    Forward,
+    /// `robot_frontlaser_side_offset`: metres to the left.
+    Side,
+    /// `robot_frontlaser_angular_offset`: radians, counter-clockwise.
+    Angle,
+}
+
 /// One message replay uses.
 #[derive(Clone, Debug, PartialEq)]
 pub enum CarmenRecord {
-    /// A scan.
+    /// A scan with its laser's pose.
     Scan(CarmenScan),
+    /// A scan without a pose (`RAWLASERn`).
+    Raw(RawScan),
+    /// A `PARAM` line giving the front laser's mount.
+    Mount {
+        /// Which part of the mount.
+        field: MountField,
+        /// Its value (metres or radians).
+        value: f64,
+    },
     /// `ODOM`: time and robot pose.
     Odom {
         /// `ipc_timestamp`, seconds.
@@ -94,11 +149,14 @@ pub enum CarmenRecord {
 }
 
 impl CarmenRecord {
-    /// The record's time stamp.
-    pub fn t_s(&self) -> f64 {
+    /// The record's time stamp, `None` for a `PARAM` line (whose stamp is the logger's start,
+    /// often 0, not a time the robot was anywhere).
+    pub fn stamp(&self) -> Option<f64> {
         match self {
-            CarmenRecord::Scan(s) => s.t_s,
-            CarmenRecord::Odom { t_s, .. } => *t_s,
+            CarmenRecord::Scan(s) => Some(s.t_s),
+            CarmenRecord::Raw(s) => Some(s.t_s),
+            CarmenRecord::Odom { t_s, .. } => Some(*t_s),
+            CarmenRecord::Mount { .. } => None,
         }
     }
 }
@@ -307,17 +365,81 @@ fn ros_range(r: f64, max_range_m: f64) -> f32 {
     }
 }
 
-/// Parses one line. `Ok(None)`: a line replay does not use (comment, `PARAM`, other types, blank).
+/// A laser's configuration fields, from `start_angle` to `max_range` (after `laser_type`):
+/// `(angle_min, angle_increment, max_range)`, the maximum checked to be above 0.
+fn laser_config(t: &mut Tokens<'_>) -> Result<(f64, f64, f64), LineError> {
+    let angle_min = t.num("start_angle")?;
+    t.num("fov")?;
+    let angle_increment = t.num("angular_resolution")?;
+    let max_range = t.num("max_range")?;
+    if max_range <= 0.0 {
+        let token = t.toks[t.i - 1].to_string();
+        return Err(LineError::OutOfRange { kind: t.kind, field: "max_range", token, expected: "metres above 0" });
+    }
+    Ok((angle_min, angle_increment, max_range))
+}
+
+/// Does a `RAWLASERn` line have `header` fields before its beam count (7 with `remission_mode`,
+/// 6 without), judged by its counts: the beam count, the remission count after that many
+/// readings, and the stamp's three fields make up the whole line.
+fn raw_header_fits(toks: &[&str], header: usize) -> bool {
+    let count = |i: usize| toks.get(i).and_then(|c| c.parse::<usize>().ok());
+    let Some(n) = count(header) else { return false };
+    let Some(rem) = count(header + 1 + n) else { return false };
+    header.saturating_add(n).saturating_add(rem).saturating_add(5) == toks.len()
+}
+
+/// Parses one line. `Ok(None)`: a line replay does not use (comment, other `PARAM`s, other
+/// types, blank).
 pub fn parse_line(line: &str) -> Result<Option<CarmenRecord>, LineError> {
     let mut it = line.split_ascii_whitespace();
     let kind = match it.next() {
         Some("FLASER") => LineKind::Flaser,
         Some("ROBOTLASER1") => LineKind::RobotLaser1,
         Some("ODOM") => LineKind::Odom,
+        Some("RAWLASER1") => LineKind::RawLaser(1),
+        Some("RAWLASER2") => LineKind::RawLaser(2),
+        Some("RAWLASER3") => LineKind::RawLaser(3),
+        Some("RAWLASER4") => LineKind::RawLaser(4),
+        Some("PARAM") => LineKind::Param,
         _ => return Ok(None),
     };
     let mut t = Tokens { kind, toks: it.collect(), i: 0 };
     let rec = match kind {
+        LineKind::Param => {
+            let field = match t.next("name")? {
+                "robot_frontlaser_offset" => MountField::Forward,
+                "robot_frontlaser_side_offset" => MountField::Side,
+                "robot_frontlaser_angular_offset" => MountField::Angle,
+                _ => return Ok(None),
+            };
+            // What follows the value varies between loggers (`ts host ts`, or `host ts` in the
+            // Radish logs): it is not read.
+            let value = t.num("value")?;
+            CarmenRecord::Mount { field, value }
+        }
+        LineKind::RawLaser(laser) => {
+            // 6 or 7 header fields (`remission_mode` came later); with neither fitting, the
+            // current logger's 7 name the error.
+            let header = if !raw_header_fits(&t.toks, 7) && raw_header_fits(&t.toks, 6) { 6 } else { 7 };
+            t.next("laser_type")?;
+            let (angle_min, angle_increment, max_range) = laser_config(&mut t)?;
+            t.num("accuracy")?;
+            if header == 7 {
+                t.next("remission_mode")?;
+            }
+            let n = t.beams()?;
+            // The header, count, n ranges, remission count, the remissions, 3 stamp fields.
+            let remissions = t.toks.get(header + 1 + n).and_then(|c| c.parse::<usize>().ok());
+            t.check_counts(n, remissions.map(|r| n.saturating_add(r).saturating_add(header + 5)))?;
+            let ranges_m = (0..n).map(|_| t.range("range").map(|r| ros_range(r, max_range))).collect::<Result<_, _>>()?;
+            let n_rem = t.count("remission count", t.toks.len())?;
+            for _ in 0..n_rem {
+                t.range("remission")?;
+            }
+            let t_s = t.stamp()?;
+            CarmenRecord::Raw(RawScan { laser, t_s, angle_min, angle_increment, ranges_m, range_max_m: max_range })
+        }
         LineKind::Odom => {
             let pose = t.pose(["x", "y", "theta"])?;
             for f in ["tv", "rv", "accel"] {
@@ -347,14 +469,7 @@ pub fn parse_line(line: &str) -> Result<Option<CarmenRecord>, LineError> {
         }
         LineKind::RobotLaser1 => {
             t.next("laser_type")?;
-            let angle_min = t.num("start_angle")?;
-            t.num("fov")?;
-            let angle_increment = t.num("angular_resolution")?;
-            let max_range = t.num("max_range")?;
-            if max_range <= 0.0 {
-                let token = t.toks[t.i - 1].to_string();
-                return Err(LineError::OutOfRange { kind, field: "max_range", token, expected: "metres above 0" });
-            }
+            let (angle_min, angle_increment, max_range) = laser_config(&mut t)?;
             t.num("accuracy")?;
             t.next("remission_mode")?;
             let n = t.beams()?;
@@ -440,8 +555,54 @@ mod tests {
     }
 
     #[test]
+    fn rawlaser_lines_with_and_without_remission_mode_and_the_front_laser_mount() {
+        // CARMEN's logger: 7 header fields (with `remission_mode`), 3 beams, 1 remission.
+        let line = "RAWLASER1 0 -1.5708 3.14159 0.0174533 81.9 0.01 0 3 1.5 81.9 0 1 0.5 1.25 host 1.26";
+        let Some(CarmenRecord::Raw(s)) = parse_line(line).unwrap() else { panic!("not a raw scan") };
+        assert_eq!((s.laser, s.t_s, s.range_max_m), (1, 1.25, 81.9));
+        #[allow(clippy::approx_constant)]
+        let written = (-1.5708, 0.0174533);
+        assert_eq!((s.angle_min, s.angle_increment), written);
+        assert_eq!(s.ranges_m[..2], [1.5, f32::INFINITY]);
+        assert!(s.ranges_m[2].is_nan());
+        // An older logger: no `remission_mode`, no remissions; the rear laser.
+        let old = "RAWLASER2 0 -1.5708 3.14159 0.0174533 81.9 0.01 2 1.5 2.5 0 7.5 host 7.5";
+        let Some(CarmenRecord::Raw(s)) = parse_line(old).unwrap() else { panic!("not a raw scan") };
+        assert_eq!((s.laser, s.ranges_m.clone(), s.t_s), (2, vec![1.5, 2.5], 7.5));
+        // A beam count that fits neither layout: named against the current one.
+        let bad = "RAWLASER1 0 -1.5708 3.14159 0.0174533 81.9 0.01 0 4 1.5 2.5 0 7.5 host 7.5";
+        assert!(
+            matches!(parse_line(bad), Err(LineError::CountMismatch { kind: LineKind::RawLaser(1), beams: 4, .. })),
+            "{:?}",
+            parse_line(bad)
+        );
+        let cut = "RAWLASER1 0 -1.5708 3.14159 0.0174533 81.9 0.01 0 3 1.5";
+        assert_eq!(parse_line(cut).unwrap_err(), LineError::MissingField { kind: LineKind::RawLaser(1), field: "range" });
+        let e = parse_line("RAWLASER3 0 -1.5708 3.14159 0.0174533 0 0.01 0 1 1.5 0 7.5 host 7.5").unwrap_err();
+        assert_eq!(e.to_string(), "RAWLASER3 max_range `0` is out of range (metres above 0)");
+        // The front laser's mount; other parameters are skipped.
+        assert_eq!(
+            parse_line("PARAM robot_frontlaser_offset 0.12 nohost 0").unwrap(),
+            Some(CarmenRecord::Mount { field: MountField::Forward, value: 0.12 })
+        );
+        assert_eq!(
+            parse_line("PARAM robot_frontlaser_offset 0.12 1.5 host 1.5").unwrap(),
+            Some(CarmenRecord::Mount { field: MountField::Forward, value: 0.12 })
+        );
+        assert_eq!(
+            parse_line("PARAM robot_frontlaser_angular_offset -0.05 nohost 0").unwrap(),
+            Some(CarmenRecord::Mount { field: MountField::Angle, value: -0.05 })
+        );
+        assert_eq!(
+            parse_line("PARAM robot_frontlaser_side_offset x nohost 0").unwrap_err(),
+            LineError::BadNumber { kind: LineKind::Param, field: "value", token: "x".into() }
+        );
+        assert_eq!(parse_line("PARAM robot_rearlaser_offset 0.0 nohost 0").unwrap(), None);
+    }
+
+    #[test]
     fn skipped_and_broken_lines() {
-        for l in ["", "# comment", "PARAM robot_length 0.47 nohost 0", "NEFF 8.39921", "RLASER 1 2 3"] {
+        for l in ["", "# comment", "PARAM robot_length 0.47 nohost 0", "NEFF 8.39921", "RLASER 1 2 3", "RAWLASER5 1 2"] {
             assert_eq!(parse_line(l).unwrap(), None, "{l}");
         }
         // Cut in the middle of the pose.

@@ -133,6 +133,8 @@ pub(super) fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> Log
     let mut line_no = 0usize;
     let mut buf = Vec::new();
     let mut seen = [false; 3];
+    // For `RAWLASER1` scans: the odometry, the front laser's mount, the scans themselves.
+    let mut raw = RawLaser::default();
     loop {
         buf.clear();
         match reader.read_until(b'\n', &mut buf) {
@@ -158,12 +160,18 @@ pub(super) fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> Log
         match carmen::parse_line(text) {
             Ok(None) => {}
             Ok(Some(rec)) => {
-                widen(&mut log.span_s, rec.t_s());
+                if let Some(t) = rec.stamp() {
+                    widen(&mut log.span_s, t);
+                }
                 match rec {
-                    carmen::CarmenRecord::Odom { .. } => {
+                    carmen::CarmenRecord::Odom { t_s, pose } => {
                         log.odometry += 1;
                         seen[2] = true;
+                        raw.odometry.push((t_s, pose));
                     }
+                    carmen::CarmenRecord::Mount { field, value } => raw.mount[field as usize] = value,
+                    carmen::CarmenRecord::Raw(s) if s.laser == 1 => raw.scans.push((s, line_no)),
+                    carmen::CarmenRecord::Raw(s) => raw.other_lasers[usize::from(s.laser.clamp(2, 4) - 2)] += 1,
                     carmen::CarmenRecord::Scan(s) => {
                         seen[(s.kind == carmen::LineKind::RobotLaser1) as usize] = true;
                         log.scans.push(ScanRecord {
@@ -187,9 +195,111 @@ pub(super) fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> Log
             log.sources.push(name.to_string());
         }
     }
+    raw.place(&mut log, seen[0] || seen[1]);
     // Logs are written in time order; a stable sort mends small reorderings between line types.
     log.scans.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
     log
+}
+
+/// A CARMEN log's `RAWLASER` lines and what places them.
+#[derive(Default)]
+struct RawLaser {
+    /// `RAWLASER1` scans and their lines.
+    scans: Vec<(carmen::RawScan, usize)>,
+    /// `ODOM` samples, `(t_s, [x, y, θ])`, in the file's order.
+    odometry: Vec<(f64, [f64; 3])>,
+    /// The front laser's mount: forward, side (metres), angle (radians) (`PARAM` lines).
+    mount: [f64; 3],
+    /// `RAWLASER2` … `RAWLASER4` lines (not mapped).
+    other_lasers: [usize; 3],
+}
+
+impl RawLaser {
+    /// Adds the `RAWLASER1` scans to `log`, each at the front laser's pose: the odometry
+    /// interpolated to its stamp (as a bag's scans are placed, [`rosbag::FrameTree`]: a scan
+    /// before the first odometry or more than [`rosbag::MAX_POSE_AGE_NS`] from it is rejected
+    /// and counted, odometry that jumps is rejected) composed with the mount. A log whose front
+    /// laser has lines with poses (`FLASER`, `ROBOTLASER1`) maps those: CARMEN's logger writes
+    /// each scan as both `ROBOTLASER1` and `RAWLASER1`, and integrated twice every return would
+    /// count double; its `RAWLASER1` lines are counted as a duplicate.
+    fn place(self, log: &mut LogData, posed: bool) {
+        let other: usize = self.other_lasers.iter().sum();
+        if other > 0 {
+            log.warnings.push(format!(
+                "{other} scans of lasers other than the front one (RAWLASER2–4: {} / {} / {}) were not used: their mount on the \
+                 robot is not in the log's lines",
+                self.other_lasers[0], self.other_lasers[1], self.other_lasers[2]
+            ));
+        }
+        if self.scans.is_empty() {
+            return;
+        }
+        if posed {
+            log.duplicate_topic += self.scans.len();
+            log.warnings.push(format!(
+                "{} RAWLASER1 lines repeat the front laser's scans that FLASER / ROBOTLASER1 lines place: not used",
+                self.scans.len()
+            ));
+            return;
+        }
+        log.sources.push("RAWLASER1".to_string());
+        if self.mount == [0.0; 3] {
+            log.warnings.push(
+                "no robot_frontlaser_offset / _side_offset / _angular_offset PARAM lines (or all 0): the front laser is \
+                 taken to sit at the robot's origin, facing forward"
+                    .to_string(),
+            );
+        }
+        // The tree's clock: nanoseconds from the log's earliest stamp (CARMEN stamps may be
+        // negative).
+        let t0 = self.odometry.iter().map(|o| o.0).chain(self.scans.iter().map(|s| s.0.t_s)).fold(f64::INFINITY, f64::min);
+        let ns = |t: f64| ((t - t0) * 1e9).round() as u64;
+        let mut tree = rosbag::FrameTree::default();
+        // In stamp order (a stable sort mends small reorderings, as for the scans).
+        let mut odometry = self.odometry;
+        odometry.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for &(t, [x, y, th]) in &odometry {
+            let r = tree.push("odom", "base", ns(t), &cdr::Transform::planar(x, y, th), rosbag::EdgeSource::Odometry("ODOM"));
+            log.transforms_rejected.count(r);
+        }
+        let [fx, fy, fa] = self.mount;
+        log.transforms_rejected.count(tree.set_static("base", "laser", &cdr::Transform::planar(fx, fy, fa)));
+        let mut unplaced = Vec::new();
+        for (s, line) in self.scans {
+            match tree.resolve_at("laser", ns(s.t_s)) {
+                Ok((pose, _, depth)) if depth > 1 => {
+                    let x_axis = pose.rotate([1.0, 0.0, 0.0]);
+                    log.scans.push(ScanRecord {
+                        t_s: s.t_s,
+                        pose: [pose.t[0], pose.t[1], x_axis[1].atan2(x_axis[0])],
+                        angle_min: s.angle_min,
+                        angle_increment: s.angle_increment,
+                        ranges_m: s.ranges_m,
+                        range_limits_m: [0.0, s.range_max_m],
+                        at: Location::Line(line),
+                    });
+                    continue;
+                }
+                Ok(_) | Err(rosbag::PoseError::NoPose) => log.no_pose += 1,
+                Err(rosbag::PoseError::NoOdometryYet) => log.no_odometry_yet += 1,
+                Err(rosbag::PoseError::Stale) => log.stale_pose += 1,
+            }
+            if unplaced.len() < 3 {
+                unplaced.push(format!("line {line} ({} s)", s.t_s));
+            }
+        }
+        if !unplaced.is_empty() {
+            log.warnings.push(format!(
+                "{} RAWLASER1 scans before the first ODOM line, {} more than {} s from the nearest one and {} with no ODOM at all \
+                 were not used: first at {}",
+                log.no_odometry_yet,
+                log.stale_pose,
+                rosbag::MAX_POSE_AGE_NS as f64 / 1e9,
+                log.no_pose,
+                unplaced.join(", ")
+            ));
+        }
+    }
 }
 
 pub(super) fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -> LogData {

@@ -328,3 +328,17 @@ pub struct RejectedTransforms {
     /// same edge ([`EdgeSource`]); not an error: a robot commonly publishes both.
     pub superseded: u32,
 }
+
+impl RejectedTransforms {
+    /// Counts a rejected transform by its reason (nothing for one taken).
+    pub(crate) fn count(&mut self, r: Result<(), EdgeReject>) {
+        match r {
+            Ok(()) => {}
+            Err(EdgeReject::Invalid | EdgeReject::TooManyFrames) => self.invalid += 1,
+            Err(EdgeReject::Loop) => self.tf_loop += 1,
+            Err(EdgeReject::Backwards) => self.stamp_backwards += 1,
+            Err(EdgeReject::Jump) => self.odometry_jump += 1,
+            Err(EdgeReject::Superseded) => self.superseded += 1,
+        }
+    }
+}

@@ -78,15 +78,7 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
     }
     let mut tree = FrameTree::default();
     let mut rej = RejectedTransforms::default();
-    let count = |r: Result<(), EdgeReject>, rej: &mut RejectedTransforms| match r {
-        Ok(()) => {}
-        Err(EdgeReject::Invalid) => rej.invalid += 1,
-        Err(EdgeReject::Loop) => rej.tf_loop += 1,
-        Err(EdgeReject::Backwards) => rej.stamp_backwards += 1,
-        Err(EdgeReject::Jump) => rej.odometry_jump += 1,
-        Err(EdgeReject::Superseded) => rej.superseded += 1,
-        Err(EdgeReject::TooManyFrames) => rej.invalid += 1,
-    };
+    let count = |r: Result<(), EdgeReject>, rej: &mut RejectedTransforms| rej.count(r);
     // tf_static describes the robot's fixed geometry: it holds for the whole bag.
     for (m, d) in &decoded {
         if let (MsgType::TfStatic, Decoded::Tf(ts)) = (m.kind, d) {
