@@ -248,17 +248,20 @@ pub fn overlaps_heldout(first: u64, last: u64) -> bool {
 /// trial each (simulator seed = world seed), every planner. World `k` (from 0) is generated in
 /// `easy` for even `k` and `hard` for odd `k` (`World::random_scenario`), so the set gives two
 /// rows, `heldout easy` and `heldout hard`, of `n / 2` worlds each (the extra one easy).
+/// `from` skips the first `from` worlds (a second held-out set, never looked at by a run of the
+/// first: worlds `from..from + n`, each the same world and scenario whatever `from` is).
 pub fn heldout_specs(
+    from: u64,
     n: u64,
     planners: &[PlannerChoice],
     model: &'static [u8],
     configure: impl Fn(&mut SearchSpec) -> Result<(), String>,
 ) -> Result<Vec<SearchSpec>, String> {
-    if n > HELDOUT_MAX_WORLDS {
-        return Err(format!("--heldout: at most {HELDOUT_MAX_WORLDS} worlds"));
+    if from.checked_add(n).is_none_or(|end| end > HELDOUT_MAX_WORLDS) {
+        return Err(format!("--heldout-from {from} --heldout {n}: the held-out worlds are the first {HELDOUT_MAX_WORLDS}"));
     }
     let mut specs = Vec::new();
-    for k in 0..n {
+    for k in from..from + n {
         let seed = HELDOUT_FIRST_SEED + k;
         let scenario = if k % 2 == 0 { Scenario::Easy } else { Scenario::Hard };
         let world = World::random_scenario(seed, scenario);

@@ -111,7 +111,7 @@ fn heldout_seeds_are_disjoint_from_tunes_and_split_into_easy_and_hard() {
     // The default tune range (`--worlds 48 --first-world 1`) is outside.
     assert!(!overlaps_heldout(1, 48));
     let specs =
-        heldout_specs(5, &[PlannerChoice::Nearest, PlannerChoice::Lives], firmware::classifier::EMBEDDED_GEO_MODEL, |_| Ok(())).unwrap();
+        heldout_specs(0, 5, &[PlannerChoice::Nearest, PlannerChoice::Lives], firmware::classifier::EMBEDDED_GEO_MODEL, |_| Ok(())).unwrap();
     assert_eq!(specs.len(), 10);
     let seeds: Vec<u64> = specs.iter().step_by(2).map(|s| s.seed).collect();
     assert_eq!(seeds, (HELDOUT_FIRST_SEED..HELDOUT_FIRST_SEED + 5).collect::<Vec<_>>());
@@ -120,7 +120,14 @@ fn heldout_seeds_are_disjoint_from_tunes_and_split_into_easy_and_hard() {
     assert!(specs.iter().all(|s| s.world_name == HELDOUT_WORLD));
     assert_eq!(specs[0].world, World::random_scenario(HELDOUT_FIRST_SEED, Scenario::Easy));
     assert!(specs[1].model.is_some() && specs[0].model.is_none(), "lives runs the classifier");
-    assert!(heldout_specs(HELDOUT_MAX_WORLDS + 1, &[PlannerChoice::Nearest], &[], |_| Ok(())).is_err());
+    assert!(heldout_specs(0, HELDOUT_MAX_WORLDS + 1, &[PlannerChoice::Nearest], &[], |_| Ok(())).is_err());
+    assert!(heldout_specs(HELDOUT_MAX_WORLDS - 2, 3, &[PlannerChoice::Nearest], &[], |_| Ok(())).is_err());
+    assert!(heldout_specs(u64::MAX, 3, &[PlannerChoice::Nearest], &[], |_| Ok(())).is_err());
+    // A second set: worlds 3 and 4 are the same worlds, in the same scenarios, as in the first.
+    let second = heldout_specs(3, 2, &[PlannerChoice::Nearest], &[], |_| Ok(())).unwrap();
+    let first = heldout_specs(0, 5, &[PlannerChoice::Nearest], &[], |_| Ok(())).unwrap();
+    assert_eq!(second.iter().map(|s| (s.seed, s.scenario_label())).collect::<Vec<_>>(), [(HELDOUT_FIRST_SEED + 3, "hard"), (HELDOUT_FIRST_SEED + 4, "easy")]);
+    assert_eq!((&second[0].world, &second[1].world), (&first[3].world, &first[4].world));
 }
 
 #[test]
