@@ -62,8 +62,20 @@ pub struct EvalArgs {
 }
 
 pub fn run(args: EvalArgs) -> Result<ExitCode, String> {
-    let EvalArgs { trials, worlds, scenarios, planners, threads, out, no_pictures, robot: robot_args, heldout, heldout_from, known_map, robots } =
-        args;
+    let EvalArgs {
+        trials,
+        worlds,
+        scenarios,
+        planners,
+        threads,
+        out,
+        no_pictures,
+        robot: robot_args,
+        heldout,
+        heldout_from,
+        known_map,
+        robots,
+    } = args;
     let planners = match (planners.is_empty(), known_map) {
         (false, _) => planners,
         (true, false) => PlannerChoice::ALL.into_iter().rev().collect(),

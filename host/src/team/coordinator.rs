@@ -160,8 +160,8 @@ impl Coordinator {
         }
     }
 
-    /// Gives every inspection region the robots still answering reported to the robot that
-    /// would reach it first: path length over the known map's free cells (as the crow flies
+    /// Gives every inspection region the robots still answering reported to the robot, of those
+    /// that reported it, that would reach it first: path length over the known map's free cells (as the crow flies
     /// without a map, or where no path joins them) over the robot's top speed; a tie to the
     /// lower index. Regions within `nonmap_pool_radius_m` of one listed before are the same
     /// region. Recomputed when the regions change and at least every `replan_interval_us`
@@ -169,11 +169,18 @@ impl Coordinator {
     /// does not flip between two robots from one tick to the next).
     fn give_regions(&mut self, tick: u32) {
         let pool = self.cfg.nonmap_pool_radius_m.to_num::<f64>();
+        // Each region, and the robots that reported it (bit r): only those hold it in their
+        // non-map store, so only they can be sent to look at it.
         let mut places: Vec<[f64; 2]> = Vec::new();
-        for s in (0..self.n()).filter(|&i| self.alive[i]).filter_map(|i| self.last[i].as_ref()) {
+        let mut known: Vec<u32> = Vec::new();
+        for (r, s) in (0..self.n()).filter(|&i| self.alive[i]).filter_map(|i| Some((i, self.last[i].as_ref()?))) {
             for &p in &s.regions {
-                if !places.iter().any(|q| (q[0] - p[0]).hypot(q[1] - p[1]) <= pool) {
-                    places.push(p);
+                match places.iter().position(|q| (q[0] - p[0]).hypot(q[1] - p[1]) <= pool) {
+                    Some(k) => known[k] |= 1 << r,
+                    None => {
+                        places.push(p);
+                        known.push(1 << r);
+                    }
                 }
             }
         }
@@ -198,6 +205,9 @@ impl Coordinator {
                 _ => vec![None; places.len()],
             };
             for (k, p) in places.iter().enumerate() {
+                if known[k] & 1 << r == 0 {
+                    continue;
+                }
                 let metres = paths[k].unwrap_or_else(|| (p[0] - at[0]).hypot(p[1] - at[1]));
                 let t = metres / self.speeds[r].max(1e-3);
                 if best[k].is_none_or(|b| t < b.0) {
@@ -390,27 +400,27 @@ mod tests {
         let cfg = firmware::Config::DEFAULT.with_planner(firmware::PlannerKind::Live);
         let cfg = firmware::Config { origin_x_m: firmware::Meters::ZERO, origin_y_m: firmware::Meters::ZERO, ..cfg };
         let mut c = Coordinator::new(cfg, Some(Arc::new(cells)), vec![0.5, 0.5], 0.2, 100.0);
-        // Robot 0 at (14, 1), just west of the wall; robot 1 at (20, 1). A region at (16, 1):
-        // 2 m from robot 0 as the crow flies but about 11 m by the door; 4 m from robot 1.
-        // Another at (5, 3), nearer robot 0 either way, reported by both robots.
+        // Robot 0 at (14, 1), just west of the wall; robot 1 at (20, 1). A region at (16, 1),
+        // reported by both: 2 m from robot 0 as the crow flies but about 11 m by the door; 4 m
+        // from robot 1.
         let hellos = [status(0, None, [14.0, 1.0], 0, vec![]), status(1, None, [20.0, 1.0], 0, vec![])];
         c.start(&hellos).unwrap();
+        // Another at (5, 3), nearer robot 0 either way; (25, 3), reported by robot 0 alone.
         let mut s0 = status(0, Some(0), [14.0, 1.0], c.epochs[0], vec![]);
         let mut s1 = status(1, Some(0), [20.0, 1.0], c.epochs[1], vec![]);
-        s0.regions = vec![[5.0, 3.0]];
+        s0.regions = vec![[5.0, 3.0], [16.05, 1.05], [25.0, 3.0]];
         s1.regions = vec![[16.0, 1.0], [5.05, 3.05]];
         c.after_tick(0, &[Some(s0.clone()), Some(s1.clone())]).unwrap();
-        assert_eq!(c.tick_msg(1, false).regions, vec![(0, [5.0, 3.0]), (1, [16.0, 1.0])]);
+        // (25, 3) is nearer robot 1, but only robot 0's store holds it: it is robot 0's.
+        assert_eq!(c.tick_msg(1, false).regions, vec![(0, [5.0, 3.0]), (1, [16.05, 1.05]), (0, [25.0, 3.0])]);
         // Without the map the crow's distance decides: (16, 1) goes to robot 0.
         let mut flat = Coordinator::new(cfg, None, vec![0.5, 0.5], 0.2, 100.0);
         flat.start(&hellos).unwrap();
         flat.after_tick(0, &[Some(s0.clone()), Some(s1.clone())]).unwrap();
-        assert_eq!(flat.tick_msg(1, false).regions, vec![(0, [5.0, 3.0]), (0, [16.0, 1.0])]);
-        // Robot 1 stops answering: its region goes to robot 0 at once (the regions it alone
-        // reported go with it).
-        s0.regions = vec![[5.0, 3.0], [16.0, 1.0]];
+        assert_eq!(flat.tick_msg(1, false).regions, vec![(0, [5.0, 3.0]), (0, [16.05, 1.05]), (0, [25.0, 3.0])]);
+        // Robot 1 stops answering: its region goes to robot 0 at once.
         c.after_tick(1, &[Some(s0), None]).unwrap();
-        assert_eq!(c.tick_msg(2, false).regions, vec![(0, [5.0, 3.0]), (0, [16.0, 1.0])]);
+        assert_eq!(c.tick_msg(2, false).regions, vec![(0, [5.0, 3.0]), (0, [16.05, 1.05]), (0, [25.0, 3.0])]);
     }
 
     #[test]

@@ -126,7 +126,10 @@ fn heldout_seeds_are_disjoint_from_tunes_and_split_into_easy_and_hard() {
     // A second set: worlds 3 and 4 are the same worlds, in the same scenarios, as in the first.
     let second = heldout_specs(3, 2, &[PlannerChoice::Nearest], &[], |_| Ok(())).unwrap();
     let first = heldout_specs(0, 5, &[PlannerChoice::Nearest], &[], |_| Ok(())).unwrap();
-    assert_eq!(second.iter().map(|s| (s.seed, s.scenario_label())).collect::<Vec<_>>(), [(HELDOUT_FIRST_SEED + 3, "hard"), (HELDOUT_FIRST_SEED + 4, "easy")]);
+    assert_eq!(
+        second.iter().map(|s| (s.seed, s.scenario_label())).collect::<Vec<_>>(),
+        [(HELDOUT_FIRST_SEED + 3, "hard"), (HELDOUT_FIRST_SEED + 4, "easy")]
+    );
     assert_eq!((&second[0].world, &second[1].world), (&first[3].world, &first[4].world));
 }
 
