@@ -77,10 +77,6 @@ pub const MAX_PROPOSALS: usize = 12;
 /// Teammates' goals a robot of a team keeps clear of (`Controller::set_team_claims`).
 pub const MAX_TEAM_CLAIMS: usize = 8;
 
-/// Inspection regions a team's coordinator gave to teammates, which a robot leaves to them
-/// (`Controller::set_region_claims`).
-pub const MAX_REGION_CLAIMS: usize = 32;
-
 /// Waypoints of a coverage route (LIVE's waypoint manager, `crate::planner::coverage`): the
 /// host's route over a known building; more are refused.
 pub const MAX_ROUTE_WAYPOINTS: usize = 256;

@@ -113,35 +113,4 @@ impl Controller {
             self.goal = None;
         }
     }
-
-    /// The inspection regions the team's coordinator gave to teammates (map frame; at most
-    /// [`crate::capacity::MAX_REGION_CLAIMS`]): LIVE's waypoint manager sends this robot to
-    /// none within `nonmap_pool_radius_m` of one. Its own priority waypoint, if it looks at
-    /// such a region, is dropped (the next tick plans again). A robot alone has none.
-    pub fn set_region_claims(&mut self, regions: &[(Meters, Meters)]) {
-        let mut cells: heapless::Vec<(i32, i32), { crate::capacity::MAX_REGION_CLAIMS }> = heapless::Vec::new();
-        for &(x, y) in regions {
-            // More than the capacity are ignored.
-            let _ = cells.push(self.lidar.geom.cell_of(x, y));
-        }
-        self.planner.set_region_claims(&cells);
-        let r = crate::grid::GridGeometry::cells(self.cfg.nonmap_pool_radius_m);
-        let given_away =
-            self.planner.route.priority_region().is_some_and(|(x, y)| self.planner.is_region_claimed(self.lidar.geom.cell_of(x, y), r));
-        if given_away && self.goal.as_ref().is_some_and(|g| g.viewpoint.source == crate::planner::Site::Inspection) {
-            // The waypoint manager's next step ends the priority waypoint (its region is
-            // claimed) and resumes the route.
-            self.goal = None;
-        }
-    }
-
-    /// The inspection regions LIVE's waypoint manager could send this robot to: the non-map
-    /// store's points with [`crate::planner::coverage::LIVE_REGION_MIN_HITS`] returns that the
-    /// camera has not seen, in the store's order (map frame).
-    pub fn inspection_regions(&self) -> impl Iterator<Item = (Meters, Meters)> + '_ {
-        self.nonmap.points().iter().filter_map(move |p| {
-            let c = self.lidar.geom.cell_of(p.x, p.y);
-            (p.hits >= crate::planner::coverage::LIVE_REGION_MIN_HITS && !self.visual.seen(c.0, c.1)).then_some((p.x, p.y))
-        })
-    }
 }

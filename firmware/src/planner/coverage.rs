@@ -163,11 +163,6 @@ impl Route {
         self.done.get(i / 32).is_some_and(|w| w >> (i % 32) & 1 != 0)
     }
 
-    /// The inspection region the priority waypoint being pursued looks at (map frame).
-    pub(crate) fn priority_region(&self) -> Option<(Meters, Meters)> {
-        self.priority.map(|p| p.region)
-    }
-
     fn mark_done(&mut self, i: usize) {
         if let Some(w) = self.done.get_mut(i / 32) {
             *w |= 1 << (i % 32);
@@ -209,8 +204,7 @@ impl Planner {
                 self.route.stats.regions_seen += 1;
             }
             let there = at(stand, p.heading);
-            let claimed = self.is_claimed(stand, super::claim_radius(cfg))
-                || self.is_region_claimed(region, GridGeometry::cells(cfg.nonmap_pool_radius_m));
+            let claimed = self.is_claimed(stand, super::claim_radius(cfg));
             if seen || there || claimed || self.is_blacklisted(stand, bl) || self.distance(stand.0, stand.1) == UNREACHABLE {
                 self.route.priority = None;
                 // The interval runs from here: the route gets at least that long before the
@@ -282,15 +276,12 @@ impl Planner {
         let robot = self.robot_cell;
         let r_cells = GridGeometry::cells(step.inputs.cfg.camera_range_m) as i64;
         let claim = super::claim_radius(step.inputs.cfg);
-        // A region the coordinator gave a teammate: the same region, pooled as this robot's
-        // store pools its points.
-        let region_claim = GridGeometry::cells(step.inputs.cfg.nonmap_pool_radius_m);
         let mut best: Option<(u16, RegionView)> = None;
         let mut work = 0;
         for p in step.inputs.nonmap.points() {
             let c = geom.cell_of(p.x, p.y);
             work += 1;
-            if p.hits < LIVE_REGION_MIN_HITS || step.inputs.visual.seen(c.0, c.1) || self.is_region_claimed(c, region_claim) {
+            if p.hits < LIVE_REGION_MIN_HITS || step.inputs.visual.seen(c.0, c.1) {
                 continue;
             }
             let usable = |v: (i32, i32)| v != c && !self.is_blacklisted(v, bl) && !self.is_claimed(v, claim);
@@ -463,40 +454,6 @@ mod tests {
 
     const EAST: BinaryAngle = BinaryAngle::ZERO;
     const NORTH: BinaryAngle = BinaryAngle::QUARTER;
-
-    #[test]
-    fn a_region_the_coordinator_gave_a_teammate_gets_no_priority_waypoint_and_one_given_away_ends() {
-        let regions = |w: &mut World| {
-            w.region(8_000, 12_000);
-            w.region(10_000, 7_000);
-        };
-        // Alone, the nearer region (10, 7) gets the priority waypoint.
-        let mut alone = World::new(PlannerKind::Live);
-        regions(&mut alone);
-        let (at, heading, _) = alone.step(5_050, 5_050, EAST, 0).unwrap();
-        let bearing = atan2((7_050 - at.1) as i32, (10_050 - at.0) as i32);
-        assert!((heading - bearing).unsigned_abs() < BinaryAngle::from_degrees(3).unsigned_abs(), "looks at (10, 7): {at:?}");
-        // (10, 7) belongs to a teammate: the priority goes to the other one.
-        let mut w = World::new(PlannerKind::Live);
-        regions(&mut w);
-        let geom = w.lidar.geom;
-        w.planner.set_region_claims(&[geom.cell_of(m(10_100), m(7_050))]);
-        let (at, heading, src) = w.step(5_050, 5_050, EAST, 0).unwrap();
-        assert_eq!(src, Site::Inspection);
-        let bearing = atan2((12_050 - at.1) as i32, (8_050 - at.0) as i32);
-        assert!((heading - bearing).unsigned_abs() < BinaryAngle::from_degrees(3).unsigned_abs(), "looks at (8, 12): {at:?}");
-        // Now (8, 12) is given away too, while pursued: the priority ends, the route resumes.
-        w.planner.set_region_claims(&[geom.cell_of(m(8_000), m(12_000)), geom.cell_of(m(10_000), m(7_000))]);
-        let (at, _, src) = w.step(6_000, 6_000, EAST, 2).unwrap();
-        assert!(near(at, (15_050, 5_050)) && src == Site::Route, "{at:?} {src:?}");
-        // Both regions are the teammates': none is inspected, even with the route done.
-        let mut w2 = World::new(PlannerKind::Live);
-        w2.region(8_000, 12_000);
-        w2.planner.set_region_claims(&[geom.cell_of(m(8_000), m(12_000))]);
-        let (_, _, src) = w2.step(5_050, 5_050, EAST, 0).unwrap();
-        assert_eq!(src, Site::Route);
-        assert_eq!(w2.planner.route.stats.priorities, 0);
-    }
 
     #[test]
     fn the_manager_follows_the_route_and_inserts_a_priority_waypoint_only_after_a_waypoint_is_reached() {

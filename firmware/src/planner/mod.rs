@@ -214,9 +214,6 @@ pub struct Planner {
     pub route: coverage::Route,
     /// A team's goals this robot leaves to its teammates (`Controller::set_team_claims`).
     claims: heapless::Vec<(i32, i32), { crate::capacity::MAX_TEAM_CLAIMS }>,
-    /// Inspection regions the team's coordinator gave to teammates
-    /// (`Controller::set_region_claims`).
-    region_claims: heapless::Vec<(i32, i32), { crate::capacity::MAX_REGION_CLAIMS }>,
 }
 
 /// How far from a teammate's goal a robot of a team chooses none of its own, in cells: half the
@@ -288,7 +285,6 @@ impl Planner {
             stamp: 0,
             blacklist: heapless::Deque::new(),
             claims: heapless::Vec::new(),
-            region_claims: heapless::Vec::new(),
             visible: heapless::Vec::new(),
             candidates: heapless::Vec::new(),
             stats: PlanStats {
@@ -399,20 +395,6 @@ impl Planner {
         for &c in cells.iter().take(crate::capacity::MAX_TEAM_CLAIMS) {
             let _ = self.claims.push(c);
         }
-    }
-
-    /// The inspection regions given to teammates (at most
-    /// [`crate::capacity::MAX_REGION_CLAIMS`]; more are ignored).
-    pub fn set_region_claims(&mut self, cells: &[(i32, i32)]) {
-        self.region_claims.clear();
-        for &c in cells.iter().take(crate::capacity::MAX_REGION_CLAIMS) {
-            let _ = self.region_claims.push(c);
-        }
-    }
-
-    /// Whether region cell `c` is within `radius_cells` of a region given to a teammate.
-    pub(crate) fn is_region_claimed(&self, c: (i32, i32), radius_cells: i32) -> bool {
-        within(self.region_claims.iter(), c, radius_cells)
     }
 
     /// Whether site `c` is within `radius_cells` of a teammate's goal.

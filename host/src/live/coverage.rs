@@ -145,27 +145,14 @@ impl KnownGrid<'_> {
     /// Path distance (steps 5 straight, 7 diagonal, no corner cutting) from `from` to every
     /// cell of `ok`.
     fn dijkstra(&self, ok: &[bool], from: usize) -> Vec<u32> {
-        self.dijkstra_until(ok, from, &[])
-    }
-
-    /// [`KnownGrid::dijkstra`], stopping once every cell of `targets` is settled (none: the
-    /// whole of `ok`); cells not settled by then read `u32::MAX`.
-    fn dijkstra_until(&self, ok: &[bool], from: usize, targets: &[usize]) -> Vec<u32> {
         let n = self.side as i64;
         let mut dist = vec![u32::MAX; ok.len()];
         let mut heap = BinaryHeap::new();
-        let mut left = targets.iter().filter(|&&t| t < ok.len()).count();
         dist[from] = 0;
         heap.push(std::cmp::Reverse((0u32, from)));
         while let Some(std::cmp::Reverse((d, i))) = heap.pop() {
             if d > dist[i] {
                 continue;
-            }
-            if !targets.is_empty() {
-                left -= targets.iter().filter(|&&t| t == i).count();
-                if left == 0 {
-                    break;
-                }
             }
             let (x, y) = (i as i64 % n, i as i64 / n);
             for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)] {
@@ -186,25 +173,6 @@ impl KnownGrid<'_> {
             }
         }
         dist
-    }
-
-    /// The path length in metres from `from` to each of `to` over the map's free cells (8
-    /// neighbours, no corner cutting; a place off the map or not joined to `from` is `None`).
-    pub fn path_lengths_m(&self, from: [f64; 2], to: &[[f64; 2]]) -> Vec<Option<f64>> {
-        let n = self.side as i64;
-        let index = |p: [f64; 2]| {
-            let (x, y) = self.cell_of(p);
-            (x >= 0 && y >= 0 && x < n && y < n).then_some((y * n + x) as usize)
-        };
-        let ok: Vec<bool> = self.cells.iter().map(|c| *c == Cell3::Free).collect();
-        let targets: Vec<Option<usize>> = to.iter().map(|&p| index(p).filter(|&i| ok[i])).collect();
-        let Some(start) = index(from).filter(|&i| ok[i]) else { return vec![None; to.len()] };
-        let wanted: Vec<usize> = targets.iter().flatten().copied().collect();
-        if wanted.is_empty() {
-            return vec![None; to.len()];
-        }
-        let dist = self.dijkstra_until(&ok, start, &wanted);
-        targets.iter().map(|t| t.and_then(|i| (dist[i] != u32::MAX).then(|| dist[i] as f64 / 5.0 * CELL_M))).collect()
     }
 
     /// The free cells seen from cell `c` facing `heading` (radians) with `fp`, sorted.

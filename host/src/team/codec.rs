@@ -14,9 +14,6 @@ pub const STATUS_TYPE: &str = "lives_team/msg/RobotStatus";
 pub const MAX_WAYPOINTS: usize = firmware::capacity::MAX_ROUTE_WAYPOINTS;
 /// Most cells one status reports seen (a 0.1 m grid's camera cone is far fewer per tick).
 pub const MAX_SEEN: usize = 1 << 16;
-/// Most inspection regions one status reports (the core gives a teammate's at most
-/// `firmware::capacity::MAX_REGION_CLAIMS`).
-pub const MAX_REGIONS: usize = firmware::capacity::MAX_REGION_CLAIMS;
 
 fn put_u32s(w: &mut CdrWriter, v: impl ExactSizeIterator<Item = u32>) {
     w.put((v.len() as u32).to_le_bytes());
@@ -94,37 +91,13 @@ fn points(r: &mut CdrReader, what: &'static str, n: usize, max: usize) -> Result
     Ok(out)
 }
 
-/// Points as `float64[] xy`.
-fn put_xy(w: &mut CdrWriter, pts: &[[f64; 2]]) {
-    w.put((2 * pts.len() as u32).to_le_bytes());
-    for v in pts.iter().flatten() {
-        w.put(v.to_le_bytes());
-    }
-}
-
-fn xy(r: &mut CdrReader, what: &'static str, max: usize) -> Result<Vec<[f64; 2]>, String> {
-    let m = r.count(what, 8).map_err(cdr)?;
-    if m % 2 != 0 || m / 2 > max {
-        return Err(format!("{what}: {m} coordinates, not 2 a point for at most {max} points"));
-    }
-    (0..m / 2)
-        .map(|k| {
-            let p = r.f64s::<2>(what).map_err(cdr)?;
-            if p.iter().any(|v| !v.is_finite()) {
-                return Err(format!("{what}: point {k} is not finite"));
-            }
-            Ok(p)
-        })
-        .collect()
-}
-
 fn cdr(e: CdrError) -> String {
     e.to_string()
 }
 
 /// `Tick`: `uint32 tick`, `bool stop`, `uint32[] epochs`, `goals` and `positions` (points:
 /// `uint32[]` which robots, `float64[]` their x, y), `uint32[] seen` (runs), `uint32[]
-/// lidar` (runs), `uint32[] region_robots` and `float64[] regions` (x, y each).
+/// lidar` (runs).
 pub fn encode_tick(m: &TickMsg) -> Vec<u8> {
     let mut w = CdrWriter::new();
     w.put(m.tick.to_le_bytes());
@@ -134,8 +107,6 @@ pub fn encode_tick(m: &TickMsg) -> Vec<u8> {
     put_points(&mut w, &m.positions);
     put_seen(&mut w, &m.seen);
     put_seen(&mut w, &m.lidar);
-    put_u32s(&mut w, m.regions.iter().map(|r| r.0));
-    put_xy(&mut w, &m.regions.iter().map(|r| r.1).collect::<Vec<_>>());
     w.finish()
 }
 
@@ -148,17 +119,7 @@ pub fn decode_tick(buf: &[u8]) -> Result<TickMsg, String> {
     let positions = points(&mut r, "positions", epochs.len(), MAX_ROBOTS)?;
     let seen_cells = seen(&mut r, "seen")?;
     let lidar = seen(&mut r, "lidar")?;
-    let most = MAX_ROBOTS * MAX_REGIONS;
-    let owners = u32s(&mut r, "region_robots", most)?;
-    let places = xy(&mut r, "regions", most)?;
-    if owners.len() != places.len() {
-        return Err(format!("regions: {} robots for {} regions", owners.len(), places.len()));
-    }
-    if let Some(o) = owners.iter().find(|&&o| o as usize >= epochs.len()) {
-        return Err(format!("regions: robot {o} beyond the team's {}", epochs.len()));
-    }
-    let regions = owners.into_iter().zip(places).collect();
-    Ok(TickMsg { tick, stop, epochs, goals, positions, seen: seen_cells, lidar, regions })
+    Ok(TickMsg { tick, stop, epochs, goals, positions, seen: seen_cells, lidar })
 }
 
 /// `Assignment`: `uint32 robot`, `uint32 epoch`, `float64[] waypoints` (x, y, heading each).
@@ -194,8 +155,8 @@ pub fn decode_assignment(buf: &[u8]) -> Result<Assignment, String> {
 
 /// `RobotStatus`: `uint32 robot`, `uint32 instance`, `int64 tick` (−1: joining), `float64[3]
 /// pose`, `bool found`, `bool idle`, `uint32 epoch`, `int64 goal_epoch` (−1: no goal),
-/// `uint16[] done` (as `uint32[]`), `goal` (points), `uint32[] seen` (runs), `uint32[] lidar` (runs),
-/// `float64[] regions` (x, y each), `float64 path_m`.
+/// `uint16[] done` (as `uint32[]`), `goal` (points), `uint32[] seen` (runs), `uint32[] lidar` (runs), `float64
+/// path_m`.
 pub fn encode_status(m: &Status) -> Vec<u8> {
     let mut w = CdrWriter::new();
     w.put(m.robot.to_le_bytes());
@@ -212,7 +173,6 @@ pub fn encode_status(m: &Status) -> Vec<u8> {
     put_points(&mut w, &[m.goal]);
     put_seen(&mut w, &m.seen);
     put_seen(&mut w, &m.lidar);
-    put_xy(&mut w, &m.regions);
     w.put(m.path_m.to_le_bytes());
     w.finish()
 }
@@ -246,7 +206,6 @@ pub fn decode_status(buf: &[u8]) -> Result<Status, String> {
     let goal = points(&mut r, "goal", 1, 1)?[0];
     let seen_cells = seen(&mut r, "seen")?;
     let lidar = seen(&mut r, "lidar")?;
-    let regions = xy(&mut r, "regions", MAX_REGIONS)?;
     let path_m = r.f64("path_m").map_err(cdr)?;
     Ok(Status {
         robot,
@@ -261,7 +220,6 @@ pub fn decode_status(buf: &[u8]) -> Result<Status, String> {
         goal,
         seen: seen_cells,
         lidar,
-        regions,
         path_m,
     })
 }
@@ -284,7 +242,6 @@ mod tests {
             seen: vec![10, 11, 12 | crate::team::SEEN_OCCUPIED, 262_143],
             lidar: vec![3, 4 | crate::team::SEEN_OCCUPIED],
             goal: Some([4.0, 5.0]),
-            regions: vec![[7.5, -1.25], [0.0, 3.0]],
             path_m: 12.5,
         }
     }
@@ -299,12 +256,10 @@ mod tests {
             positions: vec![Some([0.0, 0.5]), Some([1.5, 2.5]), None],
             seen: vec![5, 6, 7, 7 | crate::team::SEEN_OCCUPIED, 100],
             lidar: vec![1, 2],
-            regions: vec![(2, [7.5, -1.25]), (0, [0.0, 3.0])],
         };
         let a = Assignment { robot: 1, epoch: 2, waypoints: vec![[1.0, 2.0, 0.5], [3.0, -4.0, -1.0]] };
         let s = status();
-        let joining =
-            Status { tick: None, goal_epoch: None, done: vec![], seen: vec![], lidar: vec![], goal: None, regions: vec![], ..status() };
+        let joining = Status { tick: None, goal_epoch: None, done: vec![], seen: vec![], lidar: vec![], goal: None, ..status() };
         assert_eq!(decode_tick(&encode_tick(&t)).unwrap(), t);
         assert_eq!(decode_assignment(&encode_assignment(&a)).unwrap(), a);
         assert_eq!(decode_status(&encode_status(&s)).unwrap(), s);
@@ -343,24 +298,11 @@ mod tests {
             positions: vec![None; 3],
             seen: vec![],
             lidar: vec![],
-            regions: vec![(1, [2.0, 2.0])],
         };
         let mut b = encode_tick(&t);
         // Header 4, tick 4, stop 1 + 3, epochs 4 + 12, `which` count 4: its element at 32.
         assert_eq!(b[32..36], 2u32.to_le_bytes());
         b[32..36].copy_from_slice(&5u32.to_le_bytes());
         assert!(decode_tick(&b).unwrap_err().contains("beyond"), "{:?}", decode_tick(&b));
-        // A region given to robot 7 in a team of 3; one not finite; an odd coordinate count.
-        let region = |r: Vec<(u32, [f64; 2])>| encode_tick(&TickMsg { regions: r, ..t.clone() });
-        assert!(decode_tick(&region(vec![(7, [1.0, 1.0])])).unwrap_err().contains("robot 7 beyond"));
-        assert!(decode_tick(&region(vec![(0, [f64::NAN, 1.0])])).unwrap_err().contains("not finite"));
-        let mut odd = region(vec![(0, [1.0, 1.0])]);
-        // The coordinate count (2), before the two float64s (and any alignment padding).
-        let k = (0..odd.len() - 16).rev().find(|&k| odd[k..k + 4] == 2u32.to_le_bytes()).unwrap();
-        odd[k..k + 4].copy_from_slice(&3u32.to_le_bytes());
-        assert!(decode_tick(&odd).unwrap_err().contains("regions"), "{:?}", decode_tick(&odd));
-        // More regions than a status may carry.
-        let many = Status { regions: vec![[1.0, 1.0]; MAX_REGIONS + 1], ..status() };
-        assert!(decode_status(&encode_status(&many)).unwrap_err().contains("at most"));
     }
 }

@@ -47,10 +47,6 @@ pub struct Coordinator {
     reshares: u32,
     stale_goals: u32,
     entropy_start: Option<u32>,
-    /// The inspection regions reported at the last tick and the robot each is given to.
-    regions: Vec<(u32, [f64; 2])>,
-    /// The tick the regions were last given out.
-    regions_tick: Option<u32>,
 }
 
 impl Coordinator {
@@ -85,8 +81,6 @@ impl Coordinator {
             reshares: 0,
             stale_goals: 0,
             entropy_start: None,
-            regions: Vec::new(),
-            regions_tick: None,
         }
     }
 
@@ -156,66 +150,7 @@ impl Coordinator {
                 .collect(),
             seen: self.relay.clone(),
             lidar: self.relay_lidar.clone(),
-            regions: self.regions.clone(),
         }
-    }
-
-    /// Gives every inspection region the robots still answering reported to the robot, of those
-    /// that reported it, that would reach it first: path length over the known map's free cells (as the crow flies
-    /// without a map, or where no path joins them) over the robot's top speed; a tie to the
-    /// lower index. Regions within `nonmap_pool_radius_m` of one listed before are the same
-    /// region. Recomputed when the regions change and at least every `replan_interval_us`
-    /// and when an owner stops answering (robots move; the owners hold in between, so a region
-    /// does not flip between two robots from one tick to the next).
-    fn give_regions(&mut self, tick: u32) {
-        let pool = self.cfg.nonmap_pool_radius_m.to_num::<f64>();
-        // Each region, and the robots that reported it (bit r): only those hold it in their
-        // non-map store, so only they can be sent to look at it.
-        let mut places: Vec<[f64; 2]> = Vec::new();
-        let mut known: Vec<u32> = Vec::new();
-        for (r, s) in (0..self.n()).filter(|&i| self.alive[i]).filter_map(|i| Some((i, self.last[i].as_ref()?))) {
-            for &p in &s.regions {
-                match places.iter().position(|q| (q[0] - p[0]).hypot(q[1] - p[1]) <= pool) {
-                    Some(k) => known[k] |= 1 << r,
-                    None => {
-                        places.push(p);
-                        known.push(1 << r);
-                    }
-                }
-            }
-        }
-        let every = (self.cfg.replan_interval_us as f64 / 1e6 / self.tick_s).round().max(1.0) as u32;
-        let same = places.len() == self.regions.len()
-            && places.iter().zip(&self.regions).all(|(p, r)| *p == r.1 && self.alive.get(r.0 as usize) == Some(&true));
-        if same && self.regions_tick.is_some_and(|t| tick.saturating_sub(t) < every) {
-            return;
-        }
-        self.regions_tick = Some(tick);
-        let map = self.cells.as_ref().map(|cells| KnownGrid {
-            cells,
-            side: firmware::capacity::GRID_CELLS,
-            origin: [self.cfg.origin_x_m.to_num::<f64>(), self.cfg.origin_y_m.to_num::<f64>()],
-        });
-        let mut best: Vec<Option<(f64, u32)>> = vec![None; places.len()];
-        for r in (0..self.n()).filter(|&i| self.alive[i]) {
-            let Some(s) = self.last[r].as_ref() else { continue };
-            let at = [s.pose[0], s.pose[1]];
-            let paths = match (&map, places.is_empty()) {
-                (Some(m), false) => m.path_lengths_m(at, &places),
-                _ => vec![None; places.len()],
-            };
-            for (k, p) in places.iter().enumerate() {
-                if known[k] & 1 << r == 0 {
-                    continue;
-                }
-                let metres = paths[k].unwrap_or_else(|| (p[0] - at[0]).hypot(p[1] - at[1]));
-                let t = metres / self.speeds[r].max(1e-3);
-                if best[k].is_none_or(|b| t < b.0) {
-                    best[k] = Some((t, r as u32));
-                }
-            }
-        }
-        self.regions = places.into_iter().zip(best).filter_map(|(p, b)| Some((b?.1, p))).collect();
     }
 
     /// Whether robot `r` still answers.
@@ -274,7 +209,6 @@ impl Coordinator {
         self.relay_lidar.sort_by_key(|c| c & !super::SEEN_OCCUPIED);
         self.relay_lidar.dedup_by_key(|c| *c & !super::SEEN_OCCUPIED);
         let survivors: Vec<usize> = (0..self.n()).filter(|&i| self.alive[i]).collect();
-        self.give_regions(tick);
         let mut decision = Decision::default();
         // A robot that has done every waypoint of its share (a non-empty one: an empty share
         // means nothing was left to give it) takes part of what the others have left.
@@ -385,42 +319,8 @@ mod tests {
             seen: Vec::new(),
             goal: None,
             lidar: Vec::new(),
-            regions: Vec::new(),
             path_m: 0.0,
         }
-    }
-
-    #[test]
-    fn each_region_goes_to_the_robot_that_reaches_it_first_by_path() {
-        // The corridor cut by a wall at x = 15 m with a door at its north end (y 5–6 m).
-        let mut cells = (*corridor()).clone();
-        for y in 0..=50 {
-            cells[y * GRID_CELLS + 150] = Cell3::Occupied;
-        }
-        let cfg = firmware::Config::DEFAULT.with_planner(firmware::PlannerKind::Live);
-        let cfg = firmware::Config { origin_x_m: firmware::Meters::ZERO, origin_y_m: firmware::Meters::ZERO, ..cfg };
-        let mut c = Coordinator::new(cfg, Some(Arc::new(cells)), vec![0.5, 0.5], 0.2, 100.0);
-        // Robot 0 at (14, 1), just west of the wall; robot 1 at (20, 1). A region at (16, 1),
-        // reported by both: 2 m from robot 0 as the crow flies but about 11 m by the door; 4 m
-        // from robot 1.
-        let hellos = [status(0, None, [14.0, 1.0], 0, vec![]), status(1, None, [20.0, 1.0], 0, vec![])];
-        c.start(&hellos).unwrap();
-        // Another at (5, 3), nearer robot 0 either way; (25, 3), reported by robot 0 alone.
-        let mut s0 = status(0, Some(0), [14.0, 1.0], c.epochs[0], vec![]);
-        let mut s1 = status(1, Some(0), [20.0, 1.0], c.epochs[1], vec![]);
-        s0.regions = vec![[5.0, 3.0], [16.05, 1.05], [25.0, 3.0]];
-        s1.regions = vec![[16.0, 1.0], [5.05, 3.05]];
-        c.after_tick(0, &[Some(s0.clone()), Some(s1.clone())]).unwrap();
-        // (25, 3) is nearer robot 1, but only robot 0's store holds it: it is robot 0's.
-        assert_eq!(c.tick_msg(1, false).regions, vec![(0, [5.0, 3.0]), (1, [16.05, 1.05]), (0, [25.0, 3.0])]);
-        // Without the map the crow's distance decides: (16, 1) goes to robot 0.
-        let mut flat = Coordinator::new(cfg, None, vec![0.5, 0.5], 0.2, 100.0);
-        flat.start(&hellos).unwrap();
-        flat.after_tick(0, &[Some(s0.clone()), Some(s1.clone())]).unwrap();
-        assert_eq!(flat.tick_msg(1, false).regions, vec![(0, [5.0, 3.0]), (0, [16.05, 1.05]), (0, [25.0, 3.0])]);
-        // Robot 1 stops answering: its region goes to robot 0 at once.
-        c.after_tick(1, &[Some(s0), None]).unwrap();
-        assert_eq!(c.tick_msg(2, false).regions, vec![(0, [5.0, 3.0]), (0, [16.05, 1.05]), (0, [25.0, 3.0])]);
     }
 
     #[test]

@@ -131,7 +131,6 @@ pub fn run(spec: &TeamSpec, opts: &DdsOptions, robot_args: impl Fn(usize) -> Vec
         positions: Vec::new(),
         seen: Vec::new(),
         lidar: Vec::new(),
-        regions: Vec::new(),
     });
     let _ = send(&tick_w, &stop, "the stop");
     let deadline = Instant::now() + Duration::from_secs(5);
@@ -306,7 +305,6 @@ pub fn robot(spec: &TeamSpec, id: usize, opts: &DdsOptions) -> Result<(), String
             }
             robot.merge(&t.seen, &t.lidar);
             robot.give_way(&t.goals, &t.positions);
-            robot.take_regions(&t.regions);
             last = codec::encode_status(&robot.step(t.tick));
             next = t.tick + 1;
             last_sent = None;

@@ -59,10 +59,6 @@ pub struct TickMsg {
     /// The cells the robots' LiDARs observed anew (or saw change) at the last tick, without a
     /// known map (as [`Status::lidar`]): every robot takes them as a prior before it steps.
     pub lidar: Vec<u32>,
-    /// The inspection regions the robots reported ([`Status::regions`]), each with the robot
-    /// the coordinator gave it to, `(robot, [x, y])`: a robot leaves the others' to them
-    /// (`firmware::Controller::set_region_claims`, [`robot::TeamRobot::take_regions`]).
-    pub regions: Vec<(u32, [f64; 2])>,
 }
 
 /// In a seen cell's index, the bit that says the camera saw a surface (an occupied cell).
@@ -123,9 +119,6 @@ pub struct Status {
     /// holds anew or changed (free ↔ occupied) this tick, not counting what it took from the
     /// team, sorted.
     pub lidar: Vec<u32>,
-    /// The inspection regions its waypoint manager could look at (LIVE: non-map points with
-    /// enough returns that no camera has seen), `[x, y]`, at most [`codec::MAX_REGIONS`].
-    pub regions: Vec<[f64; 2]>,
     /// Distance walked, metres.
     pub path_m: f64,
 }

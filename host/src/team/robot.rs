@@ -97,17 +97,6 @@ impl TeamRobot {
         }
     }
 
-    /// Leaves to its teammates the inspection regions the coordinator gave them
-    /// ([`super::TickMsg::regions`]).
-    pub fn take_regions(&mut self, regions: &[(u32, [f64; 2])]) {
-        let theirs: Vec<(firmware::Meters, firmware::Meters)> = regions
-            .iter()
-            .filter(|r| r.0 != self.id)
-            .filter_map(|r| Some((fixed_point::meters_from_f64(r.1[0])?, fixed_point::meters_from_f64(r.1[1])?)))
-            .collect();
-        self.brain.ctrl.set_region_claims(&theirs);
-    }
-
     /// Leaves to each teammate the goal it is nearer to than this robot is (as the crow flies;
     /// a tie to the lower index), so two robots never pursue one goal and the nearer one keeps
     /// it (`positions` and `goals` by robot, this robot's own ignored).
@@ -232,11 +221,6 @@ impl TeamRobot {
             goal: self.brain.outputs().and_then(|o| o.goal.as_ref()).map(|g| [g.pose.x.to_num::<f64>(), g.pose.y.to_num::<f64>()]),
             seen,
             lidar: Vec::new(),
-            regions: ctrl
-                .inspection_regions()
-                .take(super::codec::MAX_REGIONS)
-                .map(|(x, y)| [x.to_num::<f64>(), y.to_num::<f64>()])
-                .collect(),
             path_m: crate::run::round3(self.source.sim.path_length_m()),
         }
     }
