@@ -678,6 +678,34 @@ fn an_mcap_bag_replays_with_the_laser_mount_applied() {
     assert!(!run.report.goals.is_empty(), "the controller planned on the bag");
 }
 
+/// Odometry whose frames are left empty (some drivers do): it moves the frame the laser's fixed
+/// transforms end in (`base_link`), from `odom`, and the bag replays as with the frames named.
+#[test]
+fn odometry_with_empty_frame_names_moves_the_body_the_laser_is_mounted_on() {
+    let unnamed: Vec<_> = bag_messages(YAW_90)
+        .into_iter()
+        .map(|(topic, ty, t, data)| {
+            if topic != "/odom" {
+                return (topic, ty, t, data);
+            }
+            let mut o = cdr::decode_odometry(&data, cdr::Wire::Cdr).unwrap();
+            o.child_frame_id.clear();
+            o.header.frame_id.clear();
+            (topic, ty, t, cdr::encode_odometry(&o))
+        })
+        .collect();
+    let run = replayed("unnamed-odometry.mcap", &unnamed);
+    assert_mounted_scan(&run);
+    let w = run
+        .report
+        .warnings
+        .iter()
+        .find(|w| w.contains("/odom leaves its frames empty"))
+        .unwrap_or_else(|| panic!("{:?}", run.report.warnings));
+    assert!(w.contains("`odom` → `base_link`"), "{w}");
+    assert_same_grid(&run, &replayed("named-odometry.mcap", &bag_messages(YAW_90)));
+}
+
 /// One scanner published on two topics (raw and filtered, every second scan filtered): the
 /// topic with more messages is used, once; a second scanner in a frame of its own is used too.
 #[test]

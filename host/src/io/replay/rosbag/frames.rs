@@ -254,6 +254,19 @@ impl FrameTree {
         None
     }
 
+    /// The frame `f`'s fixed (`tf_static`) transforms end in: `f` walked up its fixed edges
+    /// (`f` itself if it has none; a cycle stops after 64 edges).
+    pub(crate) fn fixed_root(&self, f: &str) -> String {
+        let mut cur = frame(f);
+        for _ in 0..64 {
+            match self.edges.get(&cur) {
+                Some(e) if e.fixed => cur = e.parent.clone(),
+                _ => break,
+            }
+        }
+        cur
+    }
+
     #[cfg(feature = "ros2")]
     /// Whether `f` is a frame of the tree (the child of an edge, or some edge's parent).
     pub(crate) fn knows(&self, f: &str) -> bool {
