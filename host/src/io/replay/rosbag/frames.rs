@@ -267,6 +267,30 @@ impl FrameTree {
         cur
     }
 
+    /// The edge an odometry message moves, `parent` → `child` as it names them, except that some
+    /// drivers leave them empty: an empty parent is `odom`, an empty child the frame the scan
+    /// frames' fixed transforms all end in (`base_link` for a laser mounted on it), or stays
+    /// empty when they end in several or there is no scan yet. The flag: a name was supplied.
+    pub(crate) fn odometry_edge<'a>(
+        &self,
+        parent: &str,
+        child: &str,
+        scan_frames: impl Iterator<Item = &'a str>,
+    ) -> (String, String, bool) {
+        let (mut p, mut c) = (frame(parent), frame(child));
+        let supplied = p.is_empty() || c.is_empty();
+        if p.is_empty() {
+            p = "odom".to_string();
+        }
+        if c.is_empty() {
+            let roots: std::collections::BTreeSet<String> = scan_frames.map(|f| self.fixed_root(f)).collect();
+            if roots.len() == 1 {
+                c = roots.into_iter().next().unwrap_or_default();
+            }
+        }
+        (p, c, supplied)
+    }
+
     #[cfg(feature = "ros2")]
     /// Whether `f` is a frame of the tree (the child of an edge, or some edge's parent).
     pub(crate) fn knows(&self, f: &str) -> bool {

@@ -98,17 +98,15 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
             _ => Vec::new(),
         })
         .collect();
-    // Odometry that names no frame: some drivers leave `child_frame_id` (or the header's
-    // `frame_id`) empty. The body it moves is then the frame the scans' fixed transforms end in
-    // (`base_link` for a laser mounted on it), if they all end in one; its parent `odom`.
-    let scan_roots: BTreeSet<String> = decoded
+    // Odometry that names no frame (some drivers leave them empty): [`FrameTree::odometry_edge`]
+    // over the scans' frames.
+    let scan_frames: BTreeSet<String> = decoded
         .iter()
         .filter_map(|(_, d)| match d {
-            Decoded::Scan(s) | Decoded::Cloud(s) => Some(tree.fixed_root(&s.header.frame_id)),
+            Decoded::Scan(s) | Decoded::Cloud(s) => Some(frame(&s.header.frame_id)),
             _ => None,
         })
         .collect();
-    let body = (scan_roots.len() == 1).then(|| scan_roots.iter().next().cloned()).flatten();
     let mut unnamed: BTreeMap<String, (String, String)> = BTreeMap::new();
     // Every moving transform, at its stamp (a scan is placed with samples before and after it).
     let mut odom_child: Option<String> = None;
@@ -125,14 +123,9 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
             }
             Decoded::Odom(o) => {
                 out.odometry += 1;
-                let (mut parent, mut child) = (frame(&o.header.frame_id), frame(&o.child_frame_id));
-                if parent.is_empty() || child.is_empty() {
-                    if parent.is_empty() {
-                        parent = "odom".to_string();
-                    }
-                    if let (true, Some(b)) = (child.is_empty(), &body) {
-                        child = b.clone();
-                    }
+                let (parent, child, supplied) =
+                    tree.odometry_edge(&o.header.frame_id, &o.child_frame_id, scan_frames.iter().map(String::as_str));
+                if supplied {
                     unnamed.entry(m.topic.clone()).or_insert_with(|| (parent.clone(), child.clone()));
                 }
                 let o = &cdr::Odometry {
@@ -162,9 +155,8 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
     for (topic, (parent, child)) in &unnamed {
         out.warnings.push(if child.is_empty() {
             format!(
-                "odometry on {topic} names no child frame and the scans' fixed transforms end in {} frames: it moves \
-                 nothing they are mounted on",
-                scan_roots.len()
+                "odometry on {topic} names no child frame and the scans' fixed transforms do not end in one frame: it moves \
+                 nothing they are mounted on"
             )
         } else {
             format!("odometry on {topic} leaves its frames empty: taken as `{parent}` → `{child}` (where the scans' fixed transforms end)")

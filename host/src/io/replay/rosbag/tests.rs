@@ -153,3 +153,21 @@ fn without_db3_a_sqlite_bag_names_the_feature() {
     let Some(ReplayError::Sqlite { reason, .. }) = &c.error else { panic!("{:?}", c.error) };
     assert!(reason.contains("`--features db3`"), "{reason}");
 }
+
+#[test]
+fn odometry_with_empty_frames_moves_the_body_the_scans_are_mounted_on() {
+    let mut t = FrameTree::default();
+    t.set_static("base_link", "laser", &Transform::planar(0.2, 0.0, 0.0)).unwrap();
+    t.set_static("base_link", "rear_laser", &Transform::planar(-0.2, 0.0, 3.0)).unwrap();
+    t.set_static("chassis", "base_link", &Transform::IDENTITY).unwrap();
+    let scans = ["laser", "/rear_laser"];
+    // Named frames stand, even with scans elsewhere.
+    assert_eq!(t.odometry_edge("odom", "base_footprint", scans.into_iter()), ("odom".into(), "base_footprint".into(), false));
+    // Empty: `odom` and the one frame both scanners' fixed transforms end in.
+    assert_eq!(t.odometry_edge("", "", scans.into_iter()), ("odom".into(), "chassis".into(), true));
+    assert_eq!(t.odometry_edge("/world", "", ["laser"].into_iter()), ("world".into(), "chassis".into(), true));
+    // A laser with no fixed transform is its own body; two trees, or no scan yet: no body.
+    assert_eq!(t.odometry_edge("odom", "", ["hokuyo"].into_iter()), ("odom".into(), "hokuyo".into(), true));
+    assert_eq!(t.odometry_edge("odom", "", ["laser", "hokuyo"].into_iter()), ("odom".into(), String::new(), true));
+    assert_eq!(t.odometry_edge("odom", "", std::iter::empty()), ("odom".into(), String::new(), true));
+}
