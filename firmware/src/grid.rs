@@ -56,6 +56,13 @@ pub struct PackedGrid {
     bytes: [u8; GRID_AREA / 4],
 }
 
+/// `n` cells' flags spread two bits a cell, as [`PackedGrid::occupied_span`] gives them: bit `2k`
+/// set if `occupied(k)`.
+#[inline]
+pub fn spread_span(n: usize, occupied: impl Fn(i32) -> bool) -> u32 {
+    (0..n as i32).filter(|&k| occupied(k)).fold(0, |m, k| m | 1 << (2 * k))
+}
+
 impl PackedGrid {
     /// All unknown.
     pub const fn new() -> Self {
@@ -105,13 +112,7 @@ impl PackedGrid {
             // Occupied is code 2: high bit set, low bit clear.
             return (codes >> 1) & !codes & even;
         }
-        let mut m = 0;
-        for k in 0..N as i32 {
-            if self.get(x.saturating_add(k), y) == Cell::Occupied {
-                m |= 1 << (2 * k);
-            }
-        }
-        m
+        spread_span(N, |k| self.get(x.saturating_add(k), y) == Cell::Occupied)
     }
 
     /// Sets the cell at `(x, y)`; returns false when out of bounds.

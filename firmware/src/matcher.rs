@@ -114,13 +114,7 @@ pub trait Occupancy {
     /// packed grid's own layout, so that a grid can answer from its bytes).
     #[inline]
     fn occupied_span(&self, x: i32, y: i32) -> u32 {
-        let mut m = 0;
-        for k in 0..SPAN as i32 {
-            if self.occupied(x.saturating_add(k), y) {
-                m |= 1 << (2 * k);
-            }
-        }
-        m
+        crate::grid::spread_span(SPAN, |k| self.occupied(x.saturating_add(k), y))
     }
 
     /// How surely cell `(x, y)` holds an obstacle, 0 ..= [`LEVEL_MAX`] (the sub-cell refinement

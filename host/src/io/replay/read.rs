@@ -268,10 +268,9 @@ impl RawLaser {
         for (s, line) in self.scans {
             match tree.resolve_at("laser", ns(s.t_s)) {
                 Ok((pose, _, depth)) if depth > 1 => {
-                    let x_axis = pose.rotate([1.0, 0.0, 0.0]);
                     log.scans.push(ScanRecord {
                         t_s: s.t_s,
-                        pose: [pose.t[0], pose.t[1], x_axis[1].atan2(x_axis[0])],
+                        pose: [pose.t[0], pose.t[1], pose.yaw()],
                         angle_min: s.angle_min,
                         angle_increment: s.angle_increment,
                         ranges_m: s.ranges_m,

@@ -396,14 +396,13 @@ impl Ros2Source {
                     self.count("odom");
                     let t = stamp(&o.header);
                     // Frames left empty by the driver: as replay takes them (`odometry_edge`).
-                    let (parent, child, supplied) =
+                    let (parent, child, filled_in) =
                         self.tree.odometry_edge(&o.header.frame_id, &o.child_frame_id, self.last_scan_ns.keys().map(String::as_str));
-                    if supplied && child.is_empty() {
+                    if filled_in && child.is_empty() {
                         self.reject("odom-unnamed-frame", format!("{topic}: no child frame, and no scan yet says which body it moves"));
                         return;
                     }
-                    let o = cdr::Odometry { header: cdr::Header { frame_id: parent, ..o.header.clone() }, child_frame_id: child, ..o };
-                    match self.add_edge(&o.header.frame_id, &o.child_frame_id, Some(t), &o.pose, EdgeSource::Odometry(&topic)) {
+                    match self.add_edge(&parent, &child, Some(t), &o.pose, EdgeSource::Odometry(&topic)) {
                         Ok(()) => {}
                         // `tf` carries the same edge (a robot commonly publishes both): not used.
                         Err(EdgeReject::Superseded) => self.count("odom-superseded"),

@@ -30,6 +30,12 @@ impl Iso {
         [v[0] + 2.0 * (w * c1[0] + c2[0]), v[1] + 2.0 * (w * c1[1] + c2[1]), v[2] + 2.0 * (w * c1[2] + c2[2])]
     }
 
+    /// The yaw of its x axis in the parent's plane, radians (a pose projected to the plane).
+    pub(crate) fn yaw(&self) -> f64 {
+        let x = self.rotate([1.0, 0.0, 0.0]);
+        x[1].atan2(x[0])
+    }
+
     /// `self ∘ other`: `other` expressed in `self`'s parent.
     pub(crate) fn compose(&self, other: &Iso) -> Iso {
         let r = self.rotate(other.t);
@@ -270,7 +276,7 @@ impl FrameTree {
     /// The edge an odometry message moves, `parent` → `child` as it names them, except that some
     /// drivers leave them empty: an empty parent is `odom`, an empty child the frame the scan
     /// frames' fixed transforms all end in (`base_link` for a laser mounted on it), or stays
-    /// empty when they end in several or there is no scan yet. The flag: a name was supplied.
+    /// empty when they end in several or there is no scan yet. The flag: a name was filled in.
     pub(crate) fn odometry_edge<'a>(
         &self,
         parent: &str,
@@ -278,7 +284,7 @@ impl FrameTree {
         scan_frames: impl Iterator<Item = &'a str>,
     ) -> (String, String, bool) {
         let (mut p, mut c) = (frame(parent), frame(child));
-        let supplied = p.is_empty() || c.is_empty();
+        let filled_in = p.is_empty() || c.is_empty();
         if p.is_empty() {
             p = "odom".to_string();
         }
@@ -288,7 +294,7 @@ impl FrameTree {
                 c = roots.into_iter().next().unwrap_or_default();
             }
         }
-        (p, c, supplied)
+        (p, c, filled_in)
     }
 
     #[cfg(feature = "ros2")]

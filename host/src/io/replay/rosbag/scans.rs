@@ -78,13 +78,12 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
     }
     let mut tree = FrameTree::default();
     let mut rej = RejectedTransforms::default();
-    let count = |r: Result<(), EdgeReject>, rej: &mut RejectedTransforms| rej.count(r);
     // tf_static describes the robot's fixed geometry: it holds for the whole bag.
     for (m, d) in &decoded {
         if let (MsgType::TfStatic, Decoded::Tf(ts)) = (m.kind, d) {
             for t in ts {
                 out.transforms += 1;
-                count(tree.set_static(&t.header.frame_id, &t.child_frame_id, &t.transform), &mut rej);
+                rej.count(tree.set_static(&t.header.frame_id, &t.child_frame_id, &t.transform));
             }
         }
     }
@@ -118,36 +117,31 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
                 for t in ts {
                     out.transforms += 1;
                     let r = tree.push(&t.header.frame_id, &t.child_frame_id, stamp_ns(&t.header, m.t_ns), &t.transform, EdgeSource::Tf);
-                    count(r, &mut rej);
+                    rej.count(r);
                 }
             }
             Decoded::Odom(o) => {
                 out.odometry += 1;
-                let (parent, child, supplied) =
+                let (parent, child, filled_in) =
                     tree.odometry_edge(&o.header.frame_id, &o.child_frame_id, scan_frames.iter().map(String::as_str));
-                if supplied {
+                if filled_in {
                     unnamed.entry(m.topic.clone()).or_insert_with(|| (parent.clone(), child.clone()));
                 }
-                let o = &cdr::Odometry {
-                    header: cdr::Header { frame_id: parent.clone(), ..o.header.clone() },
-                    child_frame_id: child.clone(),
-                    ..o.clone()
-                };
                 let by_tf = tf_edges.contains(&(parent.clone(), child.clone()));
                 let r = if by_tf {
                     Err(EdgeReject::Superseded)
                 } else {
                     tree.push(&parent, &child, stamp_ns(&o.header, m.t_ns), &o.pose, EdgeSource::Odometry(&m.topic))
                 };
+                // The body frame odometry moves (by this topic or by another source).
+                if matches!(r, Ok(()) | Err(EdgeReject::Superseded)) && odom_child.is_none() {
+                    odom_child = Some(child.clone());
+                }
                 if r == Err(EdgeReject::Superseded) {
                     let by = if by_tf { "tf".to_string() } else { tree.source_of(&child).unwrap_or_default() };
                     superseded.entry((parent, child, m.topic.clone())).or_insert((by, 0)).1 += 1;
                 }
-                // The body frame odometry moves (by this topic or by another source).
-                if matches!(r, Ok(()) | Err(EdgeReject::Superseded)) && odom_child.is_none() {
-                    odom_child = Some(frame(&o.child_frame_id));
-                }
-                count(r, &mut rej);
+                rej.count(r);
             }
             _ => {}
         }
@@ -313,9 +307,8 @@ pub(crate) fn tilted(pose: &Iso) -> bool {
 
 /// A scan in the replay's terms: the laser's planar pose and ranges by the ROS conventions.
 pub(crate) fn scan_record(s: &cdr::LaserScan, pose: &Iso, t_ns: u64, at: Location) -> ScanRecord {
-    let x_axis = pose.rotate([1.0, 0.0, 0.0]);
     let z_axis = pose.rotate([0.0, 0.0, 1.0]);
-    let yaw = x_axis[1].atan2(x_axis[0]);
+    let yaw = pose.yaw();
     // Upside down: a beam at +a in the laser frame points to −a about the world's z.
     let sign = if z_axis[2] < 0.0 { -1.0 } else { 1.0 };
     // The readings as recorded: the range rule (REP 117) is applied once, with the scan's own
