@@ -379,6 +379,17 @@ fn laser_config(t: &mut Tokens<'_>) -> Result<(f64, f64, f64), LineError> {
     Ok((angle_min, angle_increment, max_range))
 }
 
+/// `n` range readings by the ROS conventions ([`ros_range`] with `max_range`), then the
+/// remission count and the remissions (read and dropped).
+fn readings(t: &mut Tokens<'_>, n: usize, max_range: f64) -> Result<Vec<f32>, LineError> {
+    let ranges_m = (0..n).map(|_| t.range("range").map(|r| ros_range(r, max_range))).collect::<Result<_, _>>()?;
+    let n_rem = t.count("remission count", t.toks.len())?;
+    for _ in 0..n_rem {
+        t.range("remission")?;
+    }
+    Ok(ranges_m)
+}
+
 /// Does a `RAWLASERn` line have `header` fields before its beam count (7 with `remission_mode`,
 /// 6 without), judged by its counts: the beam count, the remission count after that many
 /// readings, and the stamp's three fields make up the whole line.
@@ -432,11 +443,7 @@ pub fn parse_line(line: &str) -> Result<Option<CarmenRecord>, LineError> {
             // The header, count, n ranges, remission count, the remissions, 3 stamp fields.
             let remissions = t.toks.get(header + 1 + n).and_then(|c| c.parse::<usize>().ok());
             t.check_counts(n, remissions.map(|r| n.saturating_add(r).saturating_add(header + 5)))?;
-            let ranges_m = (0..n).map(|_| t.range("range").map(|r| ros_range(r, max_range))).collect::<Result<_, _>>()?;
-            let n_rem = t.count("remission count", t.toks.len())?;
-            for _ in 0..n_rem {
-                t.range("remission")?;
-            }
+            let ranges_m = readings(&mut t, n, max_range)?;
             let t_s = t.stamp()?;
             CarmenRecord::Raw(RawScan { laser, t_s, angle_min, angle_increment, ranges_m, range_max_m: max_range })
         }
@@ -477,11 +484,7 @@ pub fn parse_line(line: &str) -> Result<Option<CarmenRecord>, LineError> {
             // motion fields, 3 stamp fields.
             let remissions = t.toks.get(8 + n).and_then(|c| c.parse::<usize>().ok());
             t.check_counts(n, remissions.map(|r| n.saturating_add(r).saturating_add(23)))?;
-            let ranges_m = (0..n).map(|_| t.range("range").map(|r| ros_range(r, max_range))).collect::<Result<_, _>>()?;
-            let n_rem = t.count("remission count", t.toks.len())?;
-            for _ in 0..n_rem {
-                t.range("remission")?;
-            }
+            let ranges_m = readings(&mut t, n, max_range)?;
             let laser_pose = t.pose(["laser_x", "laser_y", "laser_theta"])?;
             let robot_pose = t.pose(["robot_x", "robot_y", "robot_theta"])?;
             for f in ["tv", "rv", "forward_safety_dist", "side_safety_dist", "turn_axis"] {
