@@ -53,7 +53,7 @@ fn the_intel_log_exported_as_a_bag_replays_into_the_same_map() {
     assert!(s.inf_readings > 0);
     let carmen_log = replay::read_log(&log).unwrap();
     let bag_log = replay::read_log(&bag).unwrap();
-    assert_eq!((bag_log.scans.len(), bag_log.no_odometry_yet), (907, 3));
+    assert_eq!((bag_log.scans.len(), bag_log.unplaced.no_odometry_yet), (907, 3));
     // Each bag scan's laser pose is the log's (the mount undone and redone), each beam points
     // where it did (the angles turned by the mount's yaw), and every reading at or beyond 12 m
     // is +inf.
@@ -104,7 +104,7 @@ fn a_log_whose_stamps_stand_still_is_exported_one_scan_per_tick() {
     let carmen_log = replay::read_log(&log).unwrap();
     assert!(replay::stamps_stand_still(&carmen_log.scans).1);
     let bag_log = replay::read_log(&bag).unwrap();
-    assert_eq!((bag_log.scans.len(), bag_log.no_odometry_yet), (403, 3));
+    assert_eq!((bag_log.scans.len(), bag_log.unplaced.no_odometry_yet), (403, 3));
     assert!(!replay::stamps_stand_still(&bag_log.scans).1);
     for (k, w) in bag_log.scans.windows(2).enumerate() {
         assert!((w[1].t_s - w[0].t_s - 0.2).abs() < 1e-6, "scan {k}: {} then {}", w[0].t_s, w[1].t_s);

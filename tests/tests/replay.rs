@@ -1429,10 +1429,10 @@ fn bag_poses_are_interpolated_and_bad_poses_are_named_rejections() {
     let path = tmp("bad-poses.mcap");
     write_mcap(&path, &m, 4096);
     let log = replay::read_log(&path).unwrap();
-    assert_eq!((log.no_odometry_yet, log.scan_stamp_backwards), (3, 1), "{:?}", log.warnings);
+    assert_eq!((log.unplaced.no_odometry_yet, log.unplaced.scan_stamp_backwards), (3, 1), "{:?}", log.warnings);
     // The odometry's last sample is stamped 30 ms before scan 29; scans 30–33 are within 0.5 s
     // of it, 34–39 are not.
-    assert_eq!(log.stale_pose, 6, "{:?}", log.warnings);
+    assert_eq!(log.unplaced.stale_pose, 6, "{:?}", log.warnings);
     let t = log.transforms_rejected;
     assert_eq!((t.odometry_jump, t.stamp_backwards, t.tf_loop, t.invalid), (1, 1, 1, 0), "{t:?}");
     // Interpolated to the scan's stamp (30 ms after the odometry's, between two samples 0.1 m

@@ -45,7 +45,7 @@ fn the_intel_ros1_bag_replays_as_its_ros2_bag_does() {
     let ros1 = replay::read_log(&data("intel-bz2.bag")).unwrap();
     assert_eq!(ros1.format, LogFormat::Ros1Bag);
     assert!(ros1.error.is_none() && ros1.bad_records.total == 0, "{:?}", ros1.error);
-    assert_eq!((ros1.scans.len(), ros1.odometry, ros1.no_odometry_yet), (907, 907, 3));
+    assert_eq!((ros1.scans.len(), ros1.odometry, ros1.unplaced.no_odometry_yet), (907, 907, 3));
     assert_eq!(ros1.scans.len(), ros2.scans.len());
     for (a, b) in ros1.scans.iter().zip(&ros2.scans) {
         assert!(same_scan(a, b), "{a:?}\n{b:?}");

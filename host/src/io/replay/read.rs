@@ -16,18 +16,8 @@ pub struct LogData {
     pub scans: Vec<ScanRecord>,
     /// Odometry messages read.
     pub odometry: usize,
-    /// Scans that could not be given a pose (bag frames not connected).
-    pub no_pose: usize,
-    /// Bag scans stamped before the first odometry.
-    pub no_odometry_yet: usize,
-    /// Bag scans whose nearest odometry is more than [`rosbag::MAX_POSE_AGE_NS`] away.
-    pub stale_pose: usize,
-    /// Bag scans stamped before the scan before them.
-    pub scan_stamp_backwards: usize,
-    /// Bag point clouds whose frame is tilted (not cut to a level plane).
-    pub tilted_cloud: usize,
-    /// Bag scans of a second topic in a frame another topic scans.
-    pub duplicate_topic: usize,
+    /// Scans read but not placed (bag frames not connected, no odometry at their stamp, …).
+    pub unplaced: rosbag::Unplaced,
     /// Bag transforms rejected (the scans are placed without them).
     pub transforms_rejected: rosbag::RejectedTransforms,
     /// Time span of everything time-stamped that was read, seconds.
@@ -50,12 +40,7 @@ impl LogData {
             format,
             scans: Vec::new(),
             odometry: 0,
-            no_pose: 0,
-            no_odometry_yet: 0,
-            stale_pose: 0,
-            scan_stamp_backwards: 0,
-            tilted_cloud: 0,
-            duplicate_topic: 0,
+            unplaced: rosbag::Unplaced::default(),
             transforms_rejected: rosbag::RejectedTransforms::default(),
             span_s: None,
             sources: Vec::new(),
@@ -235,7 +220,7 @@ impl RawLaser {
             return;
         }
         if posed {
-            log.duplicate_topic += self.scans.len();
+            log.unplaced.duplicate_topic += self.scans.len();
             log.warnings.push(format!(
                 "{} RAWLASER1 lines repeat the front laser's scans that FLASER / ROBOTLASER1 lines place: not used",
                 self.scans.len()
@@ -279,9 +264,8 @@ impl RawLaser {
                     });
                     continue;
                 }
-                Ok(_) | Err(rosbag::PoseError::NoPose) => log.no_pose += 1,
-                Err(rosbag::PoseError::NoOdometryYet) => log.no_odometry_yet += 1,
-                Err(rosbag::PoseError::Stale) => log.stale_pose += 1,
+                Ok(_) => log.unplaced.no_pose += 1,
+                Err(e) => log.unplaced.count(e),
             }
             if unplaced.len() < 3 {
                 unplaced.push(format!("line {line} ({} s)", s.t_s));
@@ -291,10 +275,10 @@ impl RawLaser {
             log.warnings.push(format!(
                 "{} RAWLASER1 scans before the first ODOM line, {} more than {} s from the nearest one and {} with no ODOM at all \
                  were not used: first at {}",
-                log.no_odometry_yet,
-                log.stale_pose,
+                log.unplaced.no_odometry_yet,
+                log.unplaced.stale_pose,
                 rosbag::MAX_POSE_AGE_NS as f64 / 1e9,
-                log.no_pose,
+                log.unplaced.no_pose,
                 unplaced.join(", ")
             ));
         }
@@ -325,12 +309,7 @@ pub(super) fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -
         format,
         scans: scans.scans,
         odometry: scans.odometry,
-        no_pose: scans.no_pose,
-        no_odometry_yet: scans.no_odometry_yet,
-        stale_pose: scans.stale_pose,
-        scan_stamp_backwards: scans.scan_stamp_backwards,
-        tilted_cloud: scans.tilted_cloud,
-        duplicate_topic: scans.duplicate_topic,
+        unplaced: scans.unplaced,
         transforms_rejected: scans.transforms_rejected,
         span_s: contents.span_ns.map(|(a, b)| (a as f64 / 1e9, b as f64 / 1e9)),
         sources: contents.topics.iter().map(|(t, ty)| format!("{t} ({ty})")).collect(),
@@ -504,12 +483,7 @@ pub fn read_log(path: &Path) -> Result<LogData, ReplayError> {
             Some(mut a) => {
                 a.scans.extend(part.scans);
                 a.odometry += part.odometry;
-                a.no_pose += part.no_pose;
-                a.no_odometry_yet += part.no_odometry_yet;
-                a.stale_pose += part.stale_pose;
-                a.scan_stamp_backwards += part.scan_stamp_backwards;
-                a.tilted_cloud += part.tilted_cloud;
-                a.duplicate_topic += part.duplicate_topic;
+                a.unplaced.add(&part.unplaced);
                 let (t, p) = (&mut a.transforms_rejected, part.transforms_rejected);
                 t.odometry_jump += p.odometry_jump;
                 t.tf_loop += p.tf_loop;

@@ -384,12 +384,12 @@ pub fn replay(path: &Path, opts: &ReplayOptions) -> Result<ReplayRun, ReplayErro
 fn unplaced_scans(log: &LogData) -> String {
     let stale = format!("with no odometry within {} s", rosbag::MAX_POSE_AGE_NS as f64 / 1e9);
     let counts = [
-        (log.no_pose, "whose frame no odometry or transform places"),
-        (log.no_odometry_yet, "stamped before the first odometry"),
-        (log.stale_pose, stale.as_str()),
-        (log.scan_stamp_backwards, "stamped before the scan before them"),
-        (log.tilted_cloud, "point clouds in a frame tilted from level"),
-        (log.duplicate_topic, "of a second topic in a frame another topic scans"),
+        (log.unplaced.no_pose, "whose frame no odometry or transform places"),
+        (log.unplaced.no_odometry_yet, "stamped before the first odometry"),
+        (log.unplaced.stale_pose, stale.as_str()),
+        (log.unplaced.scan_stamp_backwards, "stamped before the scan before them"),
+        (log.unplaced.tilted_cloud, "point clouds in a frame tilted from level"),
+        (log.unplaced.duplicate_topic, "of a second topic in a frame another topic scans"),
     ];
     let said: Vec<String> = counts.iter().filter(|(n, _)| *n > 0).map(|(n, what)| format!("{n} {what}")).collect();
     if said.is_empty() {
@@ -528,14 +528,14 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
     let LogSource { stray_pose, no_pose, bad_angles, strays, combined_scans, combined_most, .. } = source;
     let mut rejected = Rejected {
         outside_grid,
-        no_pose: log.no_pose as u32 + no_pose,
+        no_pose: log.unplaced.no_pose as u32 + no_pose,
         bad_angles,
         stray_pose,
-        no_odometry_yet: log.no_odometry_yet as u32,
-        stale_pose: log.stale_pose as u32,
-        stamp_backwards: log.scan_stamp_backwards as u32,
-        tilted_cloud: log.tilted_cloud as u32,
-        duplicate_topic: log.duplicate_topic as u32,
+        no_odometry_yet: log.unplaced.no_odometry_yet as u32,
+        stale_pose: log.unplaced.stale_pose as u32,
+        stamp_backwards: log.unplaced.scan_stamp_backwards as u32,
+        tilted_cloud: log.unplaced.tilted_cloud as u32,
+        duplicate_topic: log.unplaced.duplicate_topic as u32,
         ..Rejected::default()
     };
     let ctrl = brain.ctrl;
@@ -612,7 +612,7 @@ pub fn replay_log(log: LogData, opts: &ReplayOptions, t_start: Instant, read_s: 
             compact(final_origin[1])
         ));
     }
-    let unplaced = log.no_pose + log.no_odometry_yet + log.stale_pose + log.scan_stamp_backwards + log.tilted_cloud + log.duplicate_topic;
+    let unplaced = log.unplaced.total();
     let scans_read = log.scans.len() as u32 + unplaced as u32;
     let scans_rejected = rejected.outside_grid
         + rejected.no_pose

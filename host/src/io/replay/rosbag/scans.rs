@@ -6,11 +6,10 @@ use crate::io::replay::{BadRecords, Location, ReplayError, ScanRecord};
 use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::path::Path;
 
-/// What the messages gave.
-#[derive(Debug, Default)]
-pub struct BagScans {
-    /// Scans with their laser poses, time order.
-    pub scans: Vec<ScanRecord>,
+/// Scans read but not used because they could not be placed, by reason (a bag's, a CARMEN
+/// log's `RAWLASER1` lines).
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Unplaced {
     /// Scans whose frame could not be placed in a tree with a root.
     pub no_pose: usize,
     /// Scans stamped before the first odometry sample (e.g. the scanner started first).
@@ -24,6 +23,41 @@ pub struct BagScans {
     /// Scans (or clouds) of a second topic in a frame another topic already scans: not used
     /// ([`one_topic_per_frame`]).
     pub duplicate_topic: usize,
+}
+
+impl Unplaced {
+    /// Counts a scan the frame tree could not place at its stamp.
+    pub(crate) fn count(&mut self, e: PoseError) {
+        match e {
+            PoseError::NoPose => self.no_pose += 1,
+            PoseError::NoOdometryYet => self.no_odometry_yet += 1,
+            PoseError::Stale => self.stale_pose += 1,
+        }
+    }
+
+    /// Adds another log part's counts.
+    pub fn add(&mut self, o: &Unplaced) {
+        self.no_pose += o.no_pose;
+        self.no_odometry_yet += o.no_odometry_yet;
+        self.stale_pose += o.stale_pose;
+        self.scan_stamp_backwards += o.scan_stamp_backwards;
+        self.tilted_cloud += o.tilted_cloud;
+        self.duplicate_topic += o.duplicate_topic;
+    }
+
+    /// Every scan not placed.
+    pub fn total(&self) -> usize {
+        self.no_pose + self.no_odometry_yet + self.stale_pose + self.scan_stamp_backwards + self.tilted_cloud + self.duplicate_topic
+    }
+}
+
+/// What the messages gave.
+#[derive(Debug, Default)]
+pub struct BagScans {
+    /// Scans with their laser poses, time order.
+    pub scans: Vec<ScanRecord>,
+    /// Scans read but not placed, by reason.
+    pub unplaced: Unplaced,
     /// Transforms rejected.
     pub transforms_rejected: RejectedTransforms,
     /// Odometry messages.
@@ -205,13 +239,13 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
             _ => continue,
         };
         if dropped_topics.contains(m.topic.as_str()) {
-            out.duplicate_topic += 1;
+            out.unplaced.duplicate_topic += 1;
             continue;
         }
         let laser = frame(&s.header.frame_id);
         let t = stamp_ns(&s.header, m.t_ns);
         if last_stamp.get(&laser).is_some_and(|&prev| t < prev) {
-            out.scan_stamp_backwards += 1;
+            out.unplaced.scan_stamp_backwards += 1;
             continue;
         }
         last_stamp.insert(laser.clone(), t);
@@ -235,7 +269,7 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
             // Only fixed transforms place it while odometry moves another tree: drawn at its
             // mount's offset from a made-up origin, every scan would sit in one place.
             Ok((_, root, depth)) if depth > 0 && fixed_only && moving => {
-                out.no_pose += 1;
+                out.unplaced.no_pose += 1;
                 if !unconnected.contains(&target) {
                     out.warnings.push(format!(
                         "scans in frame `{target}` (topic {}) were not used: only fixed transforms place it (in `{root}`), and the \
@@ -246,39 +280,36 @@ pub fn scans_from_messages(file: &Path, mut messages: Vec<BagMessage>) -> BagSca
                     unconnected.push(target.clone());
                 }
             }
-            Ok((pose, _, depth)) if depth > 0 && m.kind == MsgType::PointCloud2 && tilted(&pose) => out.tilted_cloud += 1,
+            Ok((pose, _, depth)) if depth > 0 && m.kind == MsgType::PointCloud2 && tilted(&pose) => out.unplaced.tilted_cloud += 1,
             Ok((pose, _root, depth)) if depth > 0 => out.scans.push(scan_record(s, &pose, m.t_ns, m.at)),
-            Ok(_) | Err(PoseError::NoPose) => out.no_pose += 1,
+            Ok(_) => out.unplaced.no_pose += 1,
             Err(e) => {
                 if first_unplaced.len() < 3 {
                     first_unplaced.push(format!("{} ({} s)", m.at, t as f64 / 1e9));
                 }
-                match e {
-                    PoseError::NoOdometryYet => out.no_odometry_yet += 1,
-                    _ => out.stale_pose += 1,
-                }
+                out.unplaced.count(e);
             }
         }
     }
-    if out.no_odometry_yet + out.stale_pose > 0 {
+    if out.unplaced.no_odometry_yet + out.unplaced.stale_pose > 0 {
         out.warnings.push(format!(
             "{} scans stamped before the first odometry and {} whose nearest odometry is more than {} s from their stamp \
              were not used (not placed at the frame tree's origin): first at {}",
-            out.no_odometry_yet,
-            out.stale_pose,
+            out.unplaced.no_odometry_yet,
+            out.unplaced.stale_pose,
             MAX_POSE_AGE_NS as f64 / 1e9,
             first_unplaced.join(", ")
         ));
     }
-    if out.tilted_cloud > 0 {
+    if out.unplaced.tilted_cloud > 0 {
         out.warnings.push(format!(
             "{} point clouds were not used: their frame is tilted more than {MAX_CLOUD_TILT_DEG}° from level (a depth \
              camera's optical frame?), and a cut of its horizontal plane would be a slanted one",
-            out.tilted_cloud
+            out.unplaced.tilted_cloud
         ));
     }
-    if out.scan_stamp_backwards > 0 {
-        out.warnings.push(format!("{} scans stamped before the scan before them were not used", out.scan_stamp_backwards));
+    if out.unplaced.scan_stamp_backwards > 0 {
+        out.warnings.push(format!("{} scans stamped before the scan before them were not used", out.unplaced.scan_stamp_backwards));
     }
     for ((parent, child, topic), (by, n)) in &superseded {
         out.warnings.push(format!(
