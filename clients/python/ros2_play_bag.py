@@ -95,6 +95,10 @@ def main():
                     help="play scans at this many per second without waiting for answers (`lives ros2` in real time): "
                          "measures the scan rate it sustains; the summary's `received` is what its status counted")
     ap.add_argument("--discovery", type=float, default=10.0, help="seconds to wait for lives ros2 to appear")
+    ap.add_argument("--pause-after", type=int, default=0,
+                    help="after this many scans are answered, publish nothing for --pause-s seconds (a sensor and odometry "
+                         "dropout); the summary's `after_pause` is the first tick after it")
+    ap.add_argument("--pause-s", type=float, default=2.0)
     args = ap.parse_args()
 
     dp = DomainParticipant(int(os.environ.get("ROS_DOMAIN_ID", "0")))
@@ -132,6 +136,7 @@ def main():
             if os.environ.get("PLAY_DEBUG"): print(s.data[:200], file=sys.stderr)
             if d.get("kind") == "tick":
                 last_status.update(d)
+                tick_acts[d.get("stamp_ns")] = {"acts": d.get("acts"), "goal": d.get("goal")}
             if d.get("kind") == "stop":
                 stops.append(d.get("reason"))
             if d.get("kind") == "rejection":
@@ -154,6 +159,8 @@ def main():
             unanswered.append(stamp)
 
     last_status = {}
+    tick_acts = {}
+    pause_next = None  # the first scan stamp after the pause
     started = time.time()
     next_at = time.time()
     for msg in read_ros2_messages(args.bag):
@@ -172,6 +179,10 @@ def main():
             if waiting:
                 settle(*waiting)
             stamp = out.header.stamp.sec * 10**9 + out.header.stamp.nanosec
+            if args.pause_after and played == args.pause_after:
+                time.sleep(args.pause_s)
+                drain()
+                pause_next = stamp
             writers["scan"].write(out)
             played += 1
             waiting = (stamp, time.time())
@@ -198,6 +209,14 @@ def main():
         "answer_ms": {"p50": round(1e3 * latency[len(latency) // 2], 3), "max": round(1e3 * latency[-1], 3)} if latency else None,
         "maps": last,
     }
+    if pause_next is not None:
+        # The last tick before the pause, and the first one after it that acted (with how many
+        # ticks came after the pause until then, that one included).
+        summary["before_pause"] = tick_acts.get(max((t for t in tick_acts if t < pause_next), default=None))
+        after = sorted(t for t in tick_acts if t >= pause_next)
+        acted = [(i + 1, t) for i, t in enumerate(after) if tick_acts[t]["acts"]]
+        if acted:
+            summary["after_pause"] = dict(tick_acts[acted[0][1]], ticks=acted[0][0])
     if args.rate > 0:
         summary.update({"rate_hz": args.rate, "play_s": round(play_s, 3), "played_hz": round(played / play_s, 1),
                         "received": last_status.get("received", {}), "ticks": last_status.get("tick")})

@@ -215,6 +215,12 @@ pub struct Ros2Source {
     last_odom: Option<Instant>,
     /// A goal is out (not stopped since).
     driving: Cell<bool>,
+    /// The last plan published, poses in the odometry frame: sent again with the next answer
+    /// after the watchdog stopped the base (`held`).
+    last_plan: RefCell<Vec<cdr::Transform>>,
+    /// The watchdog stopped the base while the controller held a goal: the next answer that
+    /// brings no new path re-sends `last_plan` if the controller still pursues its goal.
+    held: Cell<bool>,
     last_map_ns: Cell<Option<u64>>,
     ticks: Cell<u64>,
     stop: Arc<AtomicBool>,
@@ -290,6 +296,8 @@ impl Ros2Source {
             next_tick: now,
             last_odom: None,
             driving: Cell::new(false),
+            last_plan: RefCell::new(Vec::new()),
+            held: Cell::new(false),
             last_map_ns: Cell::new(None),
             ticks: Cell::new(0),
             stop,
@@ -499,6 +507,12 @@ impl Ros2Source {
         Ok(())
     }
 
+    /// Whether odometry (or `tf`) came within the watchdog's time (none yet counts as fresh:
+    /// nothing has been driven on it).
+    pub(super) fn odometry_fresh(&self) -> bool {
+        self.last_odom.is_none_or(|t| t.elapsed() < self.opts.watchdog)
+    }
+
     /// Places the scans whose pose is known (or whose wait is over) as frames, in order.
     fn place(&mut self) {
         while let Some(p) = self.pending.front() {
@@ -598,8 +612,9 @@ impl Source for Ros2Source {
                 return None;
             }
             // The watchdog: odometry stopped while a goal is out.
-            if self.driving.get() && self.last_odom.is_some_and(|t| t.elapsed() >= self.opts.watchdog) {
+            if self.driving.get() && !self.odometry_fresh() {
                 self.announce_stop("stale-odometry", &format!("no odometry for {:?}", self.opts.watchdog));
+                self.held.set(true);
             }
             let due = self.opts.lockstep || Instant::now() >= self.next_tick;
             if due && !self.ready.is_empty() {

@@ -26,6 +26,16 @@ impl Ros2Source {
         }
     }
 
+    /// Publishes a plan (`poses`, each facing the next) and its last pose as the goal.
+    fn send_plan(&self, h: &cdr::Header, poses: &[Transform]) {
+        self.write(Out::Plan, wire::encode_path(h, poses));
+        if let Some(last) = poses.last() {
+            self.write(Out::Goal, wire::encode_pose_stamped(h, last));
+        }
+        self.driving.set(true);
+        self.held.set(false);
+    }
+
     /// A stop the controller did not ask for (`reason`: `stale-odometry`, `shutdown`): the
     /// stop, and a status saying why.
     pub(super) fn announce_stop(&self, reason: &str, detail: &str) {
@@ -48,12 +58,11 @@ impl Ros2Source {
             match a {
                 Act::Path(path, yaw) if answer.end.is_none() => {
                     let poses = path_poses(path, *yaw);
-                    self.write(Out::Plan, wire::encode_path(&h, &poses));
-                    if let (Some(last), Some(p)) = (poses.last(), path.last()) {
-                        self.write(Out::Goal, wire::encode_pose_stamped(&h, last));
+                    self.send_plan(&h, &poses);
+                    if let Some(p) = path.last() {
                         self.goals.borrow_mut().push([p[0], p[1], yaw.unwrap_or(0.0)]);
                     }
-                    self.driving.set(true);
+                    *self.last_plan.borrow_mut() = poses;
                     acts.push("path");
                 }
                 Act::Stop => {
@@ -67,6 +76,20 @@ impl Ros2Source {
         if answer.end.is_some() && !acts.contains(&"stop") {
             self.publish_stop(t_ns, "the search ended");
             acts.push("stop");
+        }
+        // After a watchdog stop, the goal the controller still pursues goes out again with the
+        // first answer once odometry comes again (the controller sends a path only when it
+        // plans). A new path or a stop of the controller's own ends the hold.
+        if !acts.is_empty() || answer.end.is_some() || ctrl.goal().is_none() {
+            self.held.set(false);
+        } else if self.held.get() && self.odometry_fresh() {
+            let poses = self.last_plan.borrow().clone();
+            self.held.set(false);
+            if !poses.is_empty() {
+                self.send_plan(&h, &poses);
+                acts.push("path");
+                acts.push("resent");
+            }
         }
         let out = ctrl.goal().map(|g| {
             let (x, y, th) = g.pose.to_f64();
