@@ -116,7 +116,10 @@ pub fn cut(buf: &[u8], wire: Wire) -> Result<LaserScan, CdrError> {
     let band = CLOUD_BAND_DEG.to_radians().tan();
     let step = std::f64::consts::TAU / CLOUD_BEAMS as f64;
     let mut ranges = vec![f32::NAN; CLOUD_BEAMS];
-    for row in 0..height as usize {
+    // A cloud with no columns has no points, however many rows it declares (4·10⁹ empty rows
+    // took seconds to walk).
+    let rows = if width == 0 { 0 } else { height as usize };
+    for row in 0..rows {
         let start = row * row_step as usize;
         for col in 0..width as usize {
             let p = &data[start + col * point_step as usize..][..point_step as usize];
@@ -216,6 +219,19 @@ mod tests {
         assert!(e.contains("1 rows of 3 points") && e.contains("need 36 bytes; the cloud holds 24"), "{e}");
         let e = cut(&encode_cloud(&head(), ["x", "y", "w"], 2, &pts), Wire::Cdr).unwrap_err().to_string();
         assert!(e.contains("without float `x`, `y` and `z`"), "{e}");
+    }
+
+    #[test]
+    fn a_cloud_of_no_columns_has_no_points_whatever_its_rows() {
+        // The fuzzer's hang, minimal: width 0 and height u32::MAX (the size check needs both).
+        let mut b = encode_xyz_cloud(&head(), &[]);
+        let height_at = b.windows(8).position(|w| w == [1, 0, 0, 0, 0, 0, 0, 0]).expect("height 1, width 0");
+        b[height_at..height_at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+        let s = cut(&b, Wire::Cdr).unwrap();
+        assert!(s.ranges.iter().all(|r| r.is_nan()), "no point, no range");
+        // The fuzzer's input itself (a libFuzzer timeout before the fix) cuts or is refused.
+        let hang = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../fuzz/corpus/cdr/cloud-zero-width-4e9-rows.bin")).unwrap();
+        let _ = cut(&hang, Wire::Cdr);
     }
 
     #[test]
