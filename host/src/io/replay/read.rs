@@ -484,12 +484,7 @@ pub fn read_log(path: &Path) -> Result<LogData, ReplayError> {
                 a.scans.extend(part.scans);
                 a.odometry += part.odometry;
                 a.unplaced.add(&part.unplaced);
-                let (t, p) = (&mut a.transforms_rejected, part.transforms_rejected);
-                t.odometry_jump += p.odometry_jump;
-                t.tf_loop += p.tf_loop;
-                t.stamp_backwards += p.stamp_backwards;
-                t.invalid += p.invalid;
-                t.superseded += p.superseded;
+                a.transforms_rejected.add(&part.transforms_rejected);
                 if let Some((lo, hi)) = part.span_s {
                     widen(&mut a.span_s, lo);
                     widen(&mut a.span_s, hi);

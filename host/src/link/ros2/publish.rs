@@ -33,7 +33,6 @@ impl Ros2Source {
             self.write(Out::Goal, wire::encode_pose_stamped(h, last));
         }
         self.driving.set(true);
-        self.held.set(false);
     }
 
     /// A stop the controller did not ask for (`reason`: `stale-odometry`, `shutdown`): the

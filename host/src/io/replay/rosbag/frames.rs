@@ -384,4 +384,13 @@ impl RejectedTransforms {
             Err(EdgeReject::Superseded) => self.superseded += 1,
         }
     }
+
+    /// Adds another log part's counts.
+    pub fn add(&mut self, o: &RejectedTransforms) {
+        self.odometry_jump += o.odometry_jump;
+        self.tf_loop += o.tf_loop;
+        self.stamp_backwards += o.stamp_backwards;
+        self.invalid += o.invalid;
+        self.superseded += o.superseded;
+    }
 }
