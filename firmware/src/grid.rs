@@ -11,9 +11,11 @@
 use crate::capacity::{BEAMS, CELLS_PER_METER, GRID_AREA, GRID_CELLS, MAX_CAMERA_RAYS};
 
 mod bits;
+mod rays;
 use crate::scan::{BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
 pub use bits::BitGrid;
 use fixed_point::{cos, sin, BinaryAngle, Meters, Pose2};
+pub use rays::{grazing, no_return_bounds, veiling, GRAZING_STEP_PER_MILLE, MAX_BOUND_SPAN, NO_BOUND, VEIL_STEP_PER_MILLE};
 
 /// The state of one cell. In the ROS convention: −1 unknown, 0 free, 100 occupied. Its two
 /// bits in a packed grid are its discriminant: 0, 1, 2 in declaration order.
@@ -446,7 +448,8 @@ pub struct IntegrateStats {
 ///    scan. A return beyond the clearing range, and a "no return" beam (nothing within the
 ///    scan's `range_max`), frees cells out to the nearer of `range_max` and the clearing range and
 ///    marks nothing, and stops at the first cell with wall evidence: nothing seen is not a reason
-///    to erase a wall. A beam that grazes its surface ([`grazing`]) frees no occupied cell either
+///    to erase a wall; nor short of a surface its neighbouring returns span ([`no_return_bounds`]:
+///    glass, dark paint and walls met edge-on return nothing too). A beam that grazes its surface ([`grazing`]) frees no occupied cell either
 ///    (a wall seen edge-on runs through the wall's own cells for many cells before its hit);
 /// 3. the hits are applied.
 ///
@@ -466,6 +469,8 @@ pub struct LidarGrid {
     /// (the LiDAR stage of the same tick whenever the pose comes with its scan).
     pub(crate) pending_work: u32,
     hits: [(i32, i32); BEAMS],
+    /// A scan's no-return bounds ([`no_return_bounds`]), millimetres.
+    bounds: [u16; BEAMS],
     marks: BitGrid,
 }
 
@@ -479,6 +484,7 @@ impl LidarGrid {
             window: WindowStats::new(),
             pending_work: 0,
             hits: [(0, 0); BEAMS],
+            bounds: [NO_BOUND; BEAMS],
             marks: BitGrid::new(),
         }
     }
@@ -545,7 +551,9 @@ impl LidarGrid {
                 nhits += 1;
             }
         }
-        // 2. Misses along every ray, once per cell, never on a cell hit in this scan.
+        // 2. Misses along every ray, once per cell, never on a cell hit in this scan; a ray without
+        // a return stops short of the surface its neighbours' returns span.
+        st.work += no_return_bounds(scan, clear_range, &mut self.bounds);
         for b in 0..BEAMS {
             let r = scan.ranges_mm[b];
             if r == RANGE_INVALID {
@@ -554,7 +562,11 @@ impl LidarGrid {
             let a = pose.theta + beam_angle(b);
             let no_return = r == RANGE_NO_RETURN || mm_to_meters(r) >= clear_range;
             let (ex, ey) = if no_return {
-                ray_end(&self.geom, pose.x, pose.y, a, no_return_len)
+                let len = match self.bounds[b] {
+                    NO_BOUND => no_return_len,
+                    mm => mm_to_meters(mm).min(no_return_len),
+                };
+                ray_end(&self.geom, pose.x, pose.y, a, len)
             } else {
                 ray_end(&self.geom, pose.x, pose.y, a, mm_to_meters(r).saturating_add(depth))
             };
@@ -591,55 +603,6 @@ impl LidarGrid {
         st
     }
 }
-
-/// Whether beam `b` meets its surface at a grazing angle: a neighbouring beam's range differs
-/// from its own by more than [`GRAZING_STEP_PER_MILLE`] thousandths of it (a wall seen edge-on,
-/// or a depth edge).
-pub fn grazing(scan: &BeamScan, b: usize) -> bool {
-    let r = scan.ranges_mm[b];
-    let step = r as u64 * GRAZING_STEP_PER_MILLE / 1000;
-    [(b + BEAMS - 1) % BEAMS, (b + 1) % BEAMS].iter().any(|&n| {
-        let rn = scan.ranges_mm[n];
-        rn != RANGE_INVALID && rn != RANGE_NO_RETURN && (rn as i64 - r as i64).unsigned_abs() > step
-    })
-}
-
-/// Whether beam `b` is a mixed pixel (a "veiling" return): its footprint straddled a depth edge
-/// and the sensor reported a range between the two surfaces, so one neighbour is nearer and the
-/// other farther, each by more than [`VEIL_STEP_PER_MILLE`] of its range. Such a return lies on
-/// no surface: it marks no cell (ROS `laser_filters`' shadow filter drops such points by their
-/// angle to the neighbours), and like a grazing beam it frees no occupied cell. A thin object
-/// one beam wide has both neighbours farther, and is kept; a wall met at more than about 4° (its
-/// neighbours a few per cent nearer and farther) is kept too.
-pub fn veiling(scan: &BeamScan, b: usize) -> bool {
-    let r = scan.ranges_mm[b];
-    if r == RANGE_INVALID || r == RANGE_NO_RETURN {
-        return false;
-    }
-    let step = (r as u64 * VEIL_STEP_PER_MILLE / 1000) as i64;
-    let side = |n: usize| {
-        let rn = scan.ranges_mm[n];
-        if rn == RANGE_INVALID {
-            0
-        } else if rn == RANGE_NO_RETURN || rn as i64 > r as i64 + step {
-            1
-        } else if (rn as i64) < r as i64 - step {
-            -1
-        } else {
-            0
-        }
-    };
-    side((b + BEAMS - 1) % BEAMS) * side((b + 1) % BEAMS) == -1
-}
-
-/// See [`veiling`]: a mixed pixel lies at least 10 % of its range from both its neighbours (the
-/// surfaces either side of a depth edge are far apart); consecutive beams on a wall met at 4° or
-/// more differ by less (the beams are 0.4° apart).
-pub const VEIL_STEP_PER_MILLE: u64 = 100;
-
-/// See [`grazing`]: 28 mm per metre of range is 4 beam spacings (2π/897 rad each) across the
-/// beam, so a surface met at under about 14° counts as grazed.
-pub const GRAZING_STEP_PER_MILLE: u64 = 28;
 
 /// Rays needed so that neighbouring rays are at most half a cell apart at `range_cells`.
 pub fn camera_rays(fov: BinaryAngle, range_cells: i32) -> usize {

@@ -105,6 +105,59 @@ fn a_beam_that_grazes_its_surface_frees_unknown_cells_but_erases_no_occupied_one
 }
 
 #[test]
+fn a_beam_with_no_return_stops_short_of_the_surface_its_neighbours_see() {
+    // A wall 3 m ahead (x = 13.05 m for a robot at 10.05 m facing +x), seen over ±30°, with a
+    // dark patch straight ahead that returns nothing for ±2°: as glass, black paint or a wall met
+    // edge-on do on a real scanner.
+    let p = pose(10.05, 10.05, 0.0);
+    let inc = BinaryAngle::from_fraction(1, 897);
+    let n = 2 * 75 + 1;
+    let ranges: Vec<u16> = (0..n)
+        .map(|k| {
+            let phi = (k as f64 - 75.0) * std::f64::consts::TAU / 897.0;
+            if phi.abs() <= 2f64.to_radians() {
+                RANGE_NO_RETURN
+            } else {
+                (3000.0 / phi.cos()).round() as u16
+            }
+        })
+        .collect();
+    let s = resampled(BinaryAngle::from_fraction(-75, 897), inc, &ranges);
+    let mut bounds = [0u16; firmware::capacity::BEAMS];
+    firmware::grid::no_return_bounds(&s, Config::DEFAULT.lidar_max_range_m, &mut bounds);
+    let ahead = BeamScan::beam_of(BinaryAngle::ZERO);
+    assert_eq!(s.ranges_mm[ahead], RANGE_NO_RETURN);
+    // Bounded at the wall, one cell short: 2.9 m, within a few millimetres.
+    assert!((bounds[ahead] as i32 - 2900).abs() <= 5, "bound {} mm", bounds[ahead]);
+    let mut g = Box::new(LidarGrid::new(geom()));
+    g.integrate(&p, &s, Config::DEFAULT.lidar_max_range_m);
+    assert_eq!(g.get(120, 100), Cell::Free, "in front of the wall");
+    assert_eq!(g.get(140, 100), Cell::Unknown, "behind the wall: nothing seen there");
+    // Open space (no return anywhere) is still cleared out to the range.
+    let open = resampled(BinaryAngle::from_fraction(-75, 897), inc, &vec![RANGE_NO_RETURN; n]);
+    firmware::grid::no_return_bounds(&open, Config::DEFAULT.lidar_max_range_m, &mut bounds);
+    assert!(bounds.iter().all(|&b| b == firmware::grid::NO_BOUND));
+    let mut g = Box::new(LidarGrid::new(geom()));
+    g.integrate(&p, &open, Config::DEFAULT.lidar_max_range_m);
+    assert_eq!(g.get(140, 100), Cell::Free);
+    // Two returns a quarter turn or more apart bound nothing (nearly opposite each other, the
+    // segment between them would pass through the sensor).
+    let mut half = BeamScan::new();
+    half.ranges_mm = [RANGE_NO_RETURN; firmware::capacity::BEAMS];
+    half.ranges_mm[0] = 2000;
+    half.ranges_mm[firmware::capacity::BEAMS / 2 + 1] = 2000;
+    firmware::grid::no_return_bounds(&half, Config::DEFAULT.lidar_max_range_m, &mut bounds);
+    assert!(bounds.iter().all(|&b| b == firmware::grid::NO_BOUND), "two returns half a turn apart");
+    half.ranges_mm[firmware::capacity::BEAMS / 2 + 1] = RANGE_NO_RETURN;
+    half.ranges_mm[firmware::capacity::BEAMS / 4] = 2000;
+    firmware::grid::no_return_bounds(&half, Config::DEFAULT.lidar_max_range_m, &mut bounds);
+    assert!(bounds.iter().all(|&b| b == firmware::grid::NO_BOUND), "a quarter turn apart");
+    half.ranges_mm[firmware::capacity::BEAMS / 4 - 1] = 2000;
+    firmware::grid::no_return_bounds(&half, Config::DEFAULT.lidar_max_range_m, &mut bounds);
+    assert!(bounds[1] != firmware::grid::NO_BOUND, "just under a quarter turn: bounded");
+}
+
+#[test]
 fn the_camera_does_not_see_through_an_occupied_cell() {
     let mut lidar = Box::new(LidarGrid::new(geom()));
     // Known free ahead of the robot, and a wall 2 m ahead spanning the whole cone.
