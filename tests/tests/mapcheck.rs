@@ -197,3 +197,23 @@ fn bad_input_is_a_clear_error_with_status_2() {
     assert!(stderr.starts_with("error: ") && stderr.contains("nothing.log"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The realistic sensor in a corridor 1 m wide: its walls, met edge-on, mostly return nothing,
+/// and a beam with no return must not clear free space through the wall its neighbours see
+/// (`firmware::grid::no_return_bounds`; docs/experiments/real-lidar-maps.md, "No-return beams
+/// bounded by their neighbours": before it, 21.3 % of the free cells leaked through the walls,
+/// 65.4 % of the walls were kept, and the planners chased frontiers outside the corridor).
+#[test]
+fn a_narrow_corridor_seen_edge_on_leaks_no_free_space_through_its_walls() {
+    let world = common::root().join("tests/data/worlds/corridor-1m.toml");
+    let args: [&std::ffi::OsStr; 5] =
+        ["--world".as_ref(), world.as_os_str(), "--planner".as_ref(), "lives-no-nonmap".as_ref(), "--json".as_ref()];
+    let (code, stdout, stderr) = mapcheck(&args);
+    assert_eq!(code, Some(0), "{stderr}");
+    let r: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(r["reference"]["kind"], "true-world");
+    assert_eq!(r["search"]["found"], true, "{}", r["search"]);
+    let m = &r["map"];
+    assert!(share(&m["free_space_leak"]) < 0.01, "free-space leak {}", m["free_space_leak"]);
+    assert!(share(&m["walls_recovered"]) > 0.85, "walls recovered {}", m["walls_recovered"]);
+}
