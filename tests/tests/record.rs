@@ -93,7 +93,9 @@ fn lives_search_record_is_read_back_by_the_python_mcap_reader_with_exact_counts(
     assert!(plans >= goals && counts["/lives/candidates"].as_u64() == Some(plans), "{report}");
     assert_eq!(report["modes"], serde_json::json!(["Exploring", "TargetFound"]));
     assert_eq!(report["truncated"], false);
-    assert!(report["max_candidates"].as_u64().unwrap() > 10, "candidates recorded: {report}");
+    // Every candidate a step rated is recorded, not only the chosen one (how many depends on the
+    // map: at most 10 in one step of this search since the no-return bounds, more before).
+    assert!(report["max_candidates"].as_u64().unwrap() > 1, "candidates recorded: {report}");
     // A grid cropped to the office (25 x 45 m at 0.1 m, at most 112 500 cells), not the whole
     // 512 x 512 map (262 144).
     let cells = report["max_grid_cells"].as_u64().unwrap();
