@@ -67,6 +67,10 @@ pub struct MapcheckArgs {
     /// The seed (with `--world`; default 1).
     #[arg(long, requires = "world")]
     pub seed: Option<u64>,
+    /// The simulated robot (with `--world`; as `lives search --robot`): `calibrated` (the
+    /// default) or `short`. `--sim` then changes it further.
+    #[arg(long, requires = "world")]
+    pub robot: Option<crate::search::Robot>,
     /// Change the simulated robot (with `--world`; as `lives search --sim`).
     #[arg(long = "sim", value_name = "NAME=VALUE", requires = "world")]
     pub sim: Vec<String>,
@@ -83,6 +87,8 @@ pub fn run_command(
         (Some(world), _) => {
             let planner = args.planner.unwrap_or(PlannerChoice::Lives);
             let mut spec = load_spec(world, args.scenario, planner, args.seed.unwrap_or(1))?;
+            // The robot `lives search` simulates unless told otherwise.
+            args.robot.unwrap_or(crate::search::Robot::Calibrated).apply(&mut spec)?;
             for a in &args.sim {
                 crate::overrides::apply_sim(&mut spec.sim, &mut spec.controller, a)?;
             }
