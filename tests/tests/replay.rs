@@ -979,6 +979,7 @@ fn floor_args(bag: &Path, map: &Path, pose: Option<&str>) -> host::measure::mapc
         scenario: None,
         planner: None,
         seed: None,
+        robot: None,
         sim: Vec::new(),
     }
 }
