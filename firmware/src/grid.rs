@@ -12,10 +12,10 @@ use crate::capacity::{BEAMS, CELLS_PER_METER, GRID_AREA, GRID_CELLS, MAX_CAMERA_
 
 mod bits;
 mod rays;
-use crate::scan::{BeamScan, RANGE_INVALID, RANGE_NO_RETURN};
+use crate::scan::{BeamScan, RANGE_INVALID};
 pub use bits::BitGrid;
 use fixed_point::{cos, sin, BinaryAngle, Meters, Pose2};
-pub use rays::{grazing, no_return_bounds, veiling, GRAZING_STEP_PER_MILLE, MAX_BOUND_SPAN, NO_BOUND, VEIL_STEP_PER_MILLE};
+pub use rays::{grazing, is_return, no_return_bounds, veiling, GRAZING_STEP_PER_MILLE, MAX_BOUND_SPAN, NO_BOUND, VEIL_STEP_PER_MILLE};
 
 /// The state of one cell. In the ROS convention: −1 unknown, 0 free, 100 occupied. Its two
 /// bits in a packed grid are its discriminant: 0, 1, 2 in declaration order.
@@ -448,9 +448,10 @@ pub struct IntegrateStats {
 ///    scan. A return beyond the clearing range, and a "no return" beam (nothing within the
 ///    scan's `range_max`), frees cells out to the nearer of `range_max` and the clearing range and
 ///    marks nothing, and stops at the first cell with wall evidence: nothing seen is not a reason
-///    to erase a wall; nor short of a surface its neighbouring returns span ([`no_return_bounds`]:
-///    glass, dark paint and walls met edge-on return nothing too). A beam that grazes its surface ([`grazing`]) frees no occupied cell either
-///    (a wall seen edge-on runs through the wall's own cells for many cells before its hit);
+///    to erase a wall, nor past a surface its neighbouring returns span ([`no_return_bounds`]:
+///    glass, dark paint and walls met edge-on return nothing too). A beam that grazes its
+///    surface ([`grazing`]) frees no occupied cell either (a wall seen edge-on runs through the
+///    wall's own cells for many cells before its hit);
 /// 3. the hits are applied.
 ///
 /// The marks of steps 1–2 live in a bit per cell ([`BitGrid`]), cleared after each scan.
@@ -540,7 +541,7 @@ impl LidarGrid {
         let mut nhits = 0usize;
         for b in 0..BEAMS {
             let r = scan.ranges_mm[b];
-            if r == RANGE_INVALID || r == RANGE_NO_RETURN || mm_to_meters(r) >= clear_range || veiling(scan, b) {
+            if !is_return(r, clear_range) || veiling(scan, b) {
                 continue;
             }
             let a = pose.theta + beam_angle(b);
@@ -560,7 +561,7 @@ impl LidarGrid {
                 continue;
             }
             let a = pose.theta + beam_angle(b);
-            let no_return = r == RANGE_NO_RETURN || mm_to_meters(r) >= clear_range;
+            let no_return = !is_return(r, clear_range);
             let (ex, ey) = if no_return {
                 let len = match self.bounds[b] {
                     NO_BOUND => no_return_len,

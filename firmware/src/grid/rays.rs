@@ -56,6 +56,13 @@ pub const VEIL_STEP_PER_MILLE: u64 = 100;
 /// beam, so a surface met at under about 14° counts as grazed.
 pub const GRAZING_STEP_PER_MILLE: u64 = 28;
 
+/// Whether range `r` is a return the grid marks: a valid reading within the clearing range (not
+/// "no return", not at or beyond `clear_range`).
+#[inline]
+pub fn is_return(r: u16, clear_range: Meters) -> bool {
+    r != RANGE_INVALID && r != RANGE_NO_RETURN && mm_to_meters(r) < clear_range
+}
+
 /// In [`no_return_bounds`]: the beam is not bounded by its neighbours.
 pub const NO_BOUND: u16 = u16::MAX;
 
@@ -77,10 +84,7 @@ pub const MAX_BOUND_SPAN: usize = BEAMS / 4;
 /// reason. Open space, where no neighbour returns, is still cleared out to the range. Returns the
 /// work (beams visited).
 pub fn no_return_bounds(scan: &BeamScan, clear_range: Meters, out: &mut [u16; BEAMS]) -> u32 {
-    let returns = |b: usize| {
-        let r = scan.ranges_mm[b];
-        r != RANGE_INVALID && r != RANGE_NO_RETURN && mm_to_meters(r) < clear_range
-    };
+    let returns = |b: usize| is_return(scan.ranges_mm[b], clear_range);
     out.fill(NO_BOUND);
     let Some(first) = (0..BEAMS).find(|&b| returns(b)) else { return BEAMS as u32 };
     let mut work = BEAMS as u32;
