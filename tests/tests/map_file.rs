@@ -231,3 +231,41 @@ fn a_search_with_the_buildings_map_labels_its_walls_as_map() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("big"), "{}", String::from_utf8_lossy(&out.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `lives replay --map-out` saves the grid a real log leaves as a map `lives map check` reads,
+/// `lives worlds --from-map` traces a world from it (the Intel lab, walls where the map stops),
+/// and a search runs in it: the loop a user closes to search their own building.
+#[test]
+fn a_real_logs_map_becomes_a_world_a_search_runs_in() {
+    let dir = temp_dir("from-log");
+    let log = common::root().join("tests/data/carmen/intel-corrected.log.gz");
+    let yaml = dir.join("intel.yaml");
+    let (code, _, err) = run(&["replay", log.to_str().unwrap(), "--map-out", yaml.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("wrote") && dir.join("intel.pgm").is_file(), "{err}");
+    let (code, out, err) = run(&["map", "check", "--json", yaml.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    // The replay's grid at the end: `lives replay` reports 7 266 occupied and 51 287 free cells.
+    assert_eq!(v["cells"]["occupied"], 7266, "{out}");
+    assert_eq!(v["cells"]["free"], 51287, "{out}");
+    // The log's first laser pose is on the floor; ten targets from the seed.
+    let (code, toml, err) =
+        run(&["worlds", "--from-map", yaml.to_str().unwrap(), "--start", "0.6,-0.03,-20", "--random-targets", "10", "--name", "intel-lab"]);
+    assert_eq!(code, 0, "{err}");
+    let world = World::from_toml_str(&toml, "intel-lab.toml").unwrap();
+    assert_eq!(world.targets[0].positions().len(), 10);
+    assert!(world.walls.len() > 1000, "{} walls", world.walls.len());
+    let file = dir.join("intel-lab.toml");
+    std::fs::write(&file, &toml).unwrap();
+    let (code, out, err) = run(&["search", "--world", file.to_str().unwrap(), "--planner", "nearest", "--seed", "1", "--json"]);
+    // Status 0 found, 1 not found: either is a search that ran.
+    assert!(code == 0 || code == 1, "{code}: {err}");
+    let r: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(r["world"], "intel-lab");
+    assert!(r["ticks"].as_u64().unwrap() > 10 && r["collisions"] == 0, "{out}");
+    // A start off the floor, and a map with nothing free, are errors naming the map.
+    let (code, _, err) = run(&["worlds", "--from-map", yaml.to_str().unwrap(), "--start", "500,500", "--random-targets", "1"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("intel.yaml") && err.contains("not on a free cell"), "{err}");
+}

@@ -17,7 +17,8 @@ pub struct EvalArgs {
     /// 0 runs no built-in setting (the held-out worlds only).
     #[arg(long, default_value_t = 10)]
     trials: u64,
-    /// Built-in worlds, comma-separated.
+    /// Built-in worlds, comma-separated; a world file (.toml, e.g. from `lives worlds --from-map`)
+    /// is one setting of its own (it holds its own scenario and time limit).
     #[arg(long, value_delimiter = ',', default_value = "apartment,office,hallway")]
     worlds: Vec<String>,
     /// Scenarios, comma-separated.

@@ -11,6 +11,7 @@
 
 pub mod export;
 mod image;
+pub mod world;
 
 use std::fmt;
 use std::path::{Path, PathBuf};

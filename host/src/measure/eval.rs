@@ -482,8 +482,9 @@ pub fn csv(cells: &[CellSummary]) -> String {
     out
 }
 
-/// The specs of an evaluation: every planner × world × scenario × trial (seeds `1..=trials`).
-/// `lives` runs the int8 classifier (`model`); the others their own label source.
+/// The specs of an evaluation: every planner × world × scenario × trial (seeds `1..=trials`);
+/// a world file (`.toml`, or any path that exists) is one setting of its own, whatever the
+/// scenarios (it holds its own). `lives` runs the int8 classifier (`model`); the others their own label source.
 pub fn eval_specs(
     worlds: &[String],
     scenarios: &[Scenario],
@@ -494,9 +495,24 @@ pub fn eval_specs(
 ) -> Result<Vec<SearchSpec>, String> {
     let mut specs = Vec::new();
     for w in worlds {
+        let builtin = World::builtin_names().contains(&w.as_str());
+        if !builtin && (w.ends_with(".toml") || std::path::Path::new(w).exists()) {
+            // A world file holds its own scenario: one setting, named as the file names it.
+            let world = World::load(std::path::Path::new(w)).map_err(|e| e.to_string())?;
+            for &p in planners {
+                for seed in 1..=trials {
+                    let mut spec = planner_spec(&world.name, &world, Scenario::Easy, p, seed, model);
+                    spec.scenario = None;
+                    configure(&mut spec)?;
+                    specs.push(spec);
+                }
+            }
+            continue;
+        }
         for &s in scenarios {
-            let world = World::builtin(w, s)
-                .ok_or_else(|| format!("unknown built-in world `{w}` (expected {})", World::builtin_names().join(", ")))?;
+            let world = World::builtin(w, s).ok_or_else(|| {
+                format!("unknown built-in world `{w}` (expected {}, or a world file .toml)", World::builtin_names().join(", "))
+            })?;
             for &p in planners {
                 for seed in 1..=trials {
                     let mut spec = planner_spec(w, &world, s, p, seed, model);

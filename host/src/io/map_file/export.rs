@@ -95,6 +95,40 @@ pub fn true_map(world: &World, file: &str) -> PriorMap {
     PriorMap { file: file.to_string(), resolution_m: res, origin: [origin[0], origin[1], 0.0], width: nx, height: ny, cells }
 }
 
+/// A grid's map (`lives replay --map-out`, as `map_saver` saves a SLAM map): `n × n` cells of
+/// `res` metres, lower-left corner at `origin`, `cell(x, y)` its state; cropped to the known
+/// cells' box grown by [`GRID_MAP_MARGIN_CELLS`] (clipped to the grid). `None` when every cell is
+/// unknown.
+pub fn from_grid(cell: impl Fn(usize, usize) -> Cell3, n: usize, origin: [f64; 2], res: f64, file: &str) -> Option<PriorMap> {
+    let (mut lo, mut hi) = ([usize::MAX; 2], [0usize; 2]);
+    for y in 0..n {
+        for x in 0..n {
+            if cell(x, y) != Cell3::Unknown {
+                lo = [lo[0].min(x), lo[1].min(y)];
+                hi = [hi[0].max(x), hi[1].max(y)];
+            }
+        }
+    }
+    if lo[0] == usize::MAX {
+        return None;
+    }
+    let m = GRID_MAP_MARGIN_CELLS;
+    let (x0, y0) = (lo[0].saturating_sub(m), lo[1].saturating_sub(m));
+    let (x1, y1) = ((hi[0] + m).min(n - 1), (hi[1] + m).min(n - 1));
+    let (w, h) = (x1 - x0 + 1, y1 - y0 + 1);
+    let mut cells = Vec::with_capacity(w * h);
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            cells.push(cell(x, y));
+        }
+    }
+    let o = [origin[0] + x0 as f64 * res, origin[1] + y0 as f64 * res, 0.0];
+    Some(PriorMap { file: file.to_string(), resolution_m: res, origin: o, width: w, height: h, cells })
+}
+
+/// Unknown cells kept around a grid map's known ones.
+pub const GRID_MAP_MARGIN_CELLS: usize = 5;
+
 /// The map as a binary PGM, its top row the map's highest y.
 pub fn to_pgm(map: &PriorMap, comment: &str) -> Vec<u8> {
     let mut out = format!("P5\n# {}\n{} {}\n255\n", comment.replace(['\n', '\r'], " "), map.width, map.height).into_bytes();

@@ -31,6 +31,12 @@ pub struct ReplayArgs {
     /// file, which Foxglove opens (docs/recording.md).
     #[arg(long, value_name = "FILE.mcap")]
     pub record: Option<PathBuf>,
+    /// Save the controller's LiDAR grid at the end as a map_server map, as `map_saver` saves a
+    /// SLAM map: OUT.yaml and OUT.pgm beside it (occupied 0, free 254, unknown 205), in the
+    /// log's frame, cropped to the known cells. `lives search --map` and `lives worlds
+    /// --from-map` read it.
+    #[arg(long, value_name = "OUT.yaml")]
+    pub map_out: Option<PathBuf>,
     /// Override a controller parameter, e.g. `--set replan_interval_s=6` (repeatable;
     /// `lives params` lists them).
     #[arg(long = "set", value_name = "NAME=VALUE")]
@@ -57,6 +63,9 @@ pub fn run_command(args: &ReplayArgs) -> Result<std::process::ExitCode, String> 
             r.labels
         );
         picture::write_png(&run, path, &title).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    if let Some(out) = &args.map_out {
+        write_map(&run, out)?;
     }
     let mut stdout = std::io::stdout();
     if args.json {
@@ -86,4 +95,31 @@ pub fn run_command(args: &ReplayArgs) -> Result<std::process::ExitCode, String> 
         code = std::process::ExitCode::from(1);
     }
     Ok(code)
+}
+
+/// `--map-out`: the controller's LiDAR grid at the end as a map_server map.
+fn write_map(run: &ReplayRun, out: &std::path::Path) -> Result<(), String> {
+    use crate::io::map_file::{export, Cell3};
+    use firmware::grid::Cell;
+    let ctrl = &run.controller;
+    let geom = ctrl.lidar.geom;
+    let origin = [geom.origin_x.to_num::<f64>(), geom.origin_y.to_num::<f64>()];
+    let res = 1.0 / firmware::capacity::CELLS_PER_METER as f64;
+    let cell = |x: usize, y: usize| match ctrl.lidar.get(x as i32, y as i32) {
+        Cell::Occupied => Cell3::Occupied,
+        Cell::Free => Cell3::Free,
+        Cell::Unknown => Cell3::Unknown,
+    };
+    let file = out.display().to_string();
+    let map = export::from_grid(cell, firmware::capacity::GRID_CELLS, origin, res, &file)
+        .ok_or_else(|| format!("{file}: the grid holds no known cell: no map to write"))?;
+    let comment =
+        format!("lives replay --map-out: the LiDAR grid after {} ({} scans), {res} m/cell", run.report.file, run.report.scans_used);
+    export::write(&map, out, &comment)?;
+    let n = map.counts();
+    eprintln!(
+        "wrote {file}: {} x {} cells at {res} m, origin ({:.2}, {:.2}); {} occupied, {} free, {} unknown",
+        map.width, map.height, map.origin[0], map.origin[1], n.occupied, n.free, n.unknown
+    );
+    Ok(())
 }
