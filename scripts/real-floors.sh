@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Every planner in worlds traced from four real robots' maps (docs/experiments/real-floor-maps.md):
+# the map each corrected CARMEN log leaves (`lives replay --map-out`), a world traced from it
+# (`lives worlds --from-map`, starting at the log's first laser pose, ten targets from seed 1),
+# then `lives eval` over the four worlds, without and with the known map.
+# Usage: scripts/real-floors.sh [OUT_DIR]   (default out/real-floors)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-out/real-floors}
+mkdir -p "$out/worlds"
+cargo build --release -p host --bin lives -q
+lives=target/release/lives
+worlds=()
+for log in intel aces freiburg-079 csail; do
+  file=tests/data/carmen/$log-corrected.log.gz
+  "$lives" replay "$file" --map-out "$out/worlds/$log.yaml" > /dev/null
+  # Laser poses in log order (x y yaw in degrees): the first one the world accepts as a start.
+  placed=
+  while read -r x y deg; do
+    if "$lives" worlds --from-map "$out/worlds/$log.yaml" --start "$x,$y,$deg" --random-targets 10 --seed 1 \
+        --name "$log" > "$out/worlds/$log.toml" 2> "$out/worlds/$log.err"; then
+      placed="$x,$y,$deg"
+      break
+    fi
+  done < <(zcat "$file" | awk '$1 == "FLASER" { n = $2; printf "%s %s %.3f\n", $(3 + n), $(4 + n), $(5 + n) * 57.29577951308232 }')
+  if [ -z "$placed" ]; then
+    echo "$log: no laser pose of the log is a start the world accepts: $(cat "$out/worlds/$log.err")" >&2
+    exit 2
+  fi
+  echo "$log: start $placed; $(head -2 "$out/worlds/$log.toml" | tr '\n' ' ')"
+  worlds+=("$out/worlds/$log.toml")
+done
+list=$(IFS=,; echo "${worlds[*]}")
+"$lives" eval --worlds "$list" --trials 10 --heldout 0 --no-pictures --threads 2 --out "$out"
+"$lives" eval --worlds "$list" --trials 10 --heldout 0 --no-pictures --threads 2 --known-map --out "$out-map"
