@@ -41,6 +41,10 @@ pub struct WorldsArgs {
     /// The world's time limit, seconds (default `60 + 3 (w + h)` rounded to 10 s).
     #[arg(long, value_name = "S")]
     time_limit: Option<f64>,
+    /// Keep only the floor within a square of this side (metres) around the start: a building
+    /// larger than a world may be (50 m) is searched in part.
+    #[arg(long, value_name = "M")]
+    window: Option<f64>,
     /// The world's name (default: the map file's name).
     #[arg(long)]
     name: Option<String>,
@@ -109,6 +113,7 @@ fn trace(args: &WorldsArgs, map_file: &std::path::Path) -> Result<ExitCode, Stri
         seed: args.seed,
         min_target_path_m: args.min_target_path,
         time_limit_s: args.time_limit,
+        window_m: args.window,
     };
     let t = from_map::world_from_map(&map, &opts)?;
     let [lo, hi] = t.world.bounds;

@@ -56,6 +56,9 @@ pub struct FromMap {
     pub min_target_path_m: f64,
     /// The time limit; default `60 + 3 (w + h)` s rounded to 10 s (the procedural hard worlds').
     pub time_limit_s: Option<f64>,
+    /// Keep only the floor within a square of this side (metres) centred on the start, the map
+    /// frame's axes (for a building larger than a world may be).
+    pub window_m: Option<f64>,
 }
 
 /// The world and the shift from the map frame to the world frame (add it to a map position).
@@ -70,9 +73,20 @@ pub struct Traced {
 /// Traces `map` into a world (module doc). Errors name the map file and what is wrong.
 pub fn world_from_map(map: &PriorMap, opts: &FromMap) -> Result<Traced, String> {
     let file = &map.file;
-    let free = |x: i64, y: i64| x >= 0 && y >= 0 && map.get(x as usize, y as usize) == Some(Cell3::Free);
-    let (w, h) = (map.width as i64, map.height as i64);
     let r = map.resolution_m;
+    if let Some(side) = opts.window_m.filter(|s| !(s.is_finite() && *s > 0.0)) {
+        return Err(format!("--window {side}: expected a positive side in metres"));
+    }
+    if !opts.start.iter().all(|v| v.is_finite()) || map.at([opts.start[0], opts.start[1]]) != Some(Cell3::Free) {
+        return Err(format!("{file}: the start ({}, {}) is not on a free cell of the map", opts.start[0], opts.start[1]));
+    }
+    let half = opts.window_m.map_or(f64::INFINITY, |s| s / 2.0);
+    let in_window = |x: i64, y: i64| {
+        let c = map.world([(x as f64 + 0.5) * r, (y as f64 + 0.5) * r]);
+        (c[0] - opts.start[0]).abs() <= half && (c[1] - opts.start[1]).abs() <= half
+    };
+    let free = |x: i64, y: i64| x >= 0 && y >= 0 && map.get(x as usize, y as usize) == Some(Cell3::Free) && in_window(x, y);
+    let (w, h) = (map.width as i64, map.height as i64);
     // Sides between a free and a solid cell, merged along each grid line: (from, to) in cell
     // corners of the image's frame.
     let mut runs: Vec<([i64; 2], [i64; 2])> = Vec::new();
@@ -130,9 +144,6 @@ pub fn world_from_map(map: &PriorMap, opts: &FromMap) -> Result<Traced, String> 
     let moved = |p: [f64; 2]| [p[0] + shift[0], p[1] + shift[1]];
     let walls: Vec<[P2; 2]> = segments.iter().map(|s| [moved(s[0]), moved(s[1])]).collect();
     let start = moved([opts.start[0], opts.start[1]]);
-    if !opts.start.iter().all(|v| v.is_finite()) || map.at([opts.start[0], opts.start[1]]) != Some(Cell3::Free) {
-        return Err(format!("{file}: the start ({}, {}) is not on a free cell of the map", opts.start[0], opts.start[1]));
-    }
     let limit = opts.time_limit_s.unwrap_or_else(|| ((60.0 + 3.0 * (size[0] + size[1])) / 10.0).round() * 10.0);
     let mut world = World {
         name: opts.name.clone(),
@@ -229,6 +240,7 @@ mod tests {
             seed: 1,
             min_target_path_m: 0.0,
             time_limit_s: None,
+            window_m: None,
         }
     }
 
@@ -292,9 +304,38 @@ mod tests {
     }
 
     #[test]
+    fn a_window_keeps_the_floor_around_the_start() {
+        // A 20 × 4 m corridor of 1 m cells; a 6 m window around (10.5, 2) keeps x 7.5..13.5.
+        let rows = [
+            "?".repeat(22),
+            format!("?{}?", ".".repeat(20)).repeat(1),
+            format!("?{}?", ".".repeat(20)),
+            format!("?{}?", ".".repeat(20)),
+            format!("?{}?", ".".repeat(20)),
+            "?".repeat(22),
+        ];
+        let rows: Vec<&str> = rows.iter().map(|s| s.as_str()).collect();
+        let m = map(&rows, [0.0; 3]);
+        let mut o = opts([10.5, 3.0, 0.0], &[[12.5, 3.0]]);
+        let whole = world_from_map(&m, &o).unwrap();
+        assert_eq!(whole.world.bounds[1][0] - whole.world.bounds[0][0], 20.0);
+        o.window_m = Some(6.0);
+        let cut = world_from_map(&m, &o).unwrap();
+        // Cells whose centres lie within 3 m of x = 10.5: centres 7.5 … 13.5, seven cells.
+        assert_eq!(cut.world.bounds[1][0] - cut.world.bounds[0][0], 7.0);
+        assert_eq!(cut.segments, 4);
+        o.window_m = Some(f64::NAN);
+        assert!(world_from_map(&m, &o).unwrap_err().contains("--window"));
+    }
+
+    #[test]
     fn bad_requests_are_errors_naming_the_map() {
         let none = map(&["###", "#?#", "###"], [0.0; 3]);
-        assert!(world_from_map(&none, &opts([1.5, 1.5, 0.0], &[[1.5, 1.5]])).unwrap_err().starts_with("m.yaml: the map has no free cell"));
+        assert!(world_from_map(&none, &opts([1.5, 1.5, 0.0], &[[1.5, 1.5]])).unwrap_err().starts_with("m.yaml: the start (1.5, 1.5) is not on a free cell"));
+        let one = map(&["???", "?.?", "???"], [0.0; 3]);
+        let mut tiny = opts([1.2, 1.2, 0.0], &[[1.5, 1.5]]);
+        tiny.window_m = Some(0.1);
+        assert!(world_from_map(&one, &tiny).unwrap_err().starts_with("m.yaml: the map has no free cell"));
         let rows = ["??????", "?....?", "?....?", "?....?", "?....?", "??????"];
         let m = map(&rows, [0.0; 3]);
         assert!(world_from_map(&m, &opts([0.5, 0.5, 0.0], &[[3.0, 3.0]])).unwrap_err().contains("not on a free cell"));
