@@ -239,6 +239,32 @@ fn line(a: (i64, i64), b: (i64, i64)) -> impl Iterator<Item = (i64, i64)> {
     })
 }
 
+/// A set of cells as runs of consecutive indices (`[start, end)`): what a waypoint sees is a
+/// few runs a grid row, so an open hall's thousands of candidates, each seeing up to π·300² cells
+/// of a 30 m LiDAR, hold kilobytes each instead of a megabyte.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Spans(Vec<(u32, u32)>);
+
+impl Spans {
+    /// The runs of `sorted` (ascending, no duplicates).
+    pub fn of(sorted: &[u32]) -> Spans {
+        let mut runs: Vec<(u32, u32)> = Vec::new();
+        for &i in sorted {
+            match runs.last_mut() {
+                Some(r) if r.1 == i => r.1 = i + 1,
+                _ => runs.push((i, i + 1)),
+            }
+        }
+        runs.shrink_to_fit();
+        Spans(runs)
+    }
+
+    /// The cells, ascending.
+    pub fn cells(&self) -> impl Iterator<Item = u32> + '_ {
+        self.0.iter().flat_map(|&(a, b)| a..b)
+    }
+}
+
 /// A coverage problem over a known building: where the robot can stand, the candidate
 /// waypoints and what each sees. Built once; routes for one robot ([`plan`]) or a team
 /// ([`Coverage::plan_team`]) are planned on it.
@@ -247,7 +273,7 @@ pub struct Coverage<'a> {
     fp: Footprint,
     ok: Vec<bool>,
     /// (cell, heading, free cells seen).
-    cands: Vec<(usize, f64, Vec<u32>)>,
+    cands: Vec<(usize, f64, Spans)>,
     coverable: usize,
     free: usize,
 }
@@ -264,7 +290,7 @@ impl<'a> Coverage<'a> {
             Footprint::Camera { .. } => (0..CAMERA_HEADINGS).map(|k| k as f64 * std::f64::consts::TAU / CAMERA_HEADINGS as f64).collect(),
             Footprint::Lidar { .. } => vec![0.0],
         };
-        let mut cands: Vec<(usize, f64, Vec<u32>)> = Vec::new();
+        let mut cands: Vec<(usize, f64, Spans)> = Vec::new();
         for y in (0..n).step_by(LATTICE_CELLS) {
             for x in (0..n).step_by(LATTICE_CELLS) {
                 let c = y * n + x;
@@ -272,14 +298,14 @@ impl<'a> Coverage<'a> {
                     continue;
                 }
                 for &h in &headings {
-                    cands.push((c, h, map.seen_from(c, h, fp)));
+                    cands.push((c, h, Spans::of(&map.seen_from(c, h, fp))));
                 }
             }
         }
         let free = map.cells.iter().filter(|c| **c == Cell3::Free).count();
         let mut coverable = vec![false; n * n];
         for (_, _, s) in &cands {
-            for &i in s {
+            for i in s.cells() {
                 coverable[i as usize] = true;
             }
         }
@@ -336,7 +362,7 @@ impl<'a> Coverage<'a> {
                 if d == u32::MAX {
                     continue;
                 }
-                let gain = seen.iter().filter(|&&i| !covered[i as usize]).count();
+                let gain = seen.cells().filter(|&i| !covered[i as usize]).count();
                 if gain < MIN_GAIN_CELLS {
                     continue;
                 }
@@ -349,7 +375,7 @@ impl<'a> Coverage<'a> {
                 open[r] = false;
                 continue;
             };
-            for &i in &self.cands[k].2 {
+            for i in self.cands[k].2.cells() {
                 covered[i as usize] = true;
             }
             length_units[r] += d;
@@ -416,6 +442,15 @@ mod tests {
             }
         }
         c
+    }
+
+    #[test]
+    fn spans_hold_a_sorted_set_as_runs() {
+        let cells = [0u32, 1, 2, 5, 7, 8, 100];
+        let s = Spans::of(&cells);
+        assert_eq!(s.0, vec![(0, 3), (5, 6), (7, 9), (100, 101)]);
+        assert_eq!(s.cells().collect::<Vec<_>>(), cells);
+        assert_eq!(Spans::of(&[]).cells().count(), 0);
     }
 
     #[test]
