@@ -43,6 +43,15 @@ pub enum ReplayError {
         /// when the line is not UTF-8.
         control: Option<(usize, u8)>,
     },
+    /// A log line longer than [`super::read::MAX_LINE_BYTES`] (its bytes are not kept).
+    LineTooLong {
+        /// The file.
+        file: PathBuf,
+        /// The line (1-based).
+        line: usize,
+        /// Its length in bytes.
+        bytes: usize,
+    },
     /// A CARMEN line could not be read.
     CarmenLine {
         /// The file.
@@ -153,6 +162,7 @@ impl ReplayError {
         match self {
             ReplayError::CarmenLine { error, .. } => error.reason(),
             ReplayError::NotText { .. } => "not_text",
+            ReplayError::LineTooLong { .. } => "line_too_long",
             ReplayError::Message { .. } => "undecodable_message",
             ReplayError::BagChunk { .. } => "damaged_chunk",
             ReplayError::SqliteRow { .. } => "bad_row",
@@ -190,6 +200,12 @@ impl fmt::Display for ReplayError {
                 let name = if *byte == 0 { "a NUL byte".to_string() } else { format!("the control byte 0x{byte:02x}") };
                 write!(f, "{}:{line}: not text: {name} at column {column}", file.display())
             }
+            ReplayError::LineTooLong { file, line, bytes } => write!(
+                f,
+                "{}:{line}: a line of {bytes} bytes, longer than a log line may be ({} bytes; a CARMEN scan of 1 081 readings is about 10 kB)",
+                file.display(),
+                super::read::MAX_LINE_BYTES
+            ),
             ReplayError::CarmenLine { file, line, error } => write!(f, "{}:{line}: {error}", file.display()),
             ReplayError::Bag { file, offset, reason } | ReplayError::BagChunk { file, offset, reason } => {
                 write!(f, "{}: byte {offset}: {reason}", file.display())

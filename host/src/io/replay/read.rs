@@ -105,6 +105,37 @@ pub(super) fn read_vlp16(file: &Path) -> Result<LogData, ReplayError> {
     Ok(log)
 }
 
+/// The longest log line kept (a CARMEN scan of 1 081 readings is about 10 kB): a longer one is
+/// a bad record, skipped without holding it.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+/// The most text a gzip-compressed CARMEN log is decompressed to (1 GiB; the largest public
+/// CARMEN logs are a few hundred MB): past it reading stops with an error, what came before kept.
+pub const MAX_GZIP_TEXT_BYTES: u64 = 1 << 30;
+
+/// Reads one line (through its `\n`) into `buf`, keeping at most `max` bytes of it; returns
+/// the line's whole length (0 at the end) and whether it was longer than `max`.
+fn read_line_capped(r: &mut dyn BufRead, buf: &mut Vec<u8>, max: usize) -> std::io::Result<(usize, bool)> {
+    let (mut total, mut long) = (0usize, false);
+    loop {
+        let avail = r.fill_buf()?;
+        if avail.is_empty() {
+            return Ok((total, long));
+        }
+        let (take, done) = match avail.iter().position(|&b| b == b'\n') {
+            Some(i) => (i + 1, true),
+            None => (avail.len(), false),
+        };
+        let room = max.saturating_sub(buf.len());
+        long |= take > room;
+        buf.extend_from_slice(&avail[..take.min(room)]);
+        r.consume(take);
+        total += take;
+        if done {
+            return Ok((total, long));
+        }
+    }
+}
+
 pub(super) fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> LogData {
     let mut log = LogData::new(file, format);
     let counter = std::rc::Rc::new(std::cell::Cell::new(0u64));
@@ -120,19 +151,39 @@ pub(super) fn read_carmen(file: &Path, format: LogFormat, bytes: Vec<u8>) -> Log
     let mut seen = [false; 3];
     // For `RAWLASER1` scans: the odometry, the front laser's mount, the scans themselves.
     let mut raw = RawLaser::default();
+    let mut text_bytes = 0u64;
     loop {
         buf.clear();
-        match reader.read_until(b'\n', &mut buf) {
-            Ok(0) => break,
-            Ok(_) => {}
+        let long = match read_line_capped(reader.as_mut(), &mut buf, MAX_LINE_BYTES) {
+            Ok((0, _)) => break,
+            Ok((n, long)) => {
+                text_bytes += n as u64;
+                long.then_some(n)
+            }
             // Only the gzip decoder can fail here (plain text is read from memory).
             Err(e) => {
                 log.error =
                     Some(ReplayError::Gzip { file: file.to_path_buf(), lines: line_no, offset: counter.get(), reason: e.to_string() });
                 break;
             }
+        };
+        if format == LogFormat::CarmenGzip && text_bytes > MAX_GZIP_TEXT_BYTES {
+            log.error = Some(ReplayError::Gzip {
+                file: file.to_path_buf(),
+                lines: line_no,
+                offset: counter.get(),
+                reason: format!(
+                    "it decompresses to more than {} MiB of text, more than a log holds (a decompression bomb?): reading stopped",
+                    MAX_GZIP_TEXT_BYTES >> 20
+                ),
+            });
+            break;
         }
         line_no += 1;
+        if let Some(bytes) = long {
+            log.bad_records.add(ReplayError::LineTooLong { file: file.to_path_buf(), line: line_no, bytes });
+            continue;
+        }
         // A NUL (or other control byte) costs its line only, wherever it is in the file.
         if let Some(k) = buf.iter().position(|&b| is_control(b)) {
             log.bad_records.add(ReplayError::NotText { file: file.to_path_buf(), line: line_no, control: Some((k + 1, buf[k])) });

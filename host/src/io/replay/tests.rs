@@ -102,3 +102,44 @@ fn huge_numbers_print_compactly() {
     assert_eq!(compact(65.5), "65.5");
     assert_eq!(compact(-16.7655), "-16.7655");
 }
+
+#[test]
+fn a_line_longer_than_a_log_line_is_skipped_without_holding_it_and_the_rest_is_read() {
+    use std::io::Write as _;
+    let odom = "ODOM 1.0 2.0 0.5 0 0 0 1 h 1\n";
+    let long = format!("FLASER 3 {} 1.0 2.0 0 1 2 0 2 h 2\n", "1.0 ".repeat(MAX_LINE_BYTES / 4 + 10));
+    let text = [odom, &long, odom].concat();
+    for gz in [false, true] {
+        let bytes = if gz {
+            let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+            e.write_all(text.as_bytes()).unwrap();
+            e.finish().unwrap()
+        } else {
+            text.clone().into_bytes()
+        };
+        let format = if gz { LogFormat::CarmenGzip } else { LogFormat::Carmen };
+        let log = read_carmen(std::path::Path::new("long.log"), format, bytes);
+        assert_eq!(log.odometry, 2, "the lines around it are read");
+        assert_eq!(log.bad_records.total, 1);
+        let e = log.bad_records.first[0].to_string();
+        assert!(e.starts_with(&format!("long.log:2: a line of {} bytes", long.len())), "{e}");
+        assert_eq!(log.bad_records.first[0].reason(), "line_too_long");
+        assert!(log.error.is_none());
+    }
+}
+
+#[test]
+fn a_gzip_log_that_decompresses_past_the_cap_stops_with_an_error_keeping_what_came_before() {
+    use std::io::Write as _;
+    // A bomb: a valid ODOM line, then zeros (one very long line) beyond the cap.
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    e.write_all(b"ODOM 1.0 2.0 0.5 0 0 0 1 h 1\n").unwrap();
+    let zeros = vec![b'0'; 1 << 24];
+    for _ in 0..(MAX_GZIP_TEXT_BYTES >> 24) + 1 {
+        e.write_all(&zeros).unwrap();
+    }
+    let log = read_carmen(std::path::Path::new("bomb.log.gz"), LogFormat::CarmenGzip, e.finish().unwrap());
+    assert_eq!(log.odometry, 1, "the line before it is kept");
+    let err = log.error.expect("stopped").to_string();
+    assert!(err.starts_with("bomb.log.gz: ") && err.contains("more than 1024 MiB of text"), "{err}");
+}
