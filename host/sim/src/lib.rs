@@ -35,10 +35,15 @@ pub use simulator::{BaseStatus, LidarModel, Scan, Sim, SimConfig};
 pub use world::{Obstacle, Person, Start, Target, World, WorldError};
 
 /// The bytes of the file at `path` if it holds at most `max`; `Ok(None)` if it holds more, found
-/// by reading one byte past `max`, so `/dev/zero` or a huge file is refused without being read
-/// whole. For the files users hand the program: world files, classifier blobs.
+/// by reading one byte past `max`, so a huge file is refused without being read whole; a path
+/// that is not a regular file (a pipe, `/dev/zero`) is an error before it is opened. For the
+/// files users hand the program: world files, classifier blobs.
 pub fn read_at_most(path: &std::path::Path, max: u64) -> std::io::Result<Option<Vec<u8>>> {
     use std::io::Read as _;
+    // A pipe without a writer would block the open forever, a device never end: files only.
+    if !std::fs::metadata(path)?.is_file() {
+        return Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file (a pipe, a socket or a device)"));
+    }
     let mut bytes = Vec::new();
     std::fs::File::open(path)?.take(max.saturating_add(1)).read_to_end(&mut bytes)?;
     Ok((bytes.len() as u64 <= max).then_some(bytes))

@@ -235,3 +235,9 @@ fn io_error_names_file() {
     assert!(matches!(e, WorldError::Io { .. }));
     assert!(e.to_string().starts_with("/nonexistent/w.toml: cannot read"), "{e}");
 }
+
+#[test]
+fn a_device_or_a_pipe_is_refused_before_it_is_opened() {
+    let e = World::load(std::path::Path::new("/dev/zero")).unwrap_err().to_string();
+    assert!(e.starts_with("/dev/zero: ") && e.contains("not a regular file"), "{e}");
+}

@@ -370,6 +370,11 @@ pub(super) fn read_bag(file: &Path, format: LogFormat, bytes: Option<Vec<u8>>) -
     }
 }
 
+/// The error for a path that is a pipe, a socket or a device rather than a file.
+pub(super) fn not_a_regular_file() -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file (a pipe, a socket or a device): give the log as a file")
+}
+
 pub(super) fn io_err(file: &Path) -> impl Fn(std::io::Error) -> ReplayError + '_ {
     move |source| ReplayError::Io { file: file.to_path_buf(), source }
 }
@@ -488,6 +493,11 @@ fn read_zstd_file(file: &Path) -> Result<LogData, ReplayError> {
 }
 
 pub(super) fn read_one(file: &Path) -> Result<LogData, ReplayError> {
+    // A pipe or a device (`/dev/zero`) would be read until memory runs out, or block forever.
+    let meta = std::fs::metadata(file).map_err(io_err(file))?;
+    if !meta.is_file() {
+        return Err(ReplayError::Io { file: file.to_path_buf(), source: not_a_regular_file() });
+    }
     // A ROS 1 bag is streamed (camera bags are many gigabytes); the other formats are read whole.
     let mut head = Vec::with_capacity(4096);
     std::fs::File::open(file).and_then(|f| f.take(4096).read_to_end(&mut head)).map_err(io_err(file))?;

@@ -143,3 +143,9 @@ fn a_gzip_log_that_decompresses_past_the_cap_stops_with_an_error_keeping_what_ca
     let err = log.error.expect("stopped").to_string();
     assert!(err.starts_with("bomb.log.gz: ") && err.contains("more than 1024 MiB of text"), "{err}");
 }
+
+#[test]
+fn a_device_is_not_read_as_a_log() {
+    let e = read_log(std::path::Path::new("/dev/zero")).unwrap_err().to_string();
+    assert!(e.starts_with("/dev/zero") && e.contains("not a regular file"), "{e}");
+}
