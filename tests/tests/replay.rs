@@ -1508,6 +1508,23 @@ fn vlp16_captures_replay_one_scan_per_rotation_at_the_origin() {
     }
 }
 
+/// A VLP-16 capture cut short: the scans before the cut are replayed and the damage is the
+/// replay's error (exit status 1, as for every format), naming the file once and the byte.
+#[test]
+fn a_truncated_vlp16_capture_keeps_the_scans_before_and_is_named_damage() {
+    let bytes = std::fs::read(common::root().join("tests/data/velodyne/einride_vlp16_recording.bin")).unwrap();
+    let cut_path = tmp("cut-vlp16.bin");
+    std::fs::write(&cut_path, &bytes[..bytes.len() / 2 + 100]).unwrap();
+    let run = replay::replay(&cut_path, &no_classifier()).unwrap();
+    let msg = run.error.as_ref().expect("the cut is damage").to_string();
+    let name = cut_path.display().to_string();
+    assert!(msg.starts_with(&format!("{name}: the capture's reading stopped early: byte ")), "{msg}");
+    assert_eq!(msg.matches(&name).count(), 1, "{msg}");
+    assert!(run.report.scans_used >= 5 && run.report.scans_used < 14, "{}", run.report.scans_used);
+    let out = std::process::Command::new(common::lives()).args(["replay", cut_path.to_str().unwrap()]).output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
 /// Bad scans in a bag (issue 27): a `range_max` of 0, a `range_max` below `range_min`, no beams
 /// and a NaN `angle_min` are each a counted rejection with its own name, and every good scan
 /// before and after them is mapped.

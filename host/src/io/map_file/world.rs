@@ -331,7 +331,9 @@ mod tests {
     #[test]
     fn bad_requests_are_errors_naming_the_map() {
         let none = map(&["###", "#?#", "###"], [0.0; 3]);
-        assert!(world_from_map(&none, &opts([1.5, 1.5, 0.0], &[[1.5, 1.5]])).unwrap_err().starts_with("m.yaml: the start (1.5, 1.5) is not on a free cell"));
+        assert!(world_from_map(&none, &opts([1.5, 1.5, 0.0], &[[1.5, 1.5]]))
+            .unwrap_err()
+            .starts_with("m.yaml: the start (1.5, 1.5) is not on a free cell"));
         let one = map(&["???", "?.?", "???"], [0.0; 3]);
         let mut tiny = opts([1.2, 1.2, 0.0], &[[1.5, 1.5]]);
         tiny.window_m = Some(0.1);

@@ -99,8 +99,17 @@ pub(super) fn read_vlp16(file: &Path) -> Result<LogData, ReplayError> {
             at: Location::Line(i + 1),
         });
     }
+    // Damage stops the reading: the scans before it are replayed and the exit status says so
+    // (1), as for every other format (`lives lidar decode` does the same).
     if let Some(e) = capture.error {
-        log.warnings.push(format!("the capture's reading stopped early: {e}"));
+        // The capture's error names the file already; this one does too.
+        let e = e.to_string();
+        let prefix = format!("{}: ", file.display());
+        let e = e.strip_prefix(&prefix).unwrap_or(&e);
+        log.error = Some(ReplayError::Io {
+            file: file.to_path_buf(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidData, format!("the capture's reading stopped early: {e}")),
+        });
     }
     Ok(log)
 }
