@@ -198,6 +198,32 @@ fn bad_input_is_a_clear_error_with_status_2() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A damaged `--reference` log makes the figures less than they seem: its damage is said on
+/// stderr and the exit status is 1, as for damage in the log scored.
+#[test]
+fn a_damaged_reference_is_said_and_the_status_is_1() {
+    use std::io::Read as _;
+    let log = data("intel-corrected.log.gz");
+    let gz = std::fs::read(&log).unwrap();
+    let dir = std::env::temp_dir().join(format!("lives-mapcheck-ref-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cut = dir.join("half.log.gz");
+    std::fs::write(&cut, &gz[..gz.len() / 2]).unwrap();
+    // One alignment pose: the first scan's own, keyed by its time stamp.
+    let mut text = String::new();
+    flate2::read::MultiGzDecoder::new(&gz[..]).read_to_string(&mut text).unwrap();
+    let t: Vec<&str> = text.lines().find(|l| l.starts_with("FLASER")).unwrap().split_whitespace().collect();
+    let n: usize = t[1].parse().unwrap();
+    let poses = dir.join("poses.txt");
+    std::fs::write(&poses, format!("{} {} {} {}\n", t[2 + n + 6], t[2 + n], t[2 + n + 1], t[2 + n + 2])).unwrap();
+    let (code, stdout, stderr) =
+        mapcheck(&[log.as_os_str(), "--reference".as_ref(), cut.as_os_str(), "--align".as_ref(), poses.as_os_str()]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stdout.contains("walls recovered"), "the figures are still given: {stdout}");
+    assert!(stderr.contains(&format!("warning: the reference: {}: gzip stream damaged", cut.display())), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// The realistic sensor in a corridor 1 m wide: its walls, met edge-on, mostly return nothing,
 /// and a beam with no return must not clear free space through the wall its neighbours see
 /// (`firmware::grid::no_return_bounds`; docs/experiments/real-lidar-maps.md, "No-return beams

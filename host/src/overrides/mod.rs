@@ -49,7 +49,10 @@ fn validated(cfg: &mut Config, before: Config, field: &str, name: &str, v: &str)
     cfg.validate().map_err(|e| {
         *cfg = before;
         if e.field == field {
-            format!("`{name}`: expected a value in {}, got {v}", e.allowed)
+            // A value inside the range the fixed point cannot hold (1e-6 m is 0 in Q16.16) says so.
+            let tiny = v.trim().parse::<f64>().is_ok_and(|x| x != 0.0 && x.abs() < 1.0 / 65536.0);
+            let why = if tiny { " (it rounds to 0: the controller's numbers are multiples of 1/65536)" } else { "" };
+            format!("`{name}`: expected a value in {}, got {v}{why}", e.allowed)
         } else {
             format!("`{name}={v}`: the controller's {e}")
         }

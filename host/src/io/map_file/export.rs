@@ -160,6 +160,12 @@ pub fn to_yaml(map: &PriorMap, image: &str) -> String {
 /// PGM's path.
 pub fn write(map: &PriorMap, yaml: &Path, comment: &str) -> Result<std::path::PathBuf, String> {
     let pgm = yaml.with_extension("pgm");
+    // Nothing is written unless both files can be: a directory or a device as the map file.
+    for p in [yaml, pgm.as_path()] {
+        if p.exists() && !p.is_file() {
+            return Err(format!("{}: exists and is not a regular file (a directory or a device): give a file name", p.display()));
+        }
+    }
     if pgm == yaml {
         return Err(format!("{}: the map file needs a name other than its image's (use .yaml)", yaml.display()));
     }
