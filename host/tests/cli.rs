@@ -267,9 +267,16 @@ fn node_and_replay_refuse_a_bad_model_before_starting() {
         assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains("the model does not validate: not a classifier blob"), "{args:?}: {err}");
     }
-    // `/dev/zero` is refused by its size without being read whole; a planner that runs no
-    // classifier refuses `--model` rather than ignoring it.
+    // `/dev/zero` is refused before it is opened (not a regular file), a file larger than any
+    // blob by its size without being read whole; a planner that runs no classifier refuses
+    // `--model` rather than ignoring it.
     let out = lives().args(["search", "--model", "/dev/zero"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/dev/zero: not a regular file"));
+    let big = std::env::temp_dir().join(format!("lives-big-blob-{}", std::process::id()));
+    std::fs::File::create(&big).unwrap().set_len(64 << 20).unwrap();
+    let out = lives().args(["search", "--model", big.to_str().unwrap()]).output().unwrap();
+    let _ = std::fs::remove_file(&big);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("larger than any classifier blob"));
     let geo = concat!(env!("CARGO_MANIFEST_DIR"), "/../firmware/model/lives-geo-int8.bin");
