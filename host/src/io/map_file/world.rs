@@ -22,13 +22,12 @@
 //! What this module must not do: run searches or know the controller.
 
 use super::{Cell3, PriorMap};
+use crate::sim::world::WORLD_LIMIT_M;
 use crate::sim::{reach::ReachMap, Start, Target, World};
 use crate::sim::{Shape, P2};
 
 /// The free space starts this far from the world frame's axes.
 pub const MARGIN_M: f64 = 1.0;
-/// The world format's largest coordinate ([0, 51] m).
-pub const MAX_COORD_M: f64 = 51.0;
 /// The suitcase the built-in worlds hide.
 pub const TARGET_SIZE_M: [f64; 2] = [0.5, 0.35];
 /// A random target's centre stands this far from every wall (the suitcase's half diagonal and a
@@ -133,12 +132,12 @@ pub fn world_from_map(map: &PriorMap, opts: &FromMap) -> Result<Traced, String> 
     }
     let shift = [MARGIN_M - lo[0], MARGIN_M - lo[1]];
     let size = [hi[0] - lo[0], hi[1] - lo[1]];
-    if size[0] + MARGIN_M > MAX_COORD_M || size[1] + MARGIN_M > MAX_COORD_M {
+    if size[0] + MARGIN_M > WORLD_LIMIT_M || size[1] + MARGIN_M > WORLD_LIMIT_M {
         return Err(format!(
             "{file}: the map's free space spans {:.1} × {:.1} m; a world holds at most {:.0} m a side (the controller's grid is 51.2 m)",
             size[0],
             size[1],
-            MAX_COORD_M - MARGIN_M
+            WORLD_LIMIT_M - MARGIN_M
         ));
     }
     let moved = |p: [f64; 2]| [p[0] + shift[0], p[1] + shift[1]];
