@@ -35,6 +35,10 @@ pub const TARGET_SIZE_M: [f64; 2] = [0.5, 0.35];
 pub const TARGET_CLEARANCE_M: f64 = 0.35;
 /// The robot radius the reachability of random targets is computed for (the default robot's).
 pub const REACH_RADIUS_M: f64 = 0.3;
+/// Most wall segments a traced world may have: a world file holds at most 1 MiB (about 20 000
+/// segments). A real building's map gives a few thousand (the Intel lab's 4 582); more is a
+/// speckled map (noise, a scanned drawing) to clean first or cut with `--window`.
+pub const MAX_SEGMENTS: usize = 20_000;
 /// Most random target positions.
 pub const MAX_RANDOM_TARGETS: usize = 1000;
 
@@ -89,8 +93,14 @@ pub fn world_from_map(map: &PriorMap, opts: &FromMap) -> Result<Traced, String> 
     // Sides between a free and a solid cell, merged along each grid line: (from, to) in cell
     // corners of the image's frame.
     let mut runs: Vec<([i64; 2], [i64; 2])> = Vec::new();
-    let flush = |start: &mut Option<i64>, end: i64, line: i64, horizontal: bool, runs: &mut Vec<_>| {
+    // Past the cap the count goes on but no run is kept (a speckled 2001² map would hold millions).
+    let mut extra = 0usize;
+    let mut flush = |start: &mut Option<i64>, end: i64, line: i64, horizontal: bool, runs: &mut Vec<_>| {
         if let Some(s) = start.take() {
+            if runs.len() > MAX_SEGMENTS {
+                extra += 1;
+                return;
+            }
             runs.push(if horizontal { ([s, line], [end, line]) } else { ([line, s], [line, end]) });
         }
     };
@@ -118,6 +128,12 @@ pub fn world_from_map(map: &PriorMap, opts: &FromMap) -> Result<Traced, String> 
     }
     if runs.is_empty() {
         return Err(format!("{file}: the map has no free cell: nothing to trace a floor from"));
+    }
+    if runs.len() > MAX_SEGMENTS {
+        return Err(format!(
+            "{file}: the floor's outline is {} wall segments, more than a world holds ({MAX_SEGMENTS}): the map is speckled (clean it) or larger than a building (cut it with --window)",
+            runs.len() + extra
+        ));
     }
     let corner = |c: [i64; 2]| map.world([c[0] as f64 * r, c[1] as f64 * r]);
     let segments: Vec<[P2; 2]> = runs.iter().map(|&(a, b)| [corner(a), corner(b)]).collect();
@@ -348,6 +364,17 @@ mod tests {
         let mut wide = map(&["?.?"], [0.0; 3]);
         wide.resolution_m = 60.0;
         assert!(world_from_map(&wide, &opts([90.0, 30.0, 0.0], &[[90.0, 30.0]])).unwrap_err().contains("at most 50 m a side"));
+    }
+
+    #[test]
+    fn a_speckled_map_is_refused_by_its_segment_count() {
+        // Free specks every other cell: each one is its own four walls (100 × 100 specks).
+        let rows: Vec<String> = (0..200).map(|y| (0..200).map(|x| if x % 2 == 0 && y % 2 == 0 { '.' } else { '#' }).collect()).collect();
+        let rows: Vec<&str> = rows.iter().map(|s| s.as_str()).collect();
+        let mut m = map(&rows, [0.0; 3]);
+        m.resolution_m = 0.1;
+        let e = world_from_map(&m, &opts([0.05, 19.95, 0.0], &[[0.05, 19.95]])).unwrap_err();
+        assert!(e.starts_with("m.yaml: the floor's outline is 40000 wall segments, more than a world holds (20000)"), "{e}");
     }
 
     #[test]
