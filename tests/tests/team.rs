@@ -123,6 +123,11 @@ fn bad_team_input_is_named() {
     assert!(rc != 0 && err.contains("--sim-for 2:speed_mps=1"), "{rc} {err}");
     let (_, err, rc) = lives_team("--world hallway --robots 2 --sim-for 1:speed=1");
     assert!(rc != 0 && err.contains("robot 1") && err.contains("speed"), "{rc} {err}");
+    // Refused even when the team runs in one process and would not use it.
+    for bad in ["nan", "-1", "0"] {
+        let (_, err, rc) = lives_team(&format!("--world hallway --robots 2 --link-timeout {bad}"));
+        assert!(rc == 2 && err.contains("--link-timeout"), "{bad}: {rc} {err}");
+    }
 }
 
 #[test]

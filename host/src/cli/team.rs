@@ -68,6 +68,10 @@ fn parse_kill(s: &str) -> Result<(usize, f64), String> {
 }
 
 pub fn run(args: TeamArgs) -> Result<ExitCode, String> {
+    // Checked whether or not the run goes over DDS: a bad value is never silently ignored.
+    if !args.link_timeout.is_finite() || args.link_timeout <= 0.0 {
+        return Err(format!("--link-timeout {}: a time > 0 s", args.link_timeout));
+    }
     // `--known-map` stands for `--map`: load as a search without one, then give the true map.
     let mut spec = if args.known_map && args.run.map.is_none() {
         let mut s = load_spec(&RunArgs { planner: host::search::PlannerChoice::Lives, map: None, ..args.run.clone() })?;
@@ -108,9 +112,6 @@ fn over_dds(args: &TeamArgs, spec: &TeamSpec) -> Result<Option<TeamResult>, Stri
         Some(d) => d,
         None => host::link::ros2::Ros2Options::from_env()?.domain,
     };
-    if !args.link_timeout.is_finite() || args.link_timeout <= 0.0 {
-        return Err(format!("--link-timeout {}: a time > 0 s", args.link_timeout));
-    }
     let opts = team::dds::DdsOptions { domain, localhost_only: true, link_timeout: std::time::Duration::from_secs_f64(args.link_timeout) };
     if let Some(i) = args.as_robot {
         team::dds::robot(spec, i, &opts)?;
