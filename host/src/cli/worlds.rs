@@ -3,6 +3,7 @@
 
 use super::common::{load_world, say};
 use host::io::map_file::{world as from_map, PriorMap};
+use host::overrides::finite_numbers;
 use host::sim::{Scenario, World};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -50,16 +51,6 @@ pub struct WorldsArgs {
     name: Option<String>,
 }
 
-fn numbers(flag: &str, s: &str, counts: &[usize]) -> Result<Vec<f64>, String> {
-    let v: Option<Vec<f64>> = s.split(',').map(|t| t.trim().parse::<f64>().ok().filter(|x| x.is_finite())).collect();
-    v.filter(|v| counts.contains(&v.len())).ok_or_else(|| {
-        format!(
-            "{flag} {s}: expected {} finite numbers separated by commas",
-            counts.iter().map(|c| c.to_string()).collect::<Vec<_>>().join(" or ")
-        )
-    })
-}
-
 pub fn run(args: WorldsArgs) -> Result<ExitCode, String> {
     if let Some(map_file) = &args.from_map {
         return trace(&args, map_file);
@@ -95,8 +86,15 @@ pub fn run(args: WorldsArgs) -> Result<ExitCode, String> {
 /// `lives worlds --from-map`: the traced world as TOML on stdout, what was done on stderr.
 fn trace(args: &WorldsArgs, map_file: &std::path::Path) -> Result<ExitCode, String> {
     let map = PriorMap::load(map_file).map_err(|e| e.to_string())?;
-    let s = numbers("--start", args.start.as_deref().unwrap_or_default(), &[2, 3])?;
-    let targets = args.target.iter().map(|t| numbers("--target", t, &[2]).map(|v| [v[0], v[1]])).collect::<Result<Vec<_>, _>>()?;
+    let start = args.start.as_deref().unwrap_or_default();
+    let [x, y, yaw_deg] = finite_numbers::<3>(start)
+        .or_else(|| finite_numbers::<2>(start).map(|[x, y]| [x, y, 0.0]))
+        .ok_or_else(|| format!("--start {start}: expected 2 or 3 finite numbers separated by commas"))?;
+    let targets = args
+        .target
+        .iter()
+        .map(|t| finite_numbers::<2>(t).ok_or_else(|| format!("--target {t}: expected 2 finite numbers separated by commas")))
+        .collect::<Result<Vec<_>, _>>()?;
     if let Some(t) = args.time_limit.filter(|t| !(t.is_finite() && *t > 0.0)) {
         return Err(format!("--time-limit {t}: expected a positive number of seconds"));
     }
@@ -107,7 +105,7 @@ fn trace(args: &WorldsArgs, map_file: &std::path::Path) -> Result<ExitCode, Stri
         args.name.clone().unwrap_or_else(|| map_file.file_stem().map_or_else(|| "floor-map".into(), |n| n.to_string_lossy().into_owned()));
     let opts = from_map::FromMap {
         name,
-        start: [s[0], s[1], s.get(2).copied().unwrap_or(0.0).to_radians()],
+        start: [x, y, yaw_deg.to_radians()],
         targets,
         random_targets: args.random_targets,
         seed: args.seed,
