@@ -232,17 +232,29 @@ fn coarse_state(bytes: &[u8], cx: i32, cy: i32) -> u8 {
         let i = row * GRID_CELLS + x;
         (bytes[i >> 2] >> ((i & 3) * 2)) & 0xF
     };
-    let (a, b) = (nib(y), nib(y + 1));
-    let mut free = 0;
-    for v in [a & 3, a >> 2, b & 3, b >> 2] {
-        match v {
-            2 => return 2,
-            1 => free += 1,
-            _ => {}
-        }
-    }
-    u8::from(free >= 3)
+    COARSE_STATE[(nib(y) | nib(y + 1) << 4) as usize]
 }
+
+/// [`coarse_state`] of the four 2-bit cells packed in a byte (the upper row in the high nibble):
+/// 2 if any is occupied (2), else 1 if at least three are free (1), else 0.
+const COARSE_STATE: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut k = 0;
+    while k < 256 {
+        let (mut free, mut blocked, mut j) = (0, false, 0);
+        while j < 4 {
+            match (k >> (2 * j)) & 3 {
+                2 => blocked = true,
+                1 => free += 1,
+                _ => {}
+            }
+            j += 1;
+        }
+        t[k] = if blocked { 2 } else { (free >= 3) as u8 };
+        k += 1;
+    }
+    t
+};
 
 #[inline]
 fn xy(i: usize) -> (i32, i32) {
@@ -364,31 +376,47 @@ impl Rooms {
             let (x, y) = xy(i);
             self.clearance[i] = if coarse_state(bytes, x, y) == 2 { 0 } else { CLEARANCE_MAX };
         }
+        // Each cell takes the least of itself and its four causal neighbours plus the step's
+        // weight (a minimum, so the order within a cell does not matter).
         let c = &mut self.clearance;
-        let relax = |c: &mut [u8; COARSE_AREA], i: usize, x: i32, y: i32, w: u8| {
-            if let Some(j) = idx(x, y) {
-                let v = c[j].saturating_add(w);
-                if v < c[i] {
-                    c[i] = v;
+        const W: usize = COARSE_CELLS;
+        let (o, d) = (CHAMFER_ORTHO, CHAMFER_DIAG);
+        for y in 0..W {
+            for x in 0..W {
+                let i = y * W + x;
+                let mut v = c[i];
+                if x > 0 {
+                    v = v.min(c[i - 1].saturating_add(o));
                 }
-            }
-        };
-        for y in 0..N {
-            for x in 0..N {
-                let i = y as usize * COARSE_CELLS + x as usize;
-                relax(c, i, x - 1, y, CHAMFER_ORTHO);
-                relax(c, i, x - 1, y - 1, CHAMFER_DIAG);
-                relax(c, i, x, y - 1, CHAMFER_ORTHO);
-                relax(c, i, x + 1, y - 1, CHAMFER_DIAG);
+                if y > 0 {
+                    v = v.min(c[i - W].saturating_add(o));
+                    if x > 0 {
+                        v = v.min(c[i - W - 1].saturating_add(d));
+                    }
+                    if x + 1 < W {
+                        v = v.min(c[i - W + 1].saturating_add(d));
+                    }
+                }
+                c[i] = v;
             }
         }
-        for y in (0..N).rev() {
-            for x in (0..N).rev() {
-                let i = y as usize * COARSE_CELLS + x as usize;
-                relax(c, i, x + 1, y, CHAMFER_ORTHO);
-                relax(c, i, x + 1, y + 1, CHAMFER_DIAG);
-                relax(c, i, x, y + 1, CHAMFER_ORTHO);
-                relax(c, i, x - 1, y + 1, CHAMFER_DIAG);
+        for y in (0..W).rev() {
+            for x in (0..W).rev() {
+                let i = y * W + x;
+                let mut v = c[i];
+                if x + 1 < W {
+                    v = v.min(c[i + 1].saturating_add(o));
+                }
+                if y + 1 < W {
+                    v = v.min(c[i + W].saturating_add(o));
+                    if x + 1 < W {
+                        v = v.min(c[i + W + 1].saturating_add(d));
+                    }
+                    if x > 0 {
+                        v = v.min(c[i + W - 1].saturating_add(d));
+                    }
+                }
+                c[i] = v;
             }
         }
     }

@@ -753,6 +753,67 @@ fn the_inflation_is_the_robot_radius_exactly_so_a_one_metre_doorway_stays_four_c
     assert!(planner.distance(105, 75) != firmware::planner::UNREACHABLE, "the robot can walk through");
 }
 
+#[test]
+fn a_doorway_narrower_than_the_clearance_but_wider_than_the_body_is_passed_at_a_cost() {
+    // The room's east doorway (free cells y = 70..=75, jambs at y = 69 and y = 76: 0.6 m
+    // between their centres, as a 0.1 m map draws a 0.7–0.8 m door) opened onto a free strip
+    // x 101..=110 with unknown space east of it. Its middle cells (y = 72, 73) are 0.3 m from
+    // the nearer jamb: inside the 0.35 m clearance, outside the 0.25 m body.
+    let mut lidar = room_grid(false);
+    for y in 51..100 {
+        for x in 100..=110 {
+            let c = if x == 100 && !(70..=75).contains(&y) { Cell::Occupied } else { Cell::Free };
+            lidar.grid.set(x, y, c);
+        }
+        lidar.grid.set(111, y, Cell::Unknown);
+    }
+    // The camera has seen the room: what is left to search lies east of the door.
+    let vis = seen_east_of(51);
+    let store = Box::new(NonMapStore::new());
+    let mut f = Box::new(FrontierSet::new());
+    let start = pose(7.55, 7.25, 0.0);
+    let plan = |cfg: &Config, planner: &mut Planner, f: &mut FrontierSet| {
+        f.compute(&lidar, &vis, cfg.min_frontier_cells);
+        planner.plan(cfg, &lidar, &vis, f, &store, &start, None, 0).0
+    };
+
+    // Today's planner (`lethal_radius_m` at `robot_radius_m`): the door is shut, nothing beyond it
+    // is reachable and no goal goes east.
+    let tight = Config { lethal_radius_m: Config::DEFAULT.robot_radius_m, ..Config::DEFAULT };
+    let mut planner = Box::new(Planner::new());
+    let goal = plan(&tight, &mut planner, &mut f);
+    assert_eq!(planner.distance(105, 72), firmware::planner::UNREACHABLE);
+    assert!(goal.as_ref().is_none_or(|g| g.pose.x < Config::mm(10_000)), "{goal:?}");
+
+    // The default: the door's middle cells are the narrow band, passable at five times the cost.
+    let cfg = Config::DEFAULT;
+    assert_eq!(cfg.lethal_radius_m, Config::mm(250));
+    let goal = plan(&cfg, &mut planner, &mut f).expect("a goal through the door");
+    let narrow: Vec<i32> = (68..78).filter(|&y| planner.narrow(100, y)).collect();
+    assert_eq!(narrow, vec![72, 73], "the jambs' 0.25 m discs are lethal, the middle two cells narrow");
+    assert!((68..78).all(|y| !planner.traversable(100, y)), "no doorway cell is open");
+    // Through the door: from (99, 72) to (101, 72) is two straight steps onto narrow cells (25
+    // each) where an open floor costs 5 each.
+    let (inside, outside) = (planner.distance(99, 72), planner.distance(101, 72));
+    assert!(inside != firmware::planner::UNREACHABLE && outside != firmware::planner::UNREACHABLE);
+    assert_eq!(outside - inside, 2 * 5 * firmware::planner::NARROW_STEP_FACTOR);
+    // The goal stands east of the door, on an open cell, and its straightened path crosses the
+    // doorway's column between the jambs' lethal discs.
+    let (gx, gy) = lidar.geom.cell_of(goal.pose.x, goal.pose.y);
+    assert!(gx > 100 && planner.traversable(gx, gy), "goal cell ({gx}, {gy}) is open and east of the door");
+    let cells: Vec<(i32, i32)> = goal.path.iter().map(|p| lidar.geom.cell_of(p.0, p.1)).collect();
+    let mut from = lidar.geom.cell_of(start.x, start.y);
+    for &to in &cells {
+        for (x, y) in firmware::grid::Line::new(from.0, from.1, to.0, to.1) {
+            assert!(planner.distance(x, y) != firmware::planner::UNREACHABLE, "the path passes ({x}, {y}): {cells:?}");
+            if x == 100 {
+                assert!((72..=73).contains(&y), "it crosses the wall's column at y = {y}: {cells:?}");
+            }
+        }
+        from = to;
+    }
+}
+
 /// `rrt` with no tree point yet, while the map has a reachable frontier at the end of a winding
 /// corridor the random trees have not threaded in one planning step: the grid's frontier
 /// detector supplies the goal (as in `rrt_exploration`), and the search does not end

@@ -157,6 +157,7 @@ fn random_config(rng: &mut Rng) -> Config {
         scan_matching: rng.below(2) == 0,
         live_priority_interval_us: rng.next_u64() >> rng.below(64),
         scan_match_field: rng.below(2) == 0,
+        lethal_radius_m: length(rng, Meters::ZERO, MAX_ROBOT_RADIUS_M),
         // Plan every tick half the time.
         replan_interval_us: if rng.below(2) == 0 { 0 } else { rng.next_u64() >> rng.below(64) },
         switch_margin: weight(rng),

@@ -198,6 +198,16 @@ macro_rules! config_params {
             /// brings the relation error from raw odometry's 1.68 m / 5.07° to 0.17 m / 1.13°
             /// (docs/experiments/real-lidar-maps.md).
             scan_match_field: bool = false, Flag, "with scan_matching: refine matches on a smooth field by Gauss-Newton (real logs)", set "scan_match_field";
+            /// The least clearance the planner accepts (Nav2's inscribed radius): a cell within it
+            /// of an occupied cell is never traversable; a cell farther than it but within
+            /// [`Config::robot_radius_m`] is traversable at a cost (each step onto it costs
+            /// [`crate::planner::NARROW_STEP_FACTOR`] times an open step), so the robot keeps
+            /// `robot_radius_m` where there is room and passes doors a 0.1 m map draws narrower
+            /// than that. The planner uses the smaller of the two: at `robot_radius_m` or more every
+            /// inflated cell is lethal. Default 0.25 m (the default robot's body). In
+            /// [0, [`MAX_ROBOT_RADIUS_M`]].
+            lethal_radius_m: Meters = m(250), Metres, "least clearance accepted; up to robot_radius_m a cell costs more",
+                check |v, _| within(v, Meters::ZERO, MAX_ROBOT_RADIUS_M) => "[0, 1.5] m", set "lethal_radius_m";
         }
     };
 }

@@ -48,7 +48,7 @@ use fixed_point::{BinaryAngle, Meters, Pose2};
 use heapless::binary_heap::{BinaryHeap, Min};
 
 pub use explore_lite::{EXPLORE_LITE_GAIN_SCALE, EXPLORE_LITE_POTENTIAL_SCALE};
-pub use reach::{MAX_SEGMENT_CELLS, STEP_DIAGONAL, STEP_STRAIGHT, UNREACHABLE};
+pub use reach::{MAX_SEGMENT_CELLS, NARROW_STEP_FACTOR, STEP_DIAGONAL, STEP_STRAIGHT, UNREACHABLE};
 pub use view::{GAZE_HANDOVER_M, GAZE_HEADINGS};
 
 /// Rays cast across the camera cone when scoring a viewpoint's unseen cells.
@@ -453,8 +453,8 @@ impl Planner {
         self.candidates.clear();
         let robot = lidar.geom.cell_of(pose.x, pose.y);
         self.robot_cell = robot;
-        let work = self.inflate(lidar, cfg.robot_radius_m, robot);
-        work + self.distances(robot)
+        let work = self.inflate(lidar, cfg.robot_radius_m, cfg.lethal_radius_m, robot);
+        work + self.distances(lidar, robot)
     }
 
     /// The second half of a planning step, on the distance field of the last

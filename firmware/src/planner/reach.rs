@@ -13,6 +13,12 @@ pub const STEP_STRAIGHT: u16 = 5;
 pub const STEP_DIAGONAL: u16 = 7;
 /// Distance value of an unreachable cell.
 pub const UNREACHABLE: u16 = u16::MAX;
+/// Distance-field marker of a cell within `lethal_radius_m` of an occupied cell, stamped before
+/// Dijkstra; [`Planner::distance`] reports it as [`UNREACHABLE`].
+const LETHAL: u16 = UNREACHABLE - 1;
+/// A step onto a cell of the narrow band (farther than `lethal_radius_m` from every occupied cell
+/// but within `robot_radius_m` of one) costs this many times a step onto an open cell.
+pub const NARROW_STEP_FACTOR: u16 = 5;
 /// Longest straight segment between two path waypoints, cells (3 m).
 pub const MAX_SEGMENT_CELLS: i32 = 30;
 
@@ -43,21 +49,58 @@ impl Planner {
     /// Path distance (units of 0.02 m) from the robot to `(x, y)` as of the last step.
     #[inline]
     pub fn distance(&self, x: i32, y: i32) -> u16 {
-        if PackedGrid::in_bounds(x, y) {
+        if PackedGrid::in_bounds(x, y) && self.dist[idx(x, y)] < LETHAL {
             self.dist[idx(x, y)]
         } else {
             UNREACHABLE
         }
     }
 
-    /// True if the last step considered `(x, y)` traversable.
+    /// True if the last step considered `(x, y)` open: free and farther than `robot_radius_m`
+    /// from every occupied cell (or the robot's way out of that clearance).
     pub fn traversable(&self, x: i32, y: i32) -> bool {
         PackedGrid::in_bounds(x, y) && !self.blocked.get(x, y)
     }
 
-    /// Step 1: which cells the robot may stand on.
-    pub(super) fn inflate(&mut self, lidar: &LidarGrid, radius: Meters, robot: (i32, i32)) -> u32 {
-        let mut offsets: heapless::Vec<(i8, i8), MAX_INFLATION_OFFSETS> = heapless::Vec::new();
+    /// Whether the robot may step onto `(x, y)` after [`Planner::inflate`], `bytes` being the
+    /// LiDAR grid's ([`PackedGrid::as_bytes`]): 1 open, 2 a free cell of the narrow band between
+    /// `lethal_radius_m` and `robot_radius_m` (at [`NARROW_STEP_FACTOR`] times the cost), 0 not
+    /// at all (lethal, not free, outside the grid).
+    #[inline]
+    fn step_kind(&self, bytes: &[u8], x: i32, y: i32) -> u8 {
+        let Some(i) = PackedGrid::index(x, y) else {
+            return 0;
+        };
+        if self.blocked.words()[i >> 5] & (1 << (i & 31)) == 0 {
+            1
+        } else if self.dist[i] != LETHAL && (bytes[i >> 2] >> ((i & 3) * 2)) & 3 == Cell::Free as u8 {
+            2
+        } else {
+            0
+        }
+    }
+
+    /// True if the last step reached `(x, y)` through the narrow band's cost: a reachable cell
+    /// within `robot_radius_m` of an occupied cell.
+    pub fn narrow(&self, x: i32, y: i32) -> bool {
+        self.reach_kind(x, y) == 2
+    }
+
+    /// As of the last step: 0 unreachable, 1 reachable and open, 2 reachable through the
+    /// narrow band ([`Planner::narrow`]).
+    #[inline]
+    fn reach_kind(&self, x: i32, y: i32) -> u8 {
+        match PackedGrid::index(x, y) {
+            Some(i) if self.dist[i] < LETHAL => 1 + (self.blocked.words()[i >> 5] >> (i & 31) & 1) as u8,
+            _ => 0,
+        }
+    }
+
+    /// Step 1: which cells the robot may stand on. Cells within `radius` of an occupied cell are
+    /// blocked (not open); those within `lethal` (at most `radius`) are marked [`LETHAL`] in the
+    /// distance field, which this resets, and the rest of the blocked cells are the narrow band.
+    pub(super) fn inflate(&mut self, lidar: &LidarGrid, radius: Meters, lethal: Meters, robot: (i32, i32)) -> u32 {
+        let mut offsets: heapless::Vec<(i8, i8, bool), MAX_INFLATION_OFFSETS> = heapless::Vec::new();
         // Cells whose centre lies within `radius` of an occupied cell's centre: the squared
         // distance in cells, exact (0.35 m → ≤ 12.25 cells², not a radius rounded to 4 cells,
         // which would leave a 1 m doorway only two cells wide). A radius beyond the largest a
@@ -67,13 +110,17 @@ impl Planner {
         let r_q16 = radius.to_bits() as i64 * crate::capacity::CELLS_PER_METER;
         let r2 = ((r_q16 * r_q16) >> 32) as i32;
         let r = ((r_q16 + 0xFFFF) >> 16) as i32;
+        let l_q16 = lethal.clamp(Meters::ZERO, radius).to_bits() as i64 * crate::capacity::CELLS_PER_METER;
+        let l2 = ((l_q16 * l_q16) >> 32) as i32;
         for dy in -r..=r {
             for dx in -r..=r {
-                if dx * dx + dy * dy <= r2 {
-                    let _ = offsets.push((dx as i8, dy as i8));
+                let d2 = dx * dx + dy * dy;
+                if d2 <= r2 {
+                    let _ = offsets.push((dx as i8, dy as i8, d2 <= l2));
                 }
             }
         }
+        self.dist.fill(UNREACHABLE);
         // Every cell not free is blocked: 32 cells (8 packed bytes) a word.
         let bytes = lidar.grid.as_bytes();
         for (w, word) in self.blocked.words_mut().iter_mut().enumerate() {
@@ -90,8 +137,24 @@ impl Planner {
                 if occupied & (0b10 << (2 * slot)) != 0 {
                     let i = k * 4 + slot;
                     let (x, y) = ((i % GRID_CELLS) as i32, (i / GRID_CELLS) as i32);
-                    for &(dx, dy) in offsets.iter() {
-                        self.blocked.put(x + dx as i32, y + dy as i32, true);
+                    if x >= r && y >= r && x + r < GRID_CELLS as i32 && y + r < GRID_CELLS as i32 {
+                        // The whole disc is on the grid: cell indices by offset, no bounds test.
+                        let words = self.blocked.words_mut();
+                        for &(dx, dy, lethal) in offsets.iter() {
+                            let j = (i as isize + dy as isize * GRID_CELLS as isize + dx as isize) as usize;
+                            words[j >> 5] |= 1 << (j & 31);
+                            if lethal {
+                                self.dist[j] = LETHAL;
+                            }
+                        }
+                    } else {
+                        for &(dx, dy, lethal) in offsets.iter() {
+                            let (cx, cy) = (x + dx as i32, y + dy as i32);
+                            self.blocked.put(cx, cy, true);
+                            if lethal && PackedGrid::in_bounds(cx, cy) {
+                                self.dist[idx(cx, cy)] = LETHAL;
+                            }
+                        }
                     }
                     work += offsets.len() as u32;
                 }
@@ -108,15 +171,15 @@ impl Planner {
             work += offsets.len() as u32;
             offsets
                 .iter()
-                .filter(|&&(dx, dy)| lidar.get(x + dx as i32, y + dy as i32) == Cell::Occupied)
-                .map(|&(dx, dy)| dx as i32 * dx as i32 + dy as i32 * dy as i32)
+                .filter(|&&(dx, dy, _)| lidar.get(x + dx as i32, y + dy as i32) == Cell::Occupied)
+                .map(|&(dx, dy, _)| dx as i32 * dx as i32 + dy as i32 * dy as i32)
                 .min()
                 .unwrap_or(i32::MAX)
         };
         let own = clearance(robot.0, robot.1);
         let mut escape = false;
         for pass in 0..2 {
-            for &(dx, dy) in offsets.iter() {
+            for &(dx, dy, _) in offsets.iter() {
                 let (x, y) = (robot.0 + dx as i32, robot.1 + dy as i32);
                 let neighbour = (dx, dy) != (0, 0) && dx.abs() <= 1 && dy.abs() <= 1;
                 if lidar.get(x, y) != Cell::Free {
@@ -129,6 +192,7 @@ impl Planner {
                 let c = clearance(x, y);
                 if (dx, dy) == (0, 0) || c > own || (pass == 1 && c == own) {
                     self.blocked.put(x, y, false);
+                    self.dist[idx(x, y)] = UNREACHABLE;
                     escape |= neighbour;
                 }
             }
@@ -139,9 +203,10 @@ impl Planner {
         work
     }
 
-    /// Step 2: Dijkstra from the robot's cell over traversable cells.
-    pub(super) fn distances(&mut self, robot: (i32, i32)) -> u32 {
-        self.dist.fill(UNREACHABLE);
+    /// Step 2: Dijkstra from the robot's cell over passable cells, on the field
+    /// [`Planner::inflate`] reset (lethal cells marked): a step onto a cell of the narrow band
+    /// costs [`NARROW_STEP_FACTOR`] times its length.
+    pub(super) fn distances(&mut self, lidar: &LidarGrid, robot: (i32, i32)) -> u32 {
         self.heap.clear();
         let mut work = 0;
         if !PackedGrid::in_bounds(robot.0, robot.1) {
@@ -159,6 +224,9 @@ impl Planner {
             (-1, 1, STEP_DIAGONAL),
             (-1, -1, STEP_DIAGONAL),
         ];
+        // The orthogonal neighbours (indices into `N8`) each diagonal one passes.
+        const CORNERS: [(usize, usize); 4] = [(0, 2), (0, 3), (1, 2), (1, 3)];
+        let bytes = lidar.grid.as_bytes();
         while let Some(e) = self.heap.pop() {
             let d = (e >> 32) as u16;
             let i = (e & 0xFFFF_FFFF) as usize;
@@ -168,17 +236,21 @@ impl Planner {
             work += 1;
             self.stats.reachable_cells += 1;
             let (x, y) = ((i % GRID_CELLS) as i32, (i / GRID_CELLS) as i32);
-            for &(dx, dy, cost) in N8.iter() {
-                let (nx, ny) = (x + dx, y + dy);
-                if !self.traversable(nx, ny) {
+            // Each neighbour's kind once (the diagonals' corner test reads the orthogonal ones):
+            // 0 not passable, 1 open, 2 narrow.
+            let kinds = N8.map(|(dx, dy, _)| self.step_kind(bytes, x + dx, y + dy));
+            for (k, &(dx, dy, cost)) in N8.iter().enumerate() {
+                if kinds[k] == 0 {
                     continue;
                 }
-                if dx != 0 && dy != 0 && (!self.traversable(x + dx, y) || !self.traversable(x, y + dy)) {
+                // No corner cutting: a diagonal step needs both orthogonal cells it passes.
+                if k >= 4 && (kinds[CORNERS[k - 4].0] == 0 || kinds[CORNERS[k - 4].1] == 0) {
                     continue;
                 }
+                let cost = if kinds[k] == 2 { cost * NARROW_STEP_FACTOR } else { cost };
                 let nd = d.saturating_add(cost);
-                let ni = idx(nx, ny);
-                if nd < self.dist[ni] {
+                let ni = idx(x + dx, y + dy);
+                if nd < LETHAL && nd < self.dist[ni] {
                     self.dist[ni] = nd;
                     if self.heap.push(((nd as u64) << 32) | ni as u64).is_err() {
                         self.stats.heap_overflows += 1;
@@ -218,29 +290,50 @@ impl Planner {
         c
     }
 
-    /// The nearest reachable cell to `c` within `radius` cells (Euclidean), `c` itself first.
+    /// The nearest reachable cell to `c` within `radius` cells (Euclidean), `c` itself first;
+    /// an open cell before any of the narrow band (a viewpoint keeps `robot_radius_m` where it
+    /// can).
     pub(super) fn reachable_near(&self, c: (i32, i32), radius: i32) -> Option<(i32, i32)> {
-        if self.distance(c.0, c.1) != UNREACHABLE {
+        let here = self.reach_kind(c.0, c.1);
+        if here == 1 {
             return Some(c);
         }
-        let mut best: Option<(i64, (i32, i32))> = None;
+        // (squared distance, cell) of the nearest open and the nearest narrow cell.
+        let mut open: Option<(i64, (i32, i32))> = None;
+        let mut narrow: Option<(i64, (i32, i32))> = None;
         for dy in -radius..=radius {
             for dx in -radius..=radius {
                 let d2 = (dx * dx + dy * dy) as i64;
-                if d2 > (radius * radius) as i64 || self.distance(c.0 + dx, c.1 + dy) == UNREACHABLE {
+                let (x, y) = (c.0 + dx, c.1 + dy);
+                let kind = if d2 > (radius * radius) as i64 { 0 } else { self.reach_kind(x, y) };
+                if kind == 0 {
                     continue;
                 }
+                let best = if kind == 2 { &mut narrow } else { &mut open };
                 if best.is_none_or(|(bd, _)| d2 < bd) {
-                    best = Some((d2, (c.0 + dx, c.1 + dy)));
+                    *best = Some((d2, (x, y)));
                 }
             }
         }
-        best.map(|b| b.1)
+        match open {
+            Some((_, o)) => Some(o),
+            None if here != 0 => Some(c),
+            None => narrow.map(|b| b.1),
+        }
     }
 
-    /// True if every cell on the straight line between `a` and `b` is reachable.
-    pub(super) fn line_clear(&self, a: (i32, i32), b: (i32, i32)) -> bool {
-        Line::new(a.0, a.1, b.0, b.1).all(|(x, y)| self.distance(x, y) != UNREACHABLE)
+    /// True if every cell on the straight line between `a` and `b` is reachable and at most
+    /// `narrow` of them are in the narrow band.
+    pub(super) fn line_clear(&self, a: (i32, i32), b: (i32, i32), narrow: u32) -> bool {
+        let mut left = narrow;
+        Line::new(a.0, a.1, b.0, b.1).all(|(x, y)| match self.reach_kind(x, y) {
+            0 => false,
+            1 => true,
+            _ => {
+                left = left.wrapping_sub(1);
+                left != u32::MAX
+            }
+        })
     }
 
     /// For `nearest`: the quarter-turn heading closest to the direction of travel into `site`.
@@ -259,7 +352,8 @@ impl Planner {
 
     /// The goal for `vp`, with its path pulled taut: walking down the distance field from the
     /// goal, a waypoint is emitted where the straight line from the previous waypoint would leave
-    /// reachable cells, or every [`MAX_SEGMENT_CELLS`], so the base can drive straight between
+    /// reachable cells or cross more cells of the narrow band than the walk did since that
+    /// waypoint, or every [`MAX_SEGMENT_CELLS`], so the base can drive straight between
     /// consecutive waypoints. The path starts at the first waypoint after the robot's cell.
     pub(super) fn goal_for(&self, lidar: &LidarGrid, vp: Viewpoint) -> Goal {
         let mut rev: heapless::Vec<(i32, i32), MAX_PATH_WAYPOINTS> = heapless::Vec::new();
@@ -267,6 +361,9 @@ impl Planner {
         let mut anchor = vp.cell;
         let mut prev = vp.cell;
         let mut steps = 0usize;
+        // Narrow cells the walk has passed since `anchor`, both ends included.
+        let narrow_at = |c: (i32, i32)| self.narrow(c.0, c.1) as u32;
+        let mut walked_narrow = narrow_at(anchor);
         let mut cur = self.descend(vp.cell.0, vp.cell.1);
         while let Some(c) = cur {
             steps += 1;
@@ -274,12 +371,14 @@ impl Planner {
                 break;
             }
             let long = (c.0 - anchor.0).abs().max((c.1 - anchor.1).abs()) > MAX_SEGMENT_CELLS;
-            if (long || !self.line_clear(anchor, c)) && prev != anchor {
+            if (long || !self.line_clear(anchor, c, walked_narrow + narrow_at(c))) && prev != anchor {
                 if rev.push(prev).is_err() {
                     break;
                 }
                 anchor = prev;
+                walked_narrow = narrow_at(anchor);
             }
+            walked_narrow += narrow_at(c);
             prev = c;
             cur = self.descend(c.0, c.1);
         }

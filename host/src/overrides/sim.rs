@@ -149,12 +149,15 @@ pub const SIM_PARAMS: &[SimParam] = &[
     SimParam::number("detect_min_visible_fraction", "fraction", (0.0, 1.0, true), |s| &mut s.detect_min_visible_fraction)
         .about("share of a target's outline that must be in view and unoccluded to detect it"),
     SimParam::number("robot_radius_m", "m", (0.05, 1.0, false), |s| &mut s.robot_radius_m)
-        .about("the simulated body's radius for collisions; the controller's clearance follows (0.10 m more)")
+        .about("the simulated body's radius for collisions; the controller's clearance follows (0.10 m more) and its least clearance (the body's)")
         .follows(|cfg, name, x| {
             // The controller keeps the same margin around the body as with the defaults
-            // (0.35 m of clearance around a 0.25 m body).
+            // (0.35 m of clearance around a 0.25 m body), and accepts no less than the body's
+            // radius in tight places (`lethal_radius_m`, 0.25 m by default).
             let margin = Config::DEFAULT.robot_radius_m.to_num::<f64>() - crate::robot_model::default_sim().robot_radius_m;
-            cfg.robot_radius_m = fixed_point::meters_from_f64(x + margin).ok_or_else(|| format!("`{name}`: {x} m is out of range"))?;
+            let body = |r: f64| fixed_point::meters_from_f64(r).ok_or_else(|| format!("`{name}`: {x} m is out of range"));
+            cfg.robot_radius_m = body(x + margin)?;
+            cfg.lethal_radius_m = body(x)?;
             Ok(())
         }),
 ];

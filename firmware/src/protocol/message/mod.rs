@@ -44,7 +44,8 @@ pub use host_to_core::*;
 /// * v7: LIVE's `MapRow` and `Route`, `live_priority_interval_us` in the configuration,
 ///   `search_entropy_bits` in the status.
 /// * v8: the configuration carries `scan_match_field` (after `live_priority_interval_us`).
-pub const PROTOCOL_VERSION: u16 = 8;
+/// * v9: the configuration carries `lethal_radius_m` (after `scan_match_field`).
+pub const PROTOCOL_VERSION: u16 = 9;
 
 /// Most beams one scan carries, whole ([`ScanMsg`]) or in segments ([`ScanSegmentMsg`]): a 360°
 /// scan at 0.33° (1091 beams) fits. Larger scans are refused ([`WireError::TooManyBeams`]).
