@@ -777,17 +777,18 @@ fn a_doorway_narrower_than_the_clearance_but_wider_than_the_body_is_passed_at_a_
         planner.plan(cfg, &lidar, &vis, f, &store, &start, None, 0).0
     };
 
-    // Today's planner (`lethal_radius_m` at `robot_radius_m`): the door is shut, nothing beyond it
-    // is reachable and no goal goes east.
-    let tight = Config { lethal_radius_m: Config::DEFAULT.robot_radius_m, ..Config::DEFAULT };
+    // The default (`lethal_radius_m` at `robot_radius_m`: no band): the door is shut, nothing
+    // beyond it is reachable and no goal goes east.
+    let tight = Config::DEFAULT;
+    assert_eq!(tight.lethal_radius_m, tight.robot_radius_m);
     let mut planner = Box::new(Planner::new());
     let goal = plan(&tight, &mut planner, &mut f);
     assert_eq!(planner.distance(105, 72), firmware::planner::UNREACHABLE);
     assert!(goal.as_ref().is_none_or(|g| g.pose.x < Config::mm(10_000)), "{goal:?}");
 
-    // The default: the door's middle cells are the narrow band, passable at five times the cost.
-    let cfg = Config::DEFAULT;
-    assert_eq!(cfg.lethal_radius_m, Config::mm(250));
+    // With the body's 0.25 m as the least clearance: the door's middle cells are the narrow
+    // band, passable at five times the cost.
+    let cfg = Config { lethal_radius_m: Config::mm(250), ..Config::DEFAULT };
     let goal = plan(&cfg, &mut planner, &mut f).expect("a goal through the door");
     let narrow: Vec<i32> = (68..78).filter(|&y| planner.narrow(100, y)).collect();
     assert_eq!(narrow, vec![72, 73], "the jambs' 0.25 m discs are lethal, the middle two cells narrow");

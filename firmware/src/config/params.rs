@@ -204,9 +204,11 @@ macro_rules! config_params {
             /// [`crate::planner::NARROW_STEP_FACTOR`] times an open step), so the robot keeps
             /// `robot_radius_m` where there is room and passes doors a 0.1 m map draws narrower
             /// than that. The planner uses the smaller of the two: at `robot_radius_m` or more every
-            /// inflated cell is lethal. Default 0.25 m (the default robot's body). In
-            /// [0, [`MAX_ROBOT_RADIUS_M`]].
-            lethal_radius_m: Meters = m(250), Metres, "least clearance accepted; up to robot_radius_m a cell costs more",
+            /// inflated cell is lethal, which is the planner without the band. Default 0.35 m, off:
+            /// 0.25 m (the default robot's body) passes every planner through the doors of real
+            /// floor maps but did not keep `lives`'s results in the built-in settings
+            /// (docs/experiments/soft-clearance.md). In [0, [`MAX_ROBOT_RADIUS_M`]].
+            lethal_radius_m: Meters = m(350), Metres, "least clearance accepted; up to robot_radius_m a cell costs more (0.25 = the body)",
                 check |v, _| within(v, Meters::ZERO, MAX_ROBOT_RADIUS_M) => "[0, 1.5] m", set "lethal_radius_m";
         }
     };

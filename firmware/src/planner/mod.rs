@@ -1,12 +1,19 @@
 //! Viewpoint selection: where the robot goes next and which way its camera looks.
 //!
 //! Every planning step starts the same way ([`reach`]):
-//! 1. **Traversable cells**: LiDAR-free cells farther than `robot_radius_m` from every occupied
-//!    cell (unknown cells are never traversable). A robot within that radius of something may
-//!    still leave, but only away from it (see [`Planner::inflate`]).
-//! 2. **Path distance** from the robot to every traversable cell: Dijkstra on the 8-connected grid
-//!    with integer step costs 5 (straight) and 7 (diagonal) — one unit is 0.02 m, 7/5 ≈ √2 — and
-//!    no corner cutting. The open list is a fixed-capacity binary heap ([`DIJKSTRA_HEAP`]); an
+//! 1. **Traversable cells** (Nav2's inflation, in two levels): LiDAR-free cells farther than
+//!    `robot_radius_m` from every occupied cell are *open*; free cells between `lethal_radius_m`
+//!    (the body) and `robot_radius_m` are the *narrow band*, passable at [`NARROW_STEP_FACTOR`]
+//!    times the step cost; cells within `lethal_radius_m` and unknown cells are never traversable.
+//!    So the robot keeps its full clearance where there is room and still passes a door that a
+//!    0.1 m map draws narrower than that (docs/experiments/soft-clearance.md). By default
+//!    `lethal_radius_m` equals `robot_radius_m`: no band. Viewpoints stand on
+//!    open cells where they can ([`Planner::reachable_near`]), and a path pulled taut crosses no
+//!    more narrow cells than the grid path it straightens. A robot within the clearance of
+//!    something may still leave, but only away from it (see [`Planner::inflate`]).
+//! 2. **Path distance** from the robot to every passable cell: Dijkstra on the 8-connected grid
+//!    with integer step costs 5 (straight) and 7 (diagonal) — one unit is 0.02 m, 7/5 ≈ √2 —, five
+//!    times those onto a narrow cell, and no corner cutting. The open list is a fixed-capacity binary heap ([`DIJKSTRA_HEAP`]); an
 //!    overflow is counted in [`PlanStats::heap_overflows`].
 //!
 //! Then one rule, by [`PlannerKind`], proposes *sites* (a cell, what produced it, a heading if

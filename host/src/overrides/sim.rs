@@ -149,15 +149,17 @@ pub const SIM_PARAMS: &[SimParam] = &[
     SimParam::number("detect_min_visible_fraction", "fraction", (0.0, 1.0, true), |s| &mut s.detect_min_visible_fraction)
         .about("share of a target's outline that must be in view and unoccluded to detect it"),
     SimParam::number("robot_radius_m", "m", (0.05, 1.0, false), |s| &mut s.robot_radius_m)
-        .about("the simulated body's radius for collisions; the controller's clearance follows (0.10 m more) and its least clearance (the body's)")
+        .about("the simulated body's radius for collisions; the controller's clearance and least clearance follow (0.10 m more)")
         .follows(|cfg, name, x| {
-            // The controller keeps the same margin around the body as with the defaults
-            // (0.35 m of clearance around a 0.25 m body), and accepts no less than the body's
-            // radius in tight places (`lethal_radius_m`, 0.25 m by default).
-            let margin = Config::DEFAULT.robot_radius_m.to_num::<f64>() - crate::robot_model::default_sim().robot_radius_m;
-            let body = |r: f64| fixed_point::meters_from_f64(r).ok_or_else(|| format!("`{name}`: {x} m is out of range"));
-            cfg.robot_radius_m = body(x + margin)?;
-            cfg.lethal_radius_m = body(x)?;
+            // The controller keeps the same margins around the body as with the defaults
+            // (0.35 m of clearance around a 0.25 m body; `lethal_radius_m` as far from the body
+            // as its default is: 0.35 m, so no narrow band).
+            let body = crate::robot_model::default_sim().robot_radius_m;
+            let follow = |default: fixed_point::Meters| {
+                fixed_point::meters_from_f64(x + default.to_num::<f64>() - body).ok_or_else(|| format!("`{name}`: {x} m is out of range"))
+            };
+            cfg.robot_radius_m = follow(Config::DEFAULT.robot_radius_m)?;
+            cfg.lethal_radius_m = follow(Config::DEFAULT.lethal_radius_m)?;
             Ok(())
         }),
 ];
@@ -292,6 +294,7 @@ mod tests {
         apply_sim(&mut sim, &mut c, "robot_radius_m=0.4").unwrap();
         assert_eq!(sim.robot_radius_m, 0.4);
         assert!((c.robot_radius_m.to_num::<f64>() - 0.5).abs() < 1e-4, "clearance 0.10 m more than the body");
+        assert!((c.lethal_radius_m.to_num::<f64>() - 0.5).abs() < 1e-4, "least clearance as far from the body as by default");
         assert_eq!(sim.dropout_prob, 0.0);
         let before = (sim.clone(), c);
         for bad in [
