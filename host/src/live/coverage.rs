@@ -103,6 +103,30 @@ impl std::fmt::Display for RouteError {
     }
 }
 
+/// The clearances a route keeps, as the controller's planner does: waypoints stand `keep_m`
+/// from every occupied cell (`robot_radius_m`); the robot may pass as close as `least_m`
+/// (`lethal_radius_m`, when below `keep_m`: the planner's narrow band, docs/experiments/
+/// soft-clearance.md), so a room behind a door the map draws narrow is still on the route.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clearance {
+    /// Where waypoints may stand, metres.
+    pub keep_m: f64,
+    /// Where the robot may pass, metres (at `keep_m` or above: where waypoints stand).
+    pub least_m: f64,
+}
+
+impl Clearance {
+    /// The controller's clearances in `cfg`.
+    pub fn of(cfg: &firmware::Config) -> Self {
+        Clearance { keep_m: cfg.robot_radius_m.to_num::<f64>(), least_m: cfg.lethal_radius_m.to_num::<f64>() }
+    }
+
+    /// One clearance for standing and passing.
+    pub fn uniform(radius_m: f64) -> Self {
+        Clearance { keep_m: radius_m, least_m: radius_m }
+    }
+}
+
 impl KnownGrid<'_> {
     fn at(&self, x: i64, y: i64) -> Cell3 {
         if x < 0 || y < 0 || x >= self.side as i64 || y >= self.side as i64 {
@@ -138,6 +162,29 @@ impl KnownGrid<'_> {
                     }
                 }
             }
+        }
+        ok
+    }
+
+    /// Where a robot of `clearance` may pass: [`KnownGrid::standable`] at `keep_m`, and, when
+    /// `least_m` is below it, also every free cell whose centre is farther than exactly `least_m`
+    /// from every occupied cell's centre (the controller's rule, `firmware::planner::reach`).
+    fn passable(&self, clearance: Clearance, standable: &[bool]) -> Vec<bool> {
+        let mut ok = standable.to_vec();
+        if clearance.least_m.partial_cmp(&clearance.keep_m) != Some(std::cmp::Ordering::Less) {
+            return ok;
+        }
+        let n = self.side;
+        let r2 = (clearance.least_m.max(0.0) / CELL_M).powi(2);
+        let r = r2.sqrt().ceil() as i64;
+        let offsets: Vec<(i64, i64)> =
+            (-r..=r).flat_map(|dy| (-r..=r).map(move |dx| (dx, dy))).filter(|&(dx, dy)| ((dx * dx + dy * dy) as f64) <= r2).collect();
+        for i in 0..n * n {
+            if ok[i] || self.cells[i] != Cell3::Free {
+                continue;
+            }
+            let (x, y) = ((i % n) as i64, (i / n) as i64);
+            ok[i] = !offsets.iter().any(|&(dx, dy)| self.at(x + dx, y + dy) == Cell3::Occupied);
         }
         ok
     }
@@ -271,7 +318,8 @@ impl Spans {
 pub struct Coverage<'a> {
     map: &'a KnownGrid<'a>,
     fp: Footprint,
-    ok: Vec<bool>,
+    /// Where the robot may pass (waypoints stand only where `keep_m` is kept).
+    pass: Vec<bool>,
     /// (cell, heading, free cells seen).
     cands: Vec<(usize, f64, Spans)>,
     coverable: usize,
@@ -279,13 +327,15 @@ pub struct Coverage<'a> {
 }
 
 impl<'a> Coverage<'a> {
-    /// The problem of `map` for a robot of `radius_m` with footprint `fp`; candidates are the
-    /// lattice cells reachable from `start` (world x, y).
-    pub fn new(map: &'a KnownGrid<'a>, radius_m: f64, start: [f64; 2], fp: Footprint) -> Result<Self, RouteError> {
+    /// The problem of `map` for a robot of `clearance` with footprint `fp`; candidates are the
+    /// lattice cells that keep `clearance.keep_m`, reachable from `start` (world x, y) where the
+    /// robot may pass.
+    pub fn new(map: &'a KnownGrid<'a>, clearance: Clearance, start: [f64; 2], fp: Footprint) -> Result<Self, RouteError> {
         let n = map.side;
-        let ok = map.standable(radius_m);
-        let start_cell = start_cell(map, &ok, start)?;
-        let from_start = map.dijkstra(&ok, start_cell);
+        let ok = map.standable(clearance.keep_m);
+        let pass = map.passable(clearance, &ok);
+        let start_cell = start_cell(map, &pass, start)?;
+        let from_start = map.dijkstra(&pass, start_cell);
         let headings: Vec<f64> = match fp {
             Footprint::Camera { .. } => (0..CAMERA_HEADINGS).map(|k| k as f64 * std::f64::consts::TAU / CAMERA_HEADINGS as f64).collect(),
             Footprint::Lidar { .. } => vec![0.0],
@@ -310,12 +360,12 @@ impl<'a> Coverage<'a> {
             }
         }
         let coverable = coverable.iter().filter(|b| **b).count();
-        Ok(Coverage { map, fp, ok, cands, coverable, free })
+        Ok(Coverage { map, fp, pass, cands, coverable, free })
     }
 
     /// An empty coverage (no cell covered) to mark and plan with.
     pub fn nothing_covered(&self) -> Vec<bool> {
-        vec![false; self.ok.len()]
+        vec![false; self.pass.len()]
     }
 
     /// Marks in `covered` what the footprint sees from waypoint `w` (a waypoint a robot reached:
@@ -341,11 +391,11 @@ impl<'a> Coverage<'a> {
     /// [`plan`]'s route.
     pub fn plan_team(&self, starts: &[[f64; 2]], speeds: &[f64], covered: &[bool]) -> Result<Vec<Route>, RouteError> {
         let mut covered = covered.to_vec();
-        covered.resize(self.ok.len(), false);
+        covered.resize(self.pass.len(), false);
         let overhead = (LEG_OVERHEAD_M / CELL_M * 5.0) as u64;
         let mut fields = Vec::with_capacity(starts.len());
         for &s in starts {
-            fields.push(self.map.dijkstra(&self.ok, start_cell(self.map, &self.ok, s)?));
+            fields.push(self.map.dijkstra(&self.pass, start_cell(self.map, &self.pass, s)?));
         }
         let mut length_units = vec![0u64; starts.len()];
         let mut open = vec![true; starts.len()];
@@ -380,7 +430,7 @@ impl<'a> Coverage<'a> {
             }
             length_units[r] += d;
             chosen[r].push((k, gain));
-            fields[r] = self.map.dijkstra(&self.ok, self.cands[k].0);
+            fields[r] = self.map.dijkstra(&self.pass, self.cands[k].0);
         }
         let covered_n = covered.iter().filter(|b| **b).count();
         Ok(chosen
@@ -419,10 +469,10 @@ fn start_cell(map: &KnownGrid, ok: &[bool], start: [f64; 2]) -> Result<usize, Ro
         .ok_or(RouteError::StartOutside)
 }
 
-/// The coverage route of `map` for a robot of `radius_m` starting at `start` (world x, y) with
+/// The coverage route of `map` for a robot of `clearance` starting at `start` (world x, y) with
 /// footprint `fp`.
-pub fn plan(map: &KnownGrid, radius_m: f64, start: [f64; 2], fp: Footprint) -> Result<Route, RouteError> {
-    let problem = Coverage::new(map, radius_m, start, fp)?;
+pub fn plan(map: &KnownGrid, clearance: Clearance, start: [f64; 2], fp: Footprint) -> Result<Route, RouteError> {
+    let problem = Coverage::new(map, clearance, start, fp)?;
     let mut routes = problem.plan_team(&[start], &[1.0], &problem.nothing_covered())?;
     Ok(routes.remove(0))
 }
@@ -445,6 +495,27 @@ mod tests {
     }
 
     #[test]
+    fn a_door_narrower_than_the_clearance_is_on_the_route_only_with_a_least_clearance_below_it() {
+        // The two rooms with a door of six free cells (y 46..=51, 0.6 m; jambs at y 45 and 52):
+        // its middle cells are 0.3 m from a jamb, inside 0.35 m, outside 0.25 m.
+        let mut cells = two_rooms();
+        for y in 40..60 {
+            cells[y * 200 + 90] = if (46..52).contains(&y) { Cell3::Free } else { Cell3::Occupied };
+        }
+        let map = KnownGrid { cells: &cells, side: 200, origin: [0.0, 0.0] };
+        let fp = Footprint::Lidar { range_m: 30.0 };
+        let shut = plan(&map, Clearance::uniform(0.35), [2.0, 2.0], fp).unwrap();
+        assert!(shut.waypoints.iter().all(|w| w.x < 9.0), "{:?}", shut.waypoints);
+        let band = plan(&map, Clearance { keep_m: 0.35, least_m: 0.25 }, [2.0, 2.0], fp).unwrap();
+        assert!(band.waypoints.iter().any(|w| w.x > 9.1), "the second room is visited: {:?}", band.waypoints);
+        // Waypoints still keep the full clearance: none stands in the doorway.
+        assert!(band.waypoints.iter().all(|w| (w.x - 9.05).abs() > 0.3), "{:?}", band.waypoints);
+        assert!(band.covered > shut.covered, "{} vs {}", band.covered, shut.covered);
+        // A least clearance at or above the kept one changes nothing.
+        assert_eq!(plan(&map, Clearance { keep_m: 0.35, least_m: 0.5 }, [2.0, 2.0], fp).unwrap(), shut);
+    }
+
+    #[test]
     fn spans_hold_a_sorted_set_as_runs() {
         let cells = [0u32, 1, 2, 5, 7, 8, 100];
         let s = Spans::of(&cells);
@@ -457,8 +528,9 @@ mod tests {
     fn a_route_covers_both_rooms_and_the_camera_needs_more_waypoints_than_the_lidar() {
         let cells = two_rooms();
         let map = KnownGrid { cells: &cells, side: 200, origin: [0.0, 0.0] };
-        let cam = plan(&map, 0.35, [2.0, 2.0], Footprint::Camera { range_m: 4.0, fov_rad: 90f64.to_radians() }).unwrap();
-        let lidar = plan(&map, 0.35, [2.0, 2.0], Footprint::Lidar { range_m: 30.0 }).unwrap();
+        let cam =
+            plan(&map, Clearance::uniform(0.35), [2.0, 2.0], Footprint::Camera { range_m: 4.0, fov_rad: 90f64.to_radians() }).unwrap();
+        let lidar = plan(&map, Clearance::uniform(0.35), [2.0, 2.0], Footprint::Lidar { range_m: 30.0 }).unwrap();
         for r in [&cam, &lidar] {
             assert!(r.covered as f64 >= 0.97 * r.coverable as f64, "{} of {}", r.covered, r.coverable);
             assert!(r.coverable as f64 >= 0.95 * r.free as f64, "{} of {}", r.coverable, r.free);
@@ -469,13 +541,13 @@ mod tests {
         // The tour starts near the start: the first waypoint is in the first room.
         assert!(cam.waypoints[0].x < 9.0 && lidar.waypoints[0].x < 9.0);
         // Deterministic.
-        assert_eq!(plan(&map, 0.35, [2.0, 2.0], Footprint::Lidar { range_m: 30.0 }).unwrap(), lidar);
+        assert_eq!(plan(&map, Clearance::uniform(0.35), [2.0, 2.0], Footprint::Lidar { range_m: 30.0 }).unwrap(), lidar);
     }
 
     #[test]
     fn a_start_off_the_map_is_an_error() {
         let cells = two_rooms();
         let map = KnownGrid { cells: &cells, side: 200, origin: [0.0, 0.0] };
-        assert_eq!(plan(&map, 0.35, [-5.0, 2.0], Footprint::Lidar { range_m: 30.0 }), Err(RouteError::StartOutside));
+        assert_eq!(plan(&map, Clearance::uniform(0.35), [-5.0, 2.0], Footprint::Lidar { range_m: 30.0 }), Err(RouteError::StartOutside));
     }
 }

@@ -158,7 +158,7 @@ pub fn plan_route(cfg: &firmware::Config, cells: &[Cell3], start: [f64; 2]) -> (
         side: firmware::capacity::GRID_CELLS,
         origin: [cfg.origin_x_m.to_num::<f64>(), cfg.origin_y_m.to_num::<f64>()],
     };
-    match coverage::plan(&map, cfg.robot_radius_m.to_num::<f64>(), start, fp) {
+    match coverage::plan(&map, coverage::Clearance::of(cfg), start, fp) {
         Ok(route) => {
             s.route_waypoints = route.waypoints.len().min(firmware::capacity::MAX_ROUTE_WAYPOINTS);
             s.route_length_m = crate::run::round3(route.length_m);

@@ -119,7 +119,8 @@ impl Coordinator {
             origin: [self.cfg.origin_x_m.to_num::<f64>(), self.cfg.origin_y_m.to_num::<f64>()],
         };
         let starts: Vec<[f64; 2]> = robots.iter().map(|&r| self.last[r].as_ref().map_or([0.0; 2], |s| [s.pose[0], s.pose[1]])).collect();
-        let problem = Coverage::new(&map, self.cfg.robot_radius_m.to_num::<f64>(), starts[0], fp).map_err(|e| format!("coverage: {e}"))?;
+        let problem =
+            Coverage::new(&map, crate::live::coverage::Clearance::of(&self.cfg), starts[0], fp).map_err(|e| format!("coverage: {e}"))?;
         let mut covered = problem.nothing_covered();
         for w in &self.done {
             problem.cover(&mut covered, w);
