@@ -179,12 +179,12 @@ impl KnownGrid<'_> {
         let r = r2.sqrt().ceil() as i64;
         let offsets: Vec<(i64, i64)> =
             (-r..=r).flat_map(|dy| (-r..=r).map(move |dx| (dx, dy))).filter(|&(dx, dy)| ((dx * dx + dy * dy) as f64) <= r2).collect();
-        for i in 0..n * n {
-            if ok[i] || self.cells[i] != Cell3::Free {
+        for (i, pass) in ok.iter_mut().enumerate() {
+            if *pass || self.cells[i] != Cell3::Free {
                 continue;
             }
             let (x, y) = ((i % n) as i64, (i / n) as i64);
-            ok[i] = !offsets.iter().any(|&(dx, dy)| self.at(x + dx, y + dy) == Cell3::Occupied);
+            *pass = !offsets.iter().any(|&(dx, dy)| self.at(x + dx, y + dy) == Cell3::Occupied);
         }
         ok
     }
