@@ -3,10 +3,12 @@
 # the map each corrected CARMEN log leaves (`lives replay --map-out`), a world traced from it
 # (`lives worlds --from-map`, starting at the log's first laser pose, ten targets from seed 1),
 # then `lives eval` over the four worlds, without and with the known map.
-# Usage: scripts/real-floors.sh [OUT_DIR]   (default out/real-floors)
+# Usage: scripts/real-floors.sh [OUT_DIR [EVAL_ARGS...]]   (default out/real-floors; EVAL_ARGS go to
+# both `lives eval` runs, e.g. `--set lethal_radius_m=0.25`, docs/experiments/soft-clearance.md)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-out/real-floors}
+shift || true
 mkdir -p "$out/worlds"
 cargo build --release -p host --bin lives -q
 lives=target/release/lives
@@ -38,5 +40,5 @@ for log in intel aces freiburg-079 csail; do
   worlds+=("$out/worlds/$log.toml")
 done
 list=$(IFS=,; echo "${worlds[*]}")
-"$lives" eval --worlds "$list" --trials 10 --heldout 0 --no-pictures --threads 2 --out "$out"
-"$lives" eval --worlds "$list" --trials 10 --heldout 0 --no-pictures --threads 2 --known-map --out "$out-map"
+"$lives" eval --worlds "$list" --trials 10 --heldout 0 --no-pictures --threads 2 --out "$out" "$@"
+"$lives" eval --worlds "$list" --trials 10 --heldout 0 --no-pictures --threads 2 --known-map --out "$out-map" "$@"
