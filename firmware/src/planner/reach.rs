@@ -89,7 +89,7 @@ impl Planner {
     /// As of the last step: 0 unreachable, 1 reachable and open, 2 reachable through the
     /// narrow band ([`Planner::narrow`]).
     #[inline]
-    fn reach_kind(&self, x: i32, y: i32) -> u8 {
+    pub(super) fn reach_kind(&self, x: i32, y: i32) -> u8 {
         match PackedGrid::index(x, y) {
             Some(i) if self.dist[i] < LETHAL => 1 + (self.blocked.words()[i >> 5] >> (i & 31) & 1) as u8,
             _ => 0,

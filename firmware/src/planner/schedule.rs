@@ -38,7 +38,7 @@
 //!    unless the best tour that starts elsewhere is shorter by [`TOUR_SWITCH_UNITS`]: a tour
 //!    re-solved from a moving robot otherwise changes its first task every step.
 
-use super::{Planner, Site, Step, Viewpoint, HEADINGS, STEP_STRAIGHT, UNREACHABLE};
+use super::{Planner, Site, Step, Viewpoint, HEADINGS, NARROW_STEP_FACTOR, STEP_STRAIGHT, UNREACHABLE};
 use crate::capacity::MAX_TASKS;
 use crate::config::{PlannerKind, Weight};
 use crate::grid::{Cell, GridGeometry, Line};
@@ -673,8 +673,18 @@ impl Planner {
         let (dx, dy) = ((a.0 - b.0) as i64, (a.1 - b.1) as i64);
         let euclid = ((fixed_point::isqrt_u64(((dx * dx + dy * dy) as u64) << 16) as i64 * STEP_STRAIGHT as i64) >> 8) as u32;
         let mut work = (dx.abs().max(dy.abs())) as u32;
-        if Line::new(a.0, a.1, b.0, b.1).all(|(x, y)| self.distance(x, y) != UNREACHABLE) {
-            return (euclid, work);
+        // Each cell of the narrow band on the line costs what Dijkstra charges for it (the
+        // robot's own cell, reachable whatever it is, excepted).
+        let mut narrow = 0u32;
+        let clear = Line::new(a.0, a.1, b.0, b.1).all(|(x, y)| match self.reach_kind(x, y) {
+            0 => false,
+            k => {
+                narrow += (k == 2 && (x, y) != self.robot_cell) as u32;
+                true
+            }
+        });
+        if clear {
+            return (euclid + narrow * (NARROW_STEP_FACTOR - 1) as u32 * STEP_STRAIGHT as u32, work);
         }
         // Walk the farther one down until both stand on the same cell.
         let (mut p, mut q) = (a, b);
