@@ -18,9 +18,11 @@ impl BitGrid {
     /// Bit at `(x, y)`; false out of bounds.
     #[inline]
     pub fn get(&self, x: i32, y: i32) -> bool {
-        let Some(i) = PackedGrid::index(x, y) else {
-            return false;
-        };
+        PackedGrid::index(x, y).is_some_and(|i| self.at(i))
+    }
+    /// Bit `i` in row-major order (`PackedGrid::index`); `i` must be in the grid.
+    #[inline]
+    pub fn at(&self, i: usize) -> bool {
         self.bits[i >> 5] & (1 << (i & 31)) != 0
     }
     /// Sets or clears the bit at `(x, y)` (ignored out of bounds).

@@ -12,9 +12,10 @@
 //!    more narrow cells than the grid path it straightens. A robot within the clearance of
 //!    something may still leave, but only away from it (see [`Planner::inflate`]).
 //! 2. **Path distance** from the robot to every passable cell: Dijkstra on the 8-connected grid
-//!    with integer step costs 5 (straight) and 7 (diagonal) — one unit is 0.02 m, 7/5 ≈ √2 —, five
-//!    times those onto a narrow cell, and no corner cutting. The open list is a fixed-capacity binary heap ([`DIJKSTRA_HEAP`]); an
-//!    overflow is counted in [`PlanStats::heap_overflows`].
+//!    with integer step costs 5 (straight) and 7 (diagonal) — one unit is 0.02 m, 7/5 ≈ √2 —,
+//!    five times those onto a narrow cell, and no corner cutting. The open list is a
+//!    fixed-capacity binary heap ([`DIJKSTRA_HEAP`]); an overflow is counted in
+//!    [`PlanStats::heap_overflows`].
 //!
 //! Then one rule, by [`PlannerKind`], proposes *sites* (a cell, what produced it, a heading if
 //! it has one, the rule's own score) and [`Planner::choose`] scores and picks among them:

@@ -71,9 +71,9 @@ impl Planner {
         let Some(i) = PackedGrid::index(x, y) else {
             return 0;
         };
-        if self.blocked.words()[i >> 5] & (1 << (i & 31)) == 0 {
+        if !self.blocked.at(i) {
             1
-        } else if self.dist[i] != LETHAL && (bytes[i >> 2] >> ((i & 3) * 2)) & 3 == Cell::Free as u8 {
+        } else if self.dist[i] != LETHAL && Cell::from_bits(bytes[i >> 2] >> ((i & 3) * 2)) == Cell::Free {
             2
         } else {
             0
@@ -86,12 +86,14 @@ impl Planner {
         self.reach_kind(x, y) == 2
     }
 
-    /// As of the last step: 0 unreachable, 1 reachable and open, 2 reachable through the
-    /// narrow band ([`Planner::narrow`]).
+    /// As of the last step: 0 unreachable, 1 reachable and open (the robot's own cell, where it
+    /// stands whatever the cell is, included), 2 reachable through the narrow band
+    /// ([`Planner::narrow`]).
     #[inline]
     pub(super) fn reach_kind(&self, x: i32, y: i32) -> u8 {
         match PackedGrid::index(x, y) {
-            Some(i) if self.dist[i] < LETHAL => 1 + (self.blocked.words()[i >> 5] >> (i & 31) & 1) as u8,
+            Some(i) if self.dist[i] == 0 => 1,
+            Some(i) if self.dist[i] < LETHAL => 1 + self.blocked.at(i) as u8,
             _ => 0,
         }
     }
@@ -137,23 +139,11 @@ impl Planner {
                 if occupied & (0b10 << (2 * slot)) != 0 {
                     let i = k * 4 + slot;
                     let (x, y) = ((i % GRID_CELLS) as i32, (i / GRID_CELLS) as i32);
-                    if x >= r && y >= r && x + r < GRID_CELLS as i32 && y + r < GRID_CELLS as i32 {
-                        // The whole disc is on the grid: cell indices by offset, no bounds test.
-                        let words = self.blocked.words_mut();
-                        for &(dx, dy, lethal) in offsets.iter() {
-                            let j = (i as isize + dy as isize * GRID_CELLS as isize + dx as isize) as usize;
-                            words[j >> 5] |= 1 << (j & 31);
-                            if lethal {
-                                self.dist[j] = LETHAL;
-                            }
-                        }
-                    } else {
-                        for &(dx, dy, lethal) in offsets.iter() {
-                            let (cx, cy) = (x + dx as i32, y + dy as i32);
-                            self.blocked.put(cx, cy, true);
-                            if lethal && PackedGrid::in_bounds(cx, cy) {
-                                self.dist[idx(cx, cy)] = LETHAL;
-                            }
+                    for &(dx, dy, lethal) in offsets.iter() {
+                        let (cx, cy) = (x + dx as i32, y + dy as i32);
+                        self.blocked.put(cx, cy, true);
+                        if lethal && PackedGrid::in_bounds(cx, cy) {
+                            self.dist[idx(cx, cy)] = LETHAL;
                         }
                     }
                     work += offsets.len() as u32;

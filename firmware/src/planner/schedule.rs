@@ -673,13 +673,12 @@ impl Planner {
         let (dx, dy) = ((a.0 - b.0) as i64, (a.1 - b.1) as i64);
         let euclid = ((fixed_point::isqrt_u64(((dx * dx + dy * dy) as u64) << 16) as i64 * STEP_STRAIGHT as i64) >> 8) as u32;
         let mut work = (dx.abs().max(dy.abs())) as u32;
-        // Each cell of the narrow band on the line costs what Dijkstra charges for it (the
-        // robot's own cell, reachable whatever it is, excepted).
+        // Each cell of the narrow band on the line costs what Dijkstra charges for it.
         let mut narrow = 0u32;
         let clear = Line::new(a.0, a.1, b.0, b.1).all(|(x, y)| match self.reach_kind(x, y) {
             0 => false,
             k => {
-                narrow += (k == 2 && (x, y) != self.robot_cell) as u32;
+                narrow += (k == 2) as u32;
                 true
             }
         });

@@ -144,11 +144,17 @@ impl KnownGrid<'_> {
         [self.origin[0] + (x as f64 + 0.5) * CELL_M, self.origin[1] + (y as f64 + 0.5) * CELL_M]
     }
 
-    /// Free cells farther than `radius_m` from every occupied cell.
+    /// Free cells farther than `radius_m` (rounded to whole cells) from every occupied cell.
     fn standable(&self, radius_m: f64) -> Vec<bool> {
+        let r = (radius_m / CELL_M).round();
+        self.clear_of(r * r)
+    }
+
+    /// Free cells with no occupied cell within `r2` squared cells (centre to centre).
+    fn clear_of(&self, r2: f64) -> Vec<bool> {
         let n = self.side;
         let mut ok: Vec<bool> = self.cells.iter().map(|c| *c == Cell3::Free).collect();
-        let r = (radius_m / CELL_M).round() as i64;
+        let r = r2.max(0.0).sqrt().ceil() as i64;
         for i in 0..n * n {
             if self.cells[i] != Cell3::Occupied {
                 continue;
@@ -157,7 +163,7 @@ impl KnownGrid<'_> {
             for dy in -r..=r {
                 for dx in -r..=r {
                     let (qx, qy) = (x + dx, y + dy);
-                    if dx * dx + dy * dy <= r * r && qx >= 0 && qy >= 0 && qx < n as i64 && qy < n as i64 {
+                    if ((dx * dx + dy * dy) as f64) <= r2 && qx >= 0 && qy >= 0 && qx < n as i64 && qy < n as i64 {
                         ok[qy as usize * n + qx as usize] = false;
                     }
                 }
@@ -170,21 +176,13 @@ impl KnownGrid<'_> {
     /// `least_m` is below it, also every free cell whose centre is farther than exactly `least_m`
     /// from every occupied cell's centre (the controller's rule, `firmware::planner::reach`).
     fn passable(&self, clearance: Clearance, standable: &[bool]) -> Vec<bool> {
-        let mut ok = standable.to_vec();
         if clearance.least_m.partial_cmp(&clearance.keep_m) != Some(std::cmp::Ordering::Less) {
-            return ok;
+            return standable.to_vec();
         }
-        let n = self.side;
-        let r2 = (clearance.least_m.max(0.0) / CELL_M).powi(2);
-        let r = r2.sqrt().ceil() as i64;
-        let offsets: Vec<(i64, i64)> =
-            (-r..=r).flat_map(|dy| (-r..=r).map(move |dx| (dx, dy))).filter(|&(dx, dy)| ((dx * dx + dy * dy) as f64) <= r2).collect();
-        for (i, pass) in ok.iter_mut().enumerate() {
-            if *pass || self.cells[i] != Cell3::Free {
-                continue;
-            }
-            let (x, y) = ((i % n) as i64, (i / n) as i64);
-            *pass = !offsets.iter().any(|&(dx, dy)| self.at(x + dx, y + dy) == Cell3::Occupied);
+        let least = clearance.least_m.max(0.0) / CELL_M;
+        let mut ok = self.clear_of(least * least);
+        for (pass, &stand) in ok.iter_mut().zip(standable) {
+            *pass |= stand;
         }
         ok
     }
