@@ -155,7 +155,8 @@ pub struct SearchSpec {
     pub seed: u64,
     /// Simulator settings.
     pub sim: SimConfig,
-    /// Controller settings (the planner kind and the grid origin are set by [`run`]).
+    /// Controller settings: the planner's own defaults ([`Config::with_planner`]), then `--set`
+    /// and the robot's model (the grid origin is set by [`run`]).
     pub controller: Config,
     /// Print every new goal with its utility terms to stderr.
     pub trace: bool,
@@ -182,7 +183,8 @@ impl SearchSpec {
             scenario: Some(scenario),
             planner,
             seed,
-            controller: controller_model(&Config::DEFAULT, &sim),
+            // The planner's own defaults first: `--set` (applied to this later) overrides them.
+            controller: controller_model(&Config::DEFAULT.with_planner(planner.kind()), &sim),
             sim,
             trace: false,
             trace_candidates: 0,
@@ -611,6 +613,27 @@ pub fn record_search(
 mod tests {
     use super::*;
 
+    /// `explore-lite` brings its own `min_frontier_cells` (5), goal timeout (30 s) and switch
+    /// margin (0); a `--set` of any of them is what the controller runs, not the planner's
+    /// default (before: silently replaced when the search started).
+    #[test]
+    fn a_set_parameter_overrides_the_planners_own_default() {
+        let w = World::builtin("apartment", Scenario::Easy).unwrap();
+        let mut spec = SearchSpec::new("apartment", w.clone(), Scenario::Easy, PlannerChoice::ExploreLite, 1);
+        let plain = crate::run::controller_config(&spec.controller, &spec.world, spec.planner.kind());
+        assert_eq!((plain.min_frontier_cells, plain.goal_timeout_us), (5, 30_000_000), "the planner's defaults");
+        for a in ["min_frontier_cells=8", "goal_timeout_s=5", "switch_margin=6"] {
+            crate::overrides::apply(&mut spec.controller, a).unwrap();
+        }
+        let cfg = crate::run::controller_config(&spec.controller, &spec.world, spec.planner.kind());
+        assert_eq!((cfg.min_frontier_cells, cfg.goal_timeout_us, cfg.switch_margin), (8, 5_000_000, firmware::config::Weight::from_num(6)));
+        // A route follower's gaze likewise.
+        let mut spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::Live, 1);
+        assert!(!crate::run::controller_config(&spec.controller, &spec.world, spec.planner.kind()).gaze);
+        crate::overrides::apply(&mut spec.controller, "gaze=true").unwrap();
+        assert!(crate::run::controller_config(&spec.controller, &spec.world, spec.planner.kind()).gaze);
+    }
+
     #[test]
     fn a_named_robot_sets_the_simulated_camera_and_the_controllers_model_of_it() {
         assert_eq!("calibrated".parse::<Robot>(), Ok(Robot::Calibrated));
@@ -634,7 +657,7 @@ mod tests {
         let mut spec = SearchSpec::new("apartment", w, Scenario::Easy, PlannerChoice::Multisensor, 1);
         Robot::Short.apply(&mut spec).unwrap();
         assert_eq!(spec.sim, default_sim());
-        assert_eq!(spec.controller, controller_model(&Config::DEFAULT, &default_sim()));
+        assert_eq!(spec.controller, controller_model(&Config::DEFAULT.with_planner(firmware::PlannerKind::Multisensor), &default_sim()));
     }
 
     /// The utility a candidate line prints, parsed back.

@@ -179,7 +179,14 @@ impl Config {
     /// better frontier replace the goal (no switch margin). Every place that runs a planner (the
     /// simulated search, the bridge to a robot, the dataset walker) gets its configuration here,
     /// so the core, not a host, decides what each planner does.
+    ///
+    /// A configuration already running `kind` is returned as it is: its planner's defaults came
+    /// with the choice of the planner, and what was set since (`--set`) stands. Choose the planner
+    /// first, then apply the overrides.
     pub fn with_planner(self, kind: PlannerKind) -> Config {
+        if self.planner == kind {
+            return self;
+        }
         let base = Config { planner: kind, ..self };
         match kind {
             PlannerKind::ExploreLite => Config { min_frontier_cells: 5, goal_timeout_us: 30_000_000, switch_margin: Weight::ZERO, ..base },
@@ -277,6 +284,22 @@ mod tests {
                 assert_eq!(c, Config { planner, ..Config::DEFAULT }, "{planner:?}: only explore-lite and the route followers differ");
             }
         }
+    }
+
+    #[test]
+    fn what_is_set_after_the_planner_is_chosen_outlives_its_defaults() {
+        let mut c = Config::DEFAULT.with_planner(PlannerKind::ExploreLite);
+        c.min_frontier_cells = 8;
+        c.switch_margin = Weight::from_num(6);
+        let again = c.with_planner(PlannerKind::ExploreLite);
+        assert_eq!(again, c, "choosing the same planner again changes nothing");
+        let other = c.with_planner(PlannerKind::Multisensor);
+        assert_eq!(
+            (other.planner, other.min_frontier_cells),
+            (PlannerKind::Multisensor, 8),
+            "another planner keeps what it has no default for"
+        );
+        assert_eq!(other.with_planner(PlannerKind::ExploreLite).min_frontier_cells, 5, "choosing explore-lite afresh brings its defaults");
     }
 
     #[test]

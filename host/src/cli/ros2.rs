@@ -71,11 +71,11 @@ pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
     opts.max_wall = max_wall.map(|s| positive_secs("--max-wall", s)).transpose()?;
     opts.max_idle = max_idle.map(|s| positive_secs("--max-idle", s)).transpose()?;
     let origin = origin.as_deref().map(host::link::robot::parse_origin).transpose()?;
-    let mut cfg = host::link::robot::REAL_ROBOT_CONFIG;
+    // The planner's own defaults first, so that `--set` overrides them.
+    let mut cfg = host::link::robot::REAL_ROBOT_CONFIG.with_planner(planner.kind());
     for a in &set {
         host::overrides::apply(&mut cfg, a)?;
     }
-    let cfg = cfg.with_planner(planner.kind());
     let blob = if planner.uses_classifier() { host::io::model_file::model_option(model.as_deref(), false)? } else { None };
     if model.is_some() && blob.is_none() {
         return Err(format!("--model is the classifier `lives` runs; `{planner}` runs none"));

@@ -76,6 +76,7 @@ pub fn run(args: TeamArgs) -> Result<ExitCode, String> {
     let mut spec = if args.known_map && args.run.map.is_none() {
         let mut s = load_spec(&RunArgs { planner: host::search::PlannerChoice::Lives, map: None, ..args.run.clone() })?;
         s.planner = args.run.planner;
+        s.controller = s.controller.with_planner(s.planner.kind());
         s
     } else {
         load_spec(&args.run)?

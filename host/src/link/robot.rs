@@ -687,6 +687,7 @@ pub fn run_cli(o: CliOptions) -> Result<ExitCode, String> {
     }
     let mut spec = RobotSpec::new(listen);
     spec.planner = o.planner;
+    spec.controller = spec.controller.with_planner(o.planner.kind());
     spec.lidar = parse_lidar(&o.lidar)?;
     spec.origin = o.origin.as_deref().map(parse_origin).transpose()?;
     for a in &o.set {
