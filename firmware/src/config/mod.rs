@@ -176,7 +176,8 @@ impl Config {
     /// This configuration running `kind`, with the planner's own defaults where its original
     /// differs from ours: `explore-lite` (ROS `explore_lite`) takes frontiers from 0.5 m
     /// (5 cells), blacklists a goal without progress for 30 s (`goal_timeout_us`) and lets any
-    /// better frontier replace the goal (no switch margin). Every place that runs a planner (the
+    /// better frontier replace the goal (no switch margin); the route followers of a known map
+    /// (`live`, `visual-cpp`, `lidar-cpp`) face their way (no gaze). Every place that runs a planner (the
     /// simulated search, the bridge to a robot, the dataset walker) gets its configuration here,
     /// so the core, not a host, decides what each planner does.
     ///
