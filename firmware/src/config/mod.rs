@@ -177,9 +177,9 @@ impl Config {
     /// differs from ours: `explore-lite` (ROS `explore_lite`) takes frontiers from 0.5 m
     /// (5 cells), blacklists a goal without progress for 30 s (`goal_timeout_us`) and lets any
     /// better frontier replace the goal (no switch margin); the route followers of a known map
-    /// (`live`, `visual-cpp`, `lidar-cpp`) face their way (no gaze). Every place that runs a planner (the
-    /// simulated search, the bridge to a robot, the dataset walker) gets its configuration here,
-    /// so the core, not a host, decides what each planner does.
+    /// (`live`, `visual-cpp`, `lidar-cpp`) face their way (no gaze). Every place that runs a
+    /// planner (the simulated search, the bridge to a robot, the dataset walker) gets its
+    /// configuration here, so the core, not a host, decides what each planner does.
     ///
     /// A configuration already running `kind` is returned as it is: its planner's defaults came
     /// with the choice of the planner, and what was set since (`--set`) stands. Choose the planner
