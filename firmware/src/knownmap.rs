@@ -137,17 +137,20 @@ impl PriorMap {
     }
 
     /// The prior's cell under cell `(x, y)` of a grid at `geom` (both grids have 0.1 m cells).
+    #[inline]
     pub fn cell_under(&self, geom: &GridGeometry, x: i32, y: i32) -> (i32, i32) {
         let (wx, wy) = geom.center_of(x, y);
         self.geom.cell_of(wx, wy)
     }
 
     /// Whether the prior marks cell `(x, y)` of its own window free.
+    #[inline]
     pub fn free_cell(&self, x: i32, y: i32) -> bool {
         self.free.get(x, y)
     }
 
     /// Whether the prior marks cell `(x, y)` of its own window occupied.
+    #[inline]
     pub fn occupied_cell(&self, x: i32, y: i32) -> bool {
         self.occupied.get(x, y)
     }
@@ -198,21 +201,62 @@ impl PriorMap {
     /// LiDAR has already observed keep their evidence. Returns the cells visited.
     pub fn seed(&self, lidar: &mut LidarGrid) -> u32 {
         let geom = lidar.geom;
+        self.for_each_marked(&geom, |x, y, px, py| {
+            let e = if self.occupied.get(px, py) { SEED_OCCUPIED } else { SEED_FREE };
+            lidar.seed(x, y, e);
+        });
+        (GRID_CELLS * GRID_CELLS) as u32
+    }
+
+    /// Calls `f(x, y, px, py)` for every cell `(x, y)` of a grid at `geom` whose prior cell
+    /// `(px, py)` ([`PriorMap::cell_under`]) is occupied or free, in row-major order. A row
+    /// whose prior row is outside the window, and a run of 32 cells whose prior cells are all
+    /// unknown, are passed over whole: the prior cell's column grows with the cell's (the
+    /// lattices differ by a translation), so the run's prior cells lie between those of its
+    /// ends. (A run whose ends are out of order, as a coordinate wrapping past the fixed-point
+    /// range would make them, is visited cell by cell.)
+    pub fn for_each_marked(&self, geom: &GridGeometry, mut f: impl FnMut(i32, i32, i32, i32)) {
+        const RUN: i32 = 32;
         let n = GRID_CELLS as i32;
+        let marked = |px: i32, py: i32| self.occupied.get(px, py) || self.free.get(px, py);
+        // The prior's column under each column (the same in every row): computed once, as
+        // the 64-bit divisions of `cell_under` are dear on the Cortex-M.
+        let mut columns = [0i32; GRID_CELLS];
+        for (x, c) in columns.iter_mut().enumerate() {
+            *c = self.cell_under(geom, x as i32, 0).0;
+        }
         for y in 0..n {
-            for x in 0..n {
-                let (px, py) = self.cell_under(&geom, x, y);
-                let e = if self.occupied.get(px, py) {
-                    SEED_OCCUPIED
-                } else if self.free.get(px, py) {
-                    SEED_FREE
-                } else {
+            let py = self.cell_under(geom, 0, y).1;
+            if !(0..n).contains(&py) {
+                continue;
+            }
+            for x0 in (0..n).step_by(RUN as usize) {
+                let (pa, pb) = (columns[x0 as usize], columns[(x0 + RUN - 1) as usize]);
+                if pa <= pb && (pb < 0 || pa >= n || self.row_unknown(py, pa.max(0), pb.min(n - 1))) {
                     continue;
-                };
-                lidar.seed(x, y, e);
+                }
+                for x in x0..x0 + RUN {
+                    let px = columns[x as usize];
+                    if marked(px, py) {
+                        f(x, y, px, py);
+                    }
+                }
             }
         }
-        (n * n) as u32
+    }
+
+    /// True if cells `a..=b` of the window's row `py` (all within it) are neither occupied nor
+    /// free, a word of the planes at a time.
+    fn row_unknown(&self, py: i32, a: i32, b: i32) -> bool {
+        let base = py as usize * GRID_CELLS;
+        let (first, last) = (base + a as usize, base + b as usize);
+        let (occ, free) = (self.occupied.words(), self.free.words());
+        (first / 32..=last / 32).all(|w| {
+            let lo = if w == first / 32 { first % 32 } else { 0 };
+            let hi = if w == last / 32 { last % 32 } else { 31 };
+            let mask = (u32::MAX >> (31 - hi)) & (u32::MAX << lo);
+            (occ[w] | free[w]) & mask == 0
+        })
     }
 }
 
@@ -360,6 +404,57 @@ mod tests {
     use super::*;
     use crate::grid::beam_angle;
     use std::boxed::Box;
+
+    /// The runs [`PriorMap::for_each_marked`] passes over hold no marked cell: it visits exactly
+    /// the cells a cell-by-cell pass finds, in the same order, whatever the two windows' offset
+    /// (whole cells, fractions of a cell, the prior partly or wholly outside the grid).
+    #[test]
+    fn for_each_marked_visits_exactly_the_cells_a_full_pass_finds() {
+        let mut prior = Box::new(PriorMap::new());
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        // A building of 300 × 200 cells from (40, 100) of the prior's window: rows of random
+        // occupied and free runs, and a few stray cells elsewhere (at the window's edges too).
+        prior.reset(Meters::ZERO, Meters::ZERO);
+        for y in 100..300 {
+            let (occ, free): (std::vec::Vec<u8>, std::vec::Vec<u8>) = (0..38)
+                .map(|_| {
+                    let r = next();
+                    let o = (r & (r >> 8) & (r >> 16)) as u8;
+                    (o, (r >> 24) as u8 & !o)
+                })
+                .unzip();
+            prior.set_row_bits(y, 40, &occ, 300).unwrap();
+            prior.set_free_row_bits(y, 40, &free, 300).unwrap();
+        }
+        for (x, y) in [(0, 0), (511, 511), (0, 511), (511, 0), (31, 7), (32, 7), (480, 450)] {
+            prior.set_free_row_bits(y, x, &[1], 1).unwrap();
+        }
+        let mm = |v: i32| Meters::from_bits(((v as i64) << 16).div_euclid(1000) as i32);
+        for (ox, oy) in [(0, 0), (1_000, -2_000), (37, 51), (-4_963, 7_777), (-30_000, 12_345), (51_150, 0), (-60_000, -60_000)] {
+            let geom = GridGeometry { origin_x: mm(ox), origin_y: mm(oy) };
+            let mut visited = std::vec::Vec::new();
+            prior.for_each_marked(&geom, |x, y, px, py| visited.push((x, y, px, py)));
+            let mut full = std::vec::Vec::new();
+            for y in 0..GRID_CELLS as i32 {
+                for x in 0..GRID_CELLS as i32 {
+                    let (px, py) = prior.cell_under(&geom, x, y);
+                    if prior.occupied_cell(px, py) || prior.free_cell(px, py) {
+                        full.push((x, y, px, py));
+                    }
+                }
+            }
+            assert!(visited == full, "origin ({ox}, {oy}) mm: {} cells visited, {} found cell by cell", visited.len(), full.len());
+            if (ox, oy) == (0, 0) {
+                assert!(full.len() > 20_000, "{} marked cells", full.len());
+            }
+        }
+    }
 
     /// A prior map with a wall along x = 5 m (cells of column 50), window at the origin.
     fn walled() -> Box<KnownMap> {

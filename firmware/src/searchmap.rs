@@ -59,19 +59,15 @@ impl SearchMap {
     /// Recounts over the window at `geom` (a new prior, a new search, a moved window). Returns
     /// the cells visited.
     pub fn recount(&mut self, prior: &PriorMap, geom: &GridGeometry, visual: &VisualGrid) -> u32 {
-        let n = GRID_CELLS as i32;
         let (mut cells, mut unseen) = (0, 0);
-        for y in 0..n {
-            for x in 0..n {
-                let (px, py) = prior.cell_under(geom, x, y);
-                if prior.free_cell(px, py) {
-                    cells += 1;
-                    unseen += u32::from(!visual.seen(x, y));
-                }
+        prior.for_each_marked(geom, |x, y, px, py| {
+            if prior.free_cell(px, py) {
+                cells += 1;
+                unseen += u32::from(!visual.seen(x, y));
             }
-        }
+        });
         *self = SearchMap { unseen, cells };
-        (n * n) as u32
+        (GRID_CELLS * GRID_CELLS) as u32
     }
 
     /// The camera has seen window cell `(x, y)` for the first time.
