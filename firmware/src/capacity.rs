@@ -31,10 +31,6 @@ pub const MAX_NONMAP_SITES: usize = 64;
 pub const MAX_VIEWPOINTS: usize = 4 * 2 * MAX_FRONTIERS_PER_GRID + MAX_NONMAP_SITES;
 /// Open list of the path-distance search (Dijkstra); overflow is counted, never silent.
 pub const DIJKSTRA_HEAP: usize = 16384;
-/// Most entries the path-distance search pops in one tick (about 14 M instructions on the
-/// Cortex-M): a larger search goes on over the next ticks (real time; docs/mcu.md,
-/// docs/experiments/sliced-path-search.md).
-pub const PLAN_SLICE_CELLS: u32 = 16384;
 /// Waypoints in a goal's path.
 pub const MAX_PATH_WAYPOINTS: usize = 64;
 /// Blacklisted goal positions remembered (oldest forgotten first).

@@ -279,9 +279,8 @@ pub struct Controller {
     last_pose_us: Option<u64>,
     last_scan_us: Option<u64>,
     last_plan_us: Option<u64>,
-    /// A planning step is under way: its first half began on an earlier tick
-    /// ([`Planner::prepare`]); this tick goes on with its path search
-    /// ([`Planner::prepare_more`]) or, that ended, finishes it ([`Planner::select`]).
+    /// The first half of a planning step ran on the last tick ([`Planner::prepare`]); this
+    /// tick finishes it ([`Planner::select`]).
     plan_prepared: bool,
     goal: Option<Goal>,
     goal_best_dist: Meters,
@@ -704,23 +703,14 @@ impl Controller {
             return false;
         }
         if !self.plan_prepared {
-            // A planning step is spread over ticks (issue 28, real time): this one finds the
-            // frontiers and begins the path distances, the next ones finish them (one tick
-            // unless the search is larger than `PLAN_SLICE_CELLS`), the one after chooses.
+            // A planning step is spread over two ticks (issue 28, real time): this one finds
+            // the frontiers and the path distances, the next chooses on them.
             self.last_plan_us = Some(now_us);
             obs.begin(Stage::Plan);
             let work = self.frontiers.compute(&self.lidar, &self.visual, self.cfg.min_frontier_cells)
                 + self.planner.prepare(&self.cfg, &self.lidar, pose);
             obs.end(Stage::Plan);
             self.plan_prepared = true;
-            self.spent(Stage::Plan, work);
-            return false;
-        }
-        if self.planner.searching() {
-            // A path search larger than one tick's slice goes on (a large known building).
-            obs.begin(Stage::Plan);
-            let work = self.planner.prepare_more(&self.lidar);
-            obs.end(Stage::Plan);
             self.spent(Stage::Plan, work);
             return false;
         }

@@ -15,8 +15,7 @@
 //!    with integer step costs 5 (straight) and 7 (diagonal) — one unit is 0.02 m, 7/5 ≈ √2 —,
 //!    five times those onto a narrow cell, and no corner cutting. The open list is a
 //!    fixed-capacity binary heap ([`DIJKSTRA_HEAP`]); an overflow is counted in
-//!    [`PlanStats::heap_overflows`]. A search larger than [`PLAN_SLICE_CELLS`] goes on over
-//!    several ticks ([`Planner::prepare_more`]).
+//!    [`PlanStats::heap_overflows`].
 //!
 //! Then one rule, by [`PlannerKind`], proposes *sites* (a cell, what produced it, a heading if
 //! it has one, the rule's own score) and [`Planner::choose`] scores and picks among them:
@@ -46,7 +45,7 @@ pub mod view;
 
 use crate::capacity::{
     BLOCKS, DIJKSTRA_HEAP, GRID_AREA, GRID_CELLS, MAX_BLACKLIST, MAX_FRONTIERS_PER_GRID, MAX_NONMAP_POINTS, MAX_NONMAP_SITES,
-    MAX_PATH_WAYPOINTS, MAX_PROPOSALS, MAX_ROOMS, MAX_TASKS, MAX_VIEWPOINTS, PLAN_SLICE_CELLS,
+    MAX_PATH_WAYPOINTS, MAX_PROPOSALS, MAX_ROOMS, MAX_TASKS, MAX_VIEWPOINTS,
 };
 use crate::config::{Config, PlannerKind, Weight};
 use crate::frontier::{FrontierSet, FrontierSource};
@@ -447,35 +446,23 @@ impl Planner {
         current: Option<((i32, i32), BinaryAngle)>,
         now_us: u64,
     ) -> (Option<Goal>, Option<i64>) {
-        let mut work = self.prepare(cfg, lidar, pose);
-        while self.searching() {
-            work += self.prepare_more(lidar);
-        }
+        let work = self.prepare(cfg, lidar, pose);
         let (goal, current_utility) = self.select(PlanInputs { cfg, lidar, visual, frontiers, nonmap, pose, now_us }, current);
         self.stats.work += work;
         (goal, current_utility)
     }
 
     /// The first half of a planning step: which cells the robot may stand on and the path
-    /// distance to each, from the robot's cell now. This inflates and runs the first
-    /// [`PLAN_SLICE_CELLS`] of the path search; while [`Planner::searching`],
-    /// [`Planner::prepare_more`] runs the next ones. The controller runs one slice a tick and
-    /// [`Planner::select`] on the tick after the last, so that no tick carries a whole step
-    /// (issue 28, real time; docs/experiments/sliced-path-search.md). Returns the work.
+    /// distance to each, from the robot's cell now. The controller runs it on one tick and
+    /// [`Planner::select`] on the next, so that no tick carries a whole step (issue 28, real
+    /// time). Returns the work.
     pub fn prepare(&mut self, cfg: &Config, lidar: &LidarGrid, pose: &Pose2) -> u32 {
         self.stats = PlanStats::default();
         self.candidates.clear();
         let robot = lidar.geom.cell_of(pose.x, pose.y);
         self.robot_cell = robot;
         let work = self.inflate(lidar, cfg.robot_radius_m, cfg.lethal_radius_m, robot);
-        self.start_distances(robot);
-        work + self.distances(lidar, PLAN_SLICE_CELLS)
-    }
-
-    /// The next [`PLAN_SLICE_CELLS`] of the path search [`Planner::prepare`] began (nothing
-    /// when it has ended). Returns the work.
-    pub fn prepare_more(&mut self, lidar: &LidarGrid) -> u32 {
-        self.distances(lidar, PLAN_SLICE_CELLS)
+        work + self.distances(lidar, robot)
     }
 
     /// The second half of a planning step, on the distance field of the last

@@ -68,15 +68,9 @@ impl Planner {
     /// at all (lethal, not free, outside the grid).
     #[inline]
     fn step_kind(&self, bytes: &[u8], x: i32, y: i32) -> u8 {
-        match PackedGrid::index(x, y) {
-            Some(i) => self.step_kind_at(bytes, i),
-            None => 0,
-        }
-    }
-
-    /// [`Planner::step_kind`] of the cell at index `i` (in the grid).
-    #[inline(always)]
-    fn step_kind_at(&self, bytes: &[u8], i: usize) -> u8 {
+        let Some(i) = PackedGrid::index(x, y) else {
+            return 0;
+        };
         if !self.blocked.at(i) {
             1
         } else if self.dist[i] != LETHAL && Cell::from_bits(bytes[i >> 2] >> ((i & 3) * 2)) == Cell::Free {
@@ -199,31 +193,17 @@ impl Planner {
         work
     }
 
-    /// Step 2 begins: Dijkstra from the robot's cell over passable cells, on the field
-    /// [`Planner::inflate`] reset (lethal cells marked). [`Planner::distances`] runs it.
-    pub(super) fn start_distances(&mut self, robot: (i32, i32)) {
+    /// Step 2: Dijkstra from the robot's cell over passable cells, on the field
+    /// [`Planner::inflate`] reset (lethal cells marked): a step onto a cell of the narrow band
+    /// costs [`NARROW_STEP_FACTOR`] times its length.
+    pub(super) fn distances(&mut self, lidar: &LidarGrid, robot: (i32, i32)) -> u32 {
         self.heap.clear();
-        if PackedGrid::in_bounds(robot.0, robot.1) {
-            self.dist[idx(robot.0, robot.1)] = 0;
-            let _ = self.heap.push(idx(robot.0, robot.1) as u64);
-        }
-    }
-
-    /// True while the path-distance search [`Planner::start_distances`] began has cells left
-    /// to pop: the distance field is not final.
-    pub fn searching(&self) -> bool {
-        !self.heap.is_empty()
-    }
-
-    /// Step 2: pops at most `max_cells` entries of the Dijkstra [`Planner::start_distances`]
-    /// began (its open list kept between calls, so a search can be spread over ticks); a step
-    /// onto a cell of the narrow band costs [`NARROW_STEP_FACTOR`] times its length. `lidar`'s
-    /// cells decide only whether a blocked cell is free (the narrow band); which cells are
-    /// blocked is the inflation's. Returns the work; [`Planner::searching`] says whether it
-    /// ended.
-    pub(super) fn distances(&mut self, lidar: &LidarGrid, max_cells: u32) -> u32 {
         let mut work = 0;
-        let mut popped = 0;
+        if !PackedGrid::in_bounds(robot.0, robot.1) {
+            return work;
+        }
+        self.dist[idx(robot.0, robot.1)] = 0;
+        let _ = self.heap.push(idx(robot.0, robot.1) as u64);
         const N8: [(i32, i32, u16); 8] = [
             (1, 0, STEP_STRAIGHT),
             (-1, 0, STEP_STRAIGHT),
@@ -237,9 +217,7 @@ impl Planner {
         // The orthogonal neighbours (indices into `N8`) each diagonal one passes.
         const CORNERS: [(usize, usize); 4] = [(0, 2), (0, 3), (1, 2), (1, 3)];
         let bytes = lidar.grid.as_bytes();
-        while popped < max_cells {
-            let Some(e) = self.heap.pop() else { break };
-            popped += 1;
+        while let Some(e) = self.heap.pop() {
             let d = (e >> 32) as u16;
             let i = (e & 0xFFFF_FFFF) as usize;
             if d > self.dist[i] {
@@ -249,14 +227,8 @@ impl Planner {
             self.stats.reachable_cells += 1;
             let (x, y) = ((i % GRID_CELLS) as i32, (i / GRID_CELLS) as i32);
             // Each neighbour's kind once (the diagonals' corner test reads the orthogonal ones):
-            // 0 not passable, 1 open, 2 narrow. Away from the grid's edge (nearly every cell)
-            // by index, without a bounds test each.
-            let edge = x == 0 || y == 0 || x == GRID_CELLS as i32 - 1 || y == GRID_CELLS as i32 - 1;
-            let kinds = if edge {
-                N8.map(|(dx, dy, _)| self.step_kind(bytes, x + dx, y + dy))
-            } else {
-                N8.map(|(dx, dy, _)| self.step_kind_at(bytes, (i as isize + dx as isize + dy as isize * GRID_CELLS as isize) as usize))
-            };
+            // 0 not passable, 1 open, 2 narrow.
+            let kinds = N8.map(|(dx, dy, _)| self.step_kind(bytes, x + dx, y + dy));
             for (k, &(dx, dy, cost)) in N8.iter().enumerate() {
                 if kinds[k] == 0 {
                     continue;
@@ -409,70 +381,5 @@ impl Planner {
         }
         let (gx, gy) = lidar.geom.center_of(vp.cell.0, vp.cell.1);
         Goal { pose: Pose2::new(gx, gy, vp.heading), viewpoint: vp, path, path_length_m: vp.path_length_m() }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    extern crate std;
-    use super::*;
-    use crate::capacity::PLAN_SLICE_CELLS;
-    use crate::config::Config;
-    use crate::grid::GridGeometry;
-    use std::boxed::Box;
-
-    /// A free square of 199 × 199 cells (19.9 m) walled round, 39 601 cells: a path search of
-    /// more than two slices.
-    fn open_square() -> Box<LidarGrid> {
-        let mut g = Box::new(LidarGrid::new(GridGeometry { origin_x: Config::mm(0), origin_y: Config::mm(0) }));
-        for y in 0..=200 {
-            for x in 0..=200 {
-                let edge = x == 0 || x == 200 || y == 0 || y == 200;
-                g.grid.set(x, y, if edge { Cell::Occupied } else { Cell::Free });
-            }
-        }
-        g
-    }
-
-    #[test]
-    fn a_path_search_larger_than_a_slice_goes_on_over_calls_and_ends_as_one_search_would() {
-        let cfg = Config::DEFAULT;
-        let lidar = open_square();
-        let pose = Pose2::new(Config::mm(10_050), Config::mm(10_050), BinaryAngle::ZERO);
-
-        let mut sliced = Box::new(Planner::new());
-        sliced.prepare(&cfg, &lidar, &pose);
-        assert!(sliced.searching(), "a search of 39 601 cells does not end within one slice of {PLAN_SLICE_CELLS}");
-        let mut slices = 1;
-        while sliced.searching() {
-            let before = sliced.stats.reachable_cells;
-            let work = sliced.prepare_more(&lidar);
-            // A slice pops at most `PLAN_SLICE_CELLS` entries (stale ones included), each
-            // reached cell costing 9 units.
-            assert!(sliced.stats.reachable_cells - before <= PLAN_SLICE_CELLS);
-            assert!(work <= 9 * PLAN_SLICE_CELLS, "a slice did {work} units");
-            slices += 1;
-            assert!(slices <= 10, "the search did not end");
-        }
-        let reached = sliced.stats.reachable_cells;
-        assert!(reached > 2 * PLAN_SLICE_CELLS, "{reached} cells reached");
-        assert!(slices >= reached.div_ceil(PLAN_SLICE_CELLS), "{slices} slices for {reached} cells");
-        assert_eq!(sliced.prepare_more(&lidar), 0, "an ended search does nothing more");
-
-        // The same search in one go: the same field, cell for cell.
-        let mut whole = Box::new(Planner::new());
-        whole.prepare(&cfg, &lidar, &pose);
-        whole.distances(&lidar, u32::MAX);
-        assert!(!whole.searching());
-        assert!(sliced.dist == whole.dist, "the sliced search's distances differ from one search's");
-        assert_eq!(sliced.stats.reachable_cells, whole.stats.reachable_cells);
-
-        // And it is the right field: in the open middle (clear of the walls' inflation) the
-        // path distance is the octile one, 5 a straight step and 7 a diagonal one.
-        for (x, y) in [(100, 100), (20, 20), (180, 30), (100, 180), (37, 151)] {
-            let (dx, dy) = ((x - 100i32).abs(), (y - 100i32).abs());
-            let octile = STEP_DIAGONAL as i32 * dx.min(dy) + STEP_STRAIGHT as i32 * (dx.max(dy) - dx.min(dy));
-            assert_eq!(sliced.distance(x, y) as i32, octile, "at ({x}, {y})");
-        }
     }
 }
