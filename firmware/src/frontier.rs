@@ -285,15 +285,12 @@ mod tests {
     /// the grid's edges and the words' edges included.
     #[test]
     fn the_word_wise_scan_finds_exactly_the_frontier_cells() {
-        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rng = fixed_point::SplitMix64(1);
         for (free_pct, occupied_pct) in [(50, 10), (90, 5), (30, 30), (98, 1)] {
             let mut grid = Box::new(PackedGrid::new());
             for y in 0..GRID_CELLS as i32 {
                 for x in 0..GRID_CELLS as i32 {
-                    state ^= state << 13;
-                    state ^= state >> 7;
-                    state ^= state << 17;
-                    let r = (state % 100) as u32;
+                    let r = rng.below(100) as u32;
                     let c = if r < free_pct {
                         Cell::Free
                     } else if r < free_pct + occupied_pct {

@@ -411,20 +411,14 @@ mod tests {
     #[test]
     fn for_each_marked_visits_exactly_the_cells_a_full_pass_finds() {
         let mut prior = Box::new(PriorMap::new());
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut rng = fixed_point::SplitMix64(2);
         // A building of 300 × 200 cells from (40, 100) of the prior's window: rows of random
         // occupied and free runs, and a few stray cells elsewhere (at the window's edges too).
         prior.reset(Meters::ZERO, Meters::ZERO);
         for y in 100..300 {
             let (occ, free): (std::vec::Vec<u8>, std::vec::Vec<u8>) = (0..38)
                 .map(|_| {
-                    let r = next();
+                    let r = rng.next_u64();
                     let o = (r & (r >> 8) & (r >> 16)) as u8;
                     (o, (r >> 24) as u8 & !o)
                 })

@@ -423,15 +423,13 @@ mod tests {
     #[test]
     fn blocked_around_reads_exactly_the_nine_cells() {
         let mut p = Box::new(Planner::new());
-        let mut state = 0xD1B5_4A32_D192_ED03u64;
+        let mut rng = fixed_point::SplitMix64(3);
         // Half, a quarter and a sixty-fourth of the cells blocked: the last leaves many
         // neighbourhoods all clear.
         for (round, density) in [(0, 0), (1, 1), (2, 2)] {
             for w in p.blocked.words_mut() {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                let (a, b) = (state as u32, (state >> 32) as u32);
+                let r = rng.next_u64();
+                let (a, b) = (r as u32, (r >> 32) as u32);
                 *w = match density {
                     0 => a,
                     1 => a & b,
