@@ -198,11 +198,12 @@ pub const SEED_OCCUPIED: crate::grid::Evidence = crate::grid::EVIDENCE_HIT;
 impl PriorMap {
     /// Seeds the cells of `lidar` it has never observed with the prior: occupied ones with
     /// [`SEED_OCCUPIED`], free ones with [`SEED_FREE`] (unknown ones stay unknown). Cells the
-    /// LiDAR has already observed keep their evidence. Returns the cells visited.
+    /// LiDAR has already observed keep their evidence. Returns the work charged: the grid's
+    /// cells, the most it visits ([`PriorMap::for_each_marked`] passes over the unmarked runs).
     pub fn seed(&self, lidar: &mut LidarGrid) -> u32 {
         let geom = lidar.geom;
         self.for_each_marked(&geom, |x, y, px, py| {
-            let e = if self.occupied.get(px, py) { SEED_OCCUPIED } else { SEED_FREE };
+            let e = if self.occupied_cell(px, py) { SEED_OCCUPIED } else { SEED_FREE };
             lidar.seed(x, y, e);
         });
         (GRID_CELLS * GRID_CELLS) as u32
@@ -215,10 +216,10 @@ impl PriorMap {
     /// lattices differ by a translation), so the run's prior cells lie between those of its
     /// ends. (A run whose ends are out of order, as a coordinate wrapping past the fixed-point
     /// range would make them, is visited cell by cell.)
-    pub fn for_each_marked(&self, geom: &GridGeometry, mut f: impl FnMut(i32, i32, i32, i32)) {
+    pub(crate) fn for_each_marked(&self, geom: &GridGeometry, mut f: impl FnMut(i32, i32, i32, i32)) {
         const RUN: i32 = 32;
         let n = GRID_CELLS as i32;
-        let marked = |px: i32, py: i32| self.occupied.get(px, py) || self.free.get(px, py);
+        let marked = |px: i32, py: i32| self.occupied_cell(px, py) || self.free_cell(px, py);
         // The prior's column under each column (the same in every row): computed once, as
         // the 64-bit divisions of `cell_under` are dear on the Cortex-M.
         let mut columns = [0i32; GRID_CELLS];

@@ -57,7 +57,7 @@ impl SearchMap {
     }
 
     /// Recounts over the window at `geom` (a new prior, a new search, a moved window). Returns
-    /// the cells visited.
+    /// the work charged: the grid's cells, the most it visits.
     pub fn recount(&mut self, prior: &PriorMap, geom: &GridGeometry, visual: &VisualGrid) -> u32 {
         let (mut cells, mut unseen) = (0, 0);
         prior.for_each_marked(geom, |x, y, px, py| {
