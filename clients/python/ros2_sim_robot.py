@@ -47,6 +47,10 @@ Exit status: 0 when the run ended, every tick was answered, the maps and markers
 decoded, and the target was found; 1 when the run ended otherwise (or sim-serve failed); 3 on a
 discovery failure or a tick not answered within ``--timeout``.
 
+With ``--pace SPEEDUP`` it keeps the wall clock (each tick at least a period, 0.2 s, over SPEEDUP
+after the one before), as a robot in a team in real time does (docs/team.md); by default it runs
+as fast as `lives ros2` answers.
+
 Usage: ``ros2_sim_robot.py --lives target/release/lives [--hello FILE] [--publish-bad KIND]… --
 --world apartment --planner lives --seed 1``
 """
@@ -115,6 +119,10 @@ class Inbox:
                 return
             with self.cond:
                 for s in samples:
+                    # A writer that went away (an earlier `lives ros2` on this domain) comes as
+                    # an InvalidSample with no data: nothing to handle.
+                    if type(s).__name__ == "InvalidSample":
+                        continue
                     handle(s)
                 self.cond.notify_all()
 
@@ -361,6 +369,9 @@ def main():
     ap.add_argument("--bad-wait", type=float, default=5.0, help="seconds to wait for the rejections of --publish-bad")
     ap.add_argument("--maps-wait", type=float, default=5.0, help="seconds to wait at the end for maps and markers not yet seen")
     ap.add_argument("--hello", help="write sim-serve's hello line here")
+    ap.add_argument("--pace", type=float, default=0.0, metavar="SPEEDUP",
+                    help="keep the wall clock: each tick at least a period / SPEEDUP after the one before "
+                         "(a robot in a team in real time); default: as fast as answered")
     ap.add_argument("--detection-topic", choices=["detections", "target"], default="detections",
                     help="where the camera's sightings go: vision_msgs/Detection2DArray on `detections`, or "
                          "geometry_msgs/PointStamped on `target`")
@@ -401,6 +412,8 @@ def main():
             publish_bad(ros, args.publish_bad)
             inbox.wait(lambda: len(inbox.rejections) >= len(args.publish_bad), args.bad_wait)
 
+        last_sent = None
+        period_s = hello["hello"]["period_us"] / 1e6
         while True:
             line = child.stdout.readline()
             if not line:
@@ -410,7 +423,12 @@ def main():
                 summary["result"] = v["result"]
                 break
             stamp_ns = v["t_us"] * 1000
+            if args.pace and last_sent is not None:
+                # The simulated robot keeps the wall clock: a tick's period (over --pace) at
+                # least from the one before; time lost waiting for an answer is not made up.
+                time.sleep(max(0.0, last_sent + period_s / args.pace - time.monotonic()))
             sent = time.monotonic()
+            last_sent = sent
             sent_at[stamp_ns] = sent
             publish_tick(ros, v, args.detection_topic, args.scan_as_cloud)
             a = answer(inbox, stamp_ns, args.timeout)

@@ -236,3 +236,110 @@ fn bad_input_on_the_graph_is_rejected_by_name_and_the_search_goes_on() {
     assert_eq!(got, search_result(&args), "{robot}");
     assert_eq!(run["rejected"].as_object().unwrap().values().map(|v| v.as_u64().unwrap()).sum::<u64>(), 6, "{run}");
 }
+
+/// LIVE on a robot's ROS 2 graph (`lives ros2 --map`): the known map seeds the grid and labels
+/// the scans, and the coverage route is planned from where the first scan is placed. Not tick
+/// for tick `lives search --map`: `lives search` plans the route from the base's true pose, the
+/// robot from its laser's (0.1 m ahead on the simulated robot), so the routes may differ.
+#[test]
+fn live_with_a_known_map_searches_through_ros2() {
+    let dir = scratch("live-map");
+    let map = dir.join("apartment-hard.yaml");
+    let st = Command::new(common::lives()).args(["map", "export", "apartment", "--scenario", "hard"]).arg(&map).status().unwrap();
+    assert!(st.success());
+    let map = map.to_string_lossy().into_owned();
+    let args = ["--world", "apartment", "--scenario", "hard", "--seed", "1", "--planner", "live", "--map", map.as_str()];
+    let expected = search_result(&args);
+    assert_eq!(expected["found"], true, "{expected}");
+    let (robot, run) = simulated("live", 15, &args, "");
+    assert_eq!(robot["result"]["found"], true, "{robot}");
+    assert_eq!(robot["ticks"], run["ticks"], "{run}");
+    assert_eq!(run["rejected"], serde_json::json!({}), "{run}");
+    // The route came from the map: the robot's first goal is a route waypoint, which the
+    // controller sends before it has seen anything beyond its first scan.
+    assert!(run["goals"].as_array().unwrap().len() >= 2, "{run}");
+}
+
+/// A team of a robot on its ROS 2 graph (`lives ros2 --team-robot 0`, the simulated robot
+/// relayed over DDS) and a simulated robot process (`lives team --real-time --as-robot 1`), with
+/// their coordinator started on its own (`lives team --external`), all in real time: the
+/// coordinator shares the known map's route out between them, the target is found, every robot
+/// is stopped, and no goal ever came from an assignment older than the one its robot had heard
+/// named.
+#[test]
+fn a_robot_on_ros2_and_a_simulated_one_search_as_a_team_with_an_external_coordinator() {
+    let py = python();
+    let dir = scratch("team");
+    let _guard = common::hang_guard("a team over ROS 2", Duration::from_secs(600));
+    let map = dir.join("apartment-hard.yaml");
+    let st = Command::new(common::lives()).args(["map", "export", "apartment", "--scenario", "hard"]).arg(&map).status().unwrap();
+    assert!(st.success());
+    let world = format!("--world apartment --scenario hard --seed 1 --planner live --map {}", q(&map));
+    let sim_args: Vec<String> = ["--world", "apartment", "--scenario", "hard", "--seed", "1", "--planner", "live", "--map"]
+        .iter()
+        .map(|s| s.to_string())
+        .chain([map.to_string_lossy().into_owned()])
+        .collect();
+    let hello = Command::new(common::lives()).arg("sim-serve").args(&sim_args).stdin(std::process::Stdio::null()).output().unwrap();
+    let hello = json_line(String::from_utf8_lossy(&hello.stdout).lines().next().unwrap_or_default());
+    let ros2_args: Vec<String> =
+        hello["hello"]["lives_ros2_args"].as_array().unwrap().iter().map(|a| format!("'{}'", a.as_str().unwrap())).collect();
+    let origin = hello["hello"]["origin"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap().to_string()).collect::<Vec<_>>().join(",");
+    let (co, ce, lo, le, so, pe) = (
+        dir.join("coord.out"),
+        dir.join("coord.err"),
+        dir.join("lives.out"),
+        dir.join("lives.err"),
+        dir.join("sim.err"),
+        dir.join("peer.out"),
+    );
+    let bin = q(common::lives());
+    let script = format!(
+        "export ROS_DOMAIN_ID=16; \
+         {bin} team --external --robots 2 --origin={origin} --speedup 4 --link-timeout 20 {world} --json >{co} 2>{ce} & coord=$!; \
+         {bin} team --real-time --speedup 4 --robots 2 --as-robot 1 {world} 2>{so} & sim=$!; \
+         {bin} ros2 --localhost --lockstep --team-robot 0 {ros2} --json >{lo} 2>{le} & node=$!; \
+         {py} {relay} --lives {bin} --timeout 120 --pace 4 -- {sim_args} >{pe} 2>&1 & peer=$!; \
+         wait $coord; rc=$?; \
+         t=0; while kill -0 $node 2>/dev/null && [ $t -lt 100 ]; do sleep 0.2; t=$((t+1)); done; \
+         kill $node $peer $sim 2>/dev/null; wait; exit $rc",
+        co = q(&co),
+        ce = q(&ce),
+        so = q(&so),
+        lo = q(&lo),
+        le = q(&le),
+        pe = q(&pe),
+        ros2 = ros2_args.join(" "),
+        relay = q(&common::root().join("clients/python/ros2_sim_robot.py")),
+        sim_args = sim_args.iter().map(|a| format!("'{a}'")).collect::<Vec<_>>().join(" "),
+    );
+    let st = Command::new(common::root().join("tests/ros2/netns.sh")).arg(&script).status().expect("netns.sh runs");
+    let read = |p: &std::path::Path| std::fs::read_to_string(p).unwrap_or_default();
+    let all = || {
+        format!(
+            "coordinator: {}\n{}\nlives ros2: {}\n{}\nsimulated robot: {}\nrelay: {}",
+            read(&co),
+            read(&ce),
+            read(&lo),
+            read(&le),
+            read(&so),
+            read(&pe)
+        )
+    };
+    assert_eq!(st.code(), Some(0), "{}", all());
+    let v: Value = serde_json::from_str(&read(&co)).unwrap_or_else(|e| panic!("{e}: {}", all()));
+    assert_eq!(v["transport"], "dds-realtime");
+    assert_eq!(v["map"], "known-map");
+    assert_eq!(v["found"], true, "{}", all());
+    assert_eq!(v["stale_goals"], 0, "{}", all());
+    for i in 0..2 {
+        let r = &v["per_robot"][i];
+        assert!(r["waypoints_assigned"].as_u64().unwrap() > 0, "robot {i}: {}", all());
+        assert!(r["bytes_up"].as_u64().unwrap() > 0 && r["bytes_down"].as_u64().unwrap() > 0, "robot {i}: {}", all());
+        assert!(r.get("lost_s").is_none(), "robot {i} lost: {}", all());
+    }
+    // The robot on ROS 2 ended with the team: it found the target, or was told to stop.
+    let node = json_line(&read(&lo));
+    assert!(node["end"] == "found" || node["end"] == "stopped", "{}", all());
+    assert!(node["ticks"].as_u64().unwrap() > 0, "{}", all());
+}

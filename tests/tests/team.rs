@@ -181,3 +181,32 @@ fn lives_search_robots_runs_the_team_with_the_map_file() {
     assert_eq!((v["robots"].as_u64(), v["time_s"].as_f64(), v["found"].as_bool()), (Some(2), Some(local.time_s), Some(local.found)), "{v}");
     assert_eq!(v["map"], "known-map");
 }
+
+/// The same team in real time (`--real-time`): no lockstep, each process on its own clock
+/// (4 simulated seconds a wall second). The cut robot is found silent and its work shared out,
+/// the team finds the target, and no goal came from an assignment older than the one its robot
+/// had heard named.
+#[test]
+fn the_team_in_real_time_survives_a_cut_link_and_finds_the_target() {
+    let args = "--world hallway --scenario hard --seed 2 --planner live --known-map --robots 3 --kill 1@10 --link-timeout 2 \
+                --processes --real-time --speedup 4 --domain 23 --json";
+    let (v, err, rc) = lives_team(args);
+    let v = v.unwrap_or_else(|| panic!("no JSON from lives team --real-time (exit {rc}): {err}"));
+    assert_eq!(v["transport"], "dds-realtime");
+    assert_eq!(v["found"], true, "{v}");
+    assert_eq!(v["stale_goals"], 0, "{v}");
+    // Lost once it had been silent for the link timeout: 2 s of wall time, 8 s of the team's.
+    let lost = v["per_robot"][1]["lost_s"].as_f64().unwrap_or_else(|| panic!("robot 1 not lost: {v}"));
+    assert!((10.0..=40.0).contains(&lost), "{v}");
+    assert!(v["reassignments"].as_u64().unwrap() >= 2, "the two survivors get the rest: {v}");
+    for i in 0..3 {
+        assert!(v["per_robot"][i]["bytes_up"].as_u64().unwrap() > 0 && v["per_robot"][i]["bytes_down"].as_u64().unwrap() > 0);
+    }
+    // --real-time runs over DDS only; --speedup only with it.
+    let (_, err, rc) = lives_team("--world hallway --robots 2 --real-time");
+    assert!(rc == 2 && err.contains("--processes"), "{rc} {err}");
+    let (_, err, rc) = lives_team("--world hallway --robots 2 --processes --real-time --speedup 0");
+    assert!(rc == 2 && err.contains("--speedup 0"), "{rc} {err}");
+    let (_, err, rc) = lives_team("--world hallway --robots 2 --external");
+    assert!(rc == 2 && err.contains("--origin"), "{rc} {err}");
+}

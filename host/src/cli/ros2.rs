@@ -46,6 +46,21 @@ pub struct Ros2Args {
     /// Stop when no scan has arrived for this many seconds (or none since the start).
     #[arg(long, value_name = "S")]
     max_idle: Option<f64>,
+    /// LIVE's known-map mode: the building's map (ROS map_server `.yaml`, in the frame the scans
+    /// are placed in: `map` when the robot localises in it). It seeds the grid and labels the
+    /// scans; `live`, `visual-cpp` and `lidar-cpp` follow a coverage route planned from where
+    /// the first scan was placed (in a team, the one the coordinator assigns).
+    #[arg(long, value_name = "FILE.yaml")]
+    map: Option<PathBuf>,
+    /// Join a team in real time as robot I (0 to N-1): its coordinator (`lives team --external
+    /// --robots N`) runs elsewhere on this DDS domain, shares out the route, merges what the
+    /// robots saw and stops everyone on a find (docs/team.md). Needs --origin, the same on every
+    /// robot and the coordinator, in the frame the robots share.
+    #[arg(long, value_name = "I")]
+    team_robot: Option<usize>,
+    /// In a team: the coordinator counts this robot lost after this many seconds of silence.
+    #[arg(long, value_name = "S", default_value_t = 10.0)]
+    link_timeout: f64,
     /// Keep DDS on the loopback interface (as `ROS_LOCALHOST_ONLY=1`).
     #[arg(long)]
     localhost: bool,
@@ -55,7 +70,22 @@ pub struct Ros2Args {
 }
 
 pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
-    let Ros2Args { planner, set, model, origin, remap, lockstep, continuous, max_wall, max_idle, localhost, json } = args;
+    let Ros2Args {
+        planner,
+        set,
+        model,
+        origin,
+        remap,
+        lockstep,
+        continuous,
+        max_wall,
+        max_idle,
+        map,
+        team_robot,
+        link_timeout,
+        localhost,
+        json,
+    } = args;
     if planner == PlannerChoice::LivesGt {
         return Err("`lives-gt` runs on the simulator's ground-truth labels, which do not travel over ROS; use `lives`".into());
     }
@@ -85,7 +115,20 @@ pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
     for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         signal_hook::flag::register(sig, stop.clone()).map_err(|e| format!("cannot handle signal {sig}: {e}"))?;
     }
-    let run = ros2::run(opts, cfg, origin, blob, stop).map_err(|e| e.to_string())?;
+    if planner.kind().is_coverage() && map.is_none() {
+        return Err(format!("`{planner}` searches a known building: give its map with --map FILE.yaml"));
+    }
+    if team_robot.is_some() && continuous {
+        return Err("--continuous and --team-robot: a team robot searches until its coordinator says stop".into());
+    }
+    if team_robot.is_some_and(|i| i >= host::team::MAX_ROBOTS) {
+        return Err(format!("--team-robot {}: a team has robots 0 to {}", team_robot.unwrap_or(0), host::team::MAX_ROBOTS - 1));
+    }
+    let link_timeout = positive_secs("--link-timeout", link_timeout)?;
+    let map = map.as_deref().map(host::io::map_file::PriorMap::load).transpose().map_err(|e| e.to_string())?;
+    let team = team_robot.map(|id| ros2::TeamSeat { id, link_timeout });
+    let brain = ros2::Ros2Brain { origin, model: blob, map, team };
+    let run = ros2::run(opts, cfg, brain, stop).map_err(|e| e.to_string())?;
     let lat = host::link::Summary::of(&run.answer_us);
     if json {
         say!(

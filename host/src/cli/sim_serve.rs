@@ -39,11 +39,15 @@ pub fn run(args: SimServeArgs) -> Result<ExitCode, String> {
             spec.planner
         ));
     }
-    let (args, origin) = lives_ros2_args(&spec)?;
+    let (mut ros2_args, origin) = lives_ros2_args(&spec)?;
+    if let Some(map) = &args.run.map {
+        // LIVE's known map: `lives ros2` loads the same file, placed at the same origin.
+        ros2_args.extend(["--map".to_string(), map.display().to_string()]);
+    }
     let hello = json!({"hello": {
         "world": spec.world_name, "scenario": spec.scenario_label(), "seed": spec.seed, "planner": spec.planner.to_string(),
         "period_us": TICK_US, "origin": origin, "range_invalid": RANGE_INVALID, "range_no_return": RANGE_NO_RETURN,
-        "lives_ros2_args": args,
+        "lives_ros2_args": ros2_args,
     }});
     let mut brain = StdioBrain { input: std::io::stdin().lock(), output: std::io::stdout().lock(), ticks: 0, goals: 0, blacklisted: 0 };
     brain.line(&hello)?;

@@ -41,6 +41,26 @@ pub struct TeamArgs {
     /// (--processes).
     #[arg(long, default_value_t = 10.0)]
     link_timeout: f64,
+    /// With --processes: no lockstep. The coordinator and every robot keep their own clock
+    /// (docs/team.md, "In real time"): a round of the coordinator and a tick of a robot take
+    /// 0.2 s of wall time divided by --speedup.
+    #[arg(long)]
+    real_time: bool,
+    /// With --real-time: simulated seconds per wall second (e.g. 4: a 0.2 s tick every 50 ms).
+    #[arg(long, default_value_t = 1.0)]
+    speedup: f64,
+    /// Coordinate robots started elsewhere, in real time: real robots running `lives ros2
+    /// --team-robot I --team-size N` (or simulated ones, `lives team --real-time --as-robot I`)
+    /// on this DDS domain. The world, planner and map say what the coordinator plans on.
+    #[arg(long)]
+    external: bool,
+    /// With --external: the grid's lower-left corner `X,Y` every robot was given (`lives ros2
+    /// --origin`), in the frame the robots share.
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true)]
+    origin: Option<String>,
+    /// With --external: end the search after this many seconds (default: the world's limit).
+    #[arg(long, value_name = "S")]
+    time_limit: Option<f64>,
     /// Run as robot I of a team over DDS (what --processes starts; not for direct use).
     #[arg(long, hide = true)]
     as_robot: Option<usize>,
@@ -71,6 +91,20 @@ pub fn run(args: TeamArgs) -> Result<ExitCode, String> {
     // Checked whether or not the run goes over DDS: a bad value is never silently ignored.
     if !args.link_timeout.is_finite() || args.link_timeout <= 0.0 {
         return Err(format!("--link-timeout {}: a time > 0 s", args.link_timeout));
+    }
+    if !args.speedup.is_finite() || args.speedup <= 0.0 || args.speedup > 100.0 {
+        return Err(format!("--speedup {}: a factor in (0, 100]", args.speedup));
+    }
+    if (args.speedup != 1.0 && !(args.real_time || args.external)) || (args.real_time && !(args.processes || args.as_robot.is_some())) {
+        return Err(
+            "--real-time (and --speedup) run a team of processes over DDS: add --processes (or --external, always in real time)".into()
+        );
+    }
+    if args.external {
+        return external(&args);
+    }
+    if args.origin.is_some() || args.time_limit.is_some() {
+        return Err("--origin and --time-limit are for --external (robots started elsewhere)".into());
     }
     // `--known-map` stands for `--map`: load as a search without one, then give the true map.
     let mut spec = if args.known_map && args.run.map.is_none() {
@@ -107,6 +141,66 @@ pub fn run(args: TeamArgs) -> Result<ExitCode, String> {
     Ok(if result.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
 
+/// `--external`: the coordinator of robots started elsewhere.
+fn external(args: &TeamArgs) -> Result<ExitCode, String> {
+    if args.known_map || args.processes || args.kill.is_some() || args.as_robot.is_some() {
+        return Err("--external coordinates robots started elsewhere: not with --known-map, --processes, --kill or --as-robot".into());
+    }
+    let origin = args.origin.as_deref().map(host::link::robot::parse_origin).transpose()?.ok_or(
+        "--external: give the grid's origin with --origin X,Y, the one every robot was given (`lives ros2 --team-robot I --origin X,Y`)",
+    )?;
+    let map = args.run.map.as_deref().map(host::io::map_file::PriorMap::load).transpose().map_err(|e| e.to_string())?;
+    // The planner and the controller's settings as for a search, without the map (it is the
+    // robots' frame's, placed at --origin below).
+    let mut spec = load_spec(&RunArgs { planner: host::search::PlannerChoice::Lives, map: None, ..args.run.clone() })?;
+    spec.planner = args.run.planner;
+    spec.controller = spec.controller.with_planner(spec.planner.kind());
+    args.robot.configure(&mut spec)?;
+    spec.world_name = "external".into();
+    spec.scenario = None;
+    if let Some(t) = args.time_limit {
+        if !t.is_finite() || t <= 0.0 {
+            return Err(format!("--time-limit {t}: a time > 0 s"));
+        }
+        spec.world.time_limit_s = t;
+    }
+    let sim_for = args.sim_for.iter().map(|s| parse_sim_for(s)).collect::<Result<Vec<_>, _>>()?;
+    let tspec = TeamSpec { sim_for, ..TeamSpec::new(spec, args.robots) };
+    let result = coordinate_external(args, &tspec, origin, map.as_ref())?;
+    if args.json {
+        say!("{}", serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?);
+    } else {
+        say!("{}", result.summary());
+    }
+    Ok(if result.found { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+#[cfg(feature = "ros2")]
+fn coordinate_external(
+    args: &TeamArgs,
+    spec: &TeamSpec,
+    origin: [f64; 2],
+    map: Option<&host::io::map_file::PriorMap>,
+) -> Result<TeamResult, String> {
+    let opts = host::link::ros2::Ros2Options::from_env()?;
+    let dds = team::dds::DdsOptions {
+        domain: args.domain.unwrap_or(opts.domain),
+        localhost_only: opts.localhost_only,
+        link_timeout: std::time::Duration::from_secs_f64(args.link_timeout),
+    };
+    team::realtime::coordinate_external(spec, origin, map, &team::realtime::RealtimeOptions { dds, speedup: args.speedup })
+}
+
+#[cfg(not(feature = "ros2"))]
+fn coordinate_external(
+    _args: &TeamArgs,
+    _spec: &TeamSpec,
+    _origin: [f64; 2],
+    _map: Option<&host::io::map_file::PriorMap>,
+) -> Result<TeamResult, String> {
+    Err("--external talks over DDS: build with `--features ros2`".into())
+}
+
 #[cfg(feature = "ros2")]
 fn over_dds(args: &TeamArgs, spec: &TeamSpec) -> Result<Option<TeamResult>, String> {
     let domain = match args.domain {
@@ -114,8 +208,13 @@ fn over_dds(args: &TeamArgs, spec: &TeamSpec) -> Result<Option<TeamResult>, Stri
         None => host::link::ros2::Ros2Options::from_env()?.domain,
     };
     let opts = team::dds::DdsOptions { domain, localhost_only: true, link_timeout: std::time::Duration::from_secs_f64(args.link_timeout) };
+    let realtime = team::realtime::RealtimeOptions { dds: opts.clone(), speedup: args.speedup };
     if let Some(i) = args.as_robot {
-        team::dds::robot(spec, i, &opts)?;
+        if args.real_time {
+            team::realtime::sim_robot(spec, i, &realtime)?;
+        } else {
+            team::dds::robot(spec, i, &opts)?;
+        }
         return Ok(None);
     }
     // Each robot runs this command again as robot I, minus what only the coordinator does.
@@ -141,7 +240,11 @@ fn over_dds(args: &TeamArgs, spec: &TeamSpec) -> Result<Option<TeamResult>, Stri
         v.extend(["--domain".to_string(), domain.to_string(), "--as-robot".to_string(), i.to_string()]);
         v
     };
-    team::dds::run(spec, &opts, robot_args).map(Some)
+    if args.real_time {
+        team::realtime::run(spec, &realtime, robot_args).map(Some)
+    } else {
+        team::dds::run(spec, &opts, robot_args).map(Some)
+    }
 }
 
 #[cfg(not(feature = "ros2"))]

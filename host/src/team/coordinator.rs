@@ -47,6 +47,11 @@ pub struct Coordinator {
     reshares: u32,
     stale_goals: u32,
     entropy_start: Option<u32>,
+    /// Real time ([`Coordinator::realtime`]): for each robot, the rounds at which its epochs were
+    /// first named, `(round, epoch)` in order.
+    named: Option<Vec<Vec<(u32, u32)>>>,
+    /// The round whose order names the next assignments.
+    next_round: u32,
 }
 
 impl Coordinator {
@@ -81,6 +86,27 @@ impl Coordinator {
             reshares: 0,
             stale_goals: 0,
             entropy_start: None,
+            named: None,
+            next_round: 0,
+        }
+    }
+
+    /// The coordinator of a team in real time ([`super::realtime`]): statuses come when they
+    /// come, and a robot reports with `tick` the newest order it had taken. A status that lags
+    /// behind an assignment the robot has not heard of yet is not stale; a goal from an
+    /// assignment older than the one the robot had heard named is ([`Coordinator::note_stale`]).
+    pub fn realtime(self) -> Self {
+        let n = self.n();
+        Coordinator { named: Some(vec![Vec::new(); n]), ..self }
+    }
+
+    /// Real time: counts `s` (robot `i`'s) if its goal comes from an assignment older than the
+    /// one named in the order it had taken (`s.tick`).
+    pub fn note_stale(&mut self, i: usize, s: &Status) {
+        let (Some(named), Some(round), Some(goal)) = (&self.named, s.tick, s.goal_epoch) else { return };
+        let current = named.get(i).and_then(|h| h.iter().rev().find(|(r, _)| *r <= round)).map_or(0, |&(_, e)| e);
+        if goal < current {
+            self.stale_goals += 1;
         }
     }
 
@@ -131,6 +157,9 @@ impl Coordinator {
         for (&r, route) in robots.iter().zip(routes) {
             let wps: Vec<Waypoint> = route.waypoints.into_iter().take(firmware::capacity::MAX_ROUTE_WAYPOINTS).collect();
             self.epochs[r] += 1;
+            if let Some(h) = self.named.as_mut().and_then(|n| n.get_mut(r)) {
+                h.push((self.next_round, self.epochs[r]));
+            }
             self.reports[r].waypoints_assigned += wps.len();
             self.done_now[r] = vec![false; wps.len()];
             out.push(Assignment { robot: r as u32, epoch: self.epochs[r], waypoints: wps.iter().map(|w| [w.x, w.y, w.heading]).collect() });
@@ -163,6 +192,7 @@ impl Coordinator {
     /// lost) and decides.
     pub fn after_tick(&mut self, tick: u32, statuses: &[Option<Status>]) -> Result<Decision, String> {
         self.last_tick = tick;
+        self.next_round = tick + 1;
         self.relay.clear();
         self.relay_lidar.clear();
         let mut lost_now = Vec::new();
@@ -178,10 +208,13 @@ impl Coordinator {
             if !self.alive[i] {
                 continue;
             }
-            if s.goal_epoch.is_some_and(|e| e != self.epochs[i]) || s.epoch != self.epochs[i] {
+            if self.named.is_none() && (s.goal_epoch.is_some_and(|e| e != self.epochs[i]) || s.epoch != self.epochs[i]) {
                 self.stale_goals += 1;
             }
-            for &d in &s.done {
+            // Waypoints done are indices into the assignment the status follows: one the robot
+            // has not taken yet (real time) says nothing about the newest.
+            let done: &[u16] = if s.epoch == self.epochs[i] { &s.done } else { &[] };
+            for &d in done {
                 let d = d as usize;
                 if d < self.routes[i].len() && !self.done_now[i][d] {
                     self.done_now[i][d] = true;
@@ -342,6 +375,40 @@ mod tests {
         let (f0, f1) = (length(&fast[0], [15.0, 3.0]), length(&fast[1], [15.5, 3.0]));
         assert!(f1 > f0 && f1 / f0 > s1 / s0, "equal speeds {s0:.1} / {s1:.1} m, robot 1 three times faster {f0:.1} / {f1:.1} m");
         assert!(fast.iter().all(|a| !a.waypoints.is_empty()), "both robots have a share");
+    }
+
+    /// In real time a status may lag behind a new assignment the robot has not heard of: not
+    /// stale. A goal from an assignment older than the one named in the round the robot had
+    /// taken is; and waypoints reported done against a replaced assignment are not credited.
+    #[test]
+    fn in_real_time_only_a_goal_older_than_what_the_robot_had_heard_named_is_stale() {
+        let cfg = camera_route_cfg();
+        let (a, b) = ([2.0, 3.0], [28.0, 3.0]);
+        let mut c = Coordinator::new(cfg, Some(corridor()), vec![0.5, 0.5], 0.2, 100.0).realtime();
+        let first = c.start(&[status(0, None, a, 0, vec![]), status(1, None, b, 0, vec![])]).unwrap();
+        let n0 = first[0].waypoints.len();
+        let with_goal = |robot, round, epoch, goal_epoch, done| Status { goal_epoch, ..status(robot, Some(round), a, epoch, done) };
+        // Round 0 names epoch 1 for both.
+        c.note_stale(0, &with_goal(0, 0, 1, Some(1), vec![]));
+        assert_eq!(c.stale_goals, 0);
+        // Robot 0 finishes its share in round 3: epoch 2 is planned, named from round 4 on.
+        let all0: Vec<u16> = (0..n0 as u16).collect();
+        let d = c.after_tick(3, &[Some(with_goal(0, 3, 1, Some(1), all0.clone())), Some(status(1, Some(3), b, 1, vec![]))]).unwrap();
+        assert!(d.assignments.iter().all(|x| x.epoch == 2), "{d:?}");
+        let done_before = c.reports[0].waypoints_done;
+        // Robot 0 still on epoch 1 in round 3 (it has not taken round 4): lagging, not stale;
+        // its epoch-1 waypoints are not credited to epoch 2.
+        let lag = with_goal(0, 3, 1, Some(1), vec![0]);
+        c.note_stale(0, &lag);
+        c.after_tick(4, &[Some(lag), Some(status(1, Some(4), b, 2, vec![]))]).unwrap();
+        assert_eq!((c.stale_goals, c.reports[0].waypoints_done), (0, done_before));
+        // It has taken round 4, which named epoch 2, yet its goal is from epoch 1: stale.
+        c.note_stale(0, &with_goal(0, 4, 1, Some(1), vec![]));
+        assert_eq!(c.stale_goals, 1);
+        // Holding the named epoch with its goal from it, or with no goal: not stale.
+        c.note_stale(0, &with_goal(0, 5, 2, Some(2), vec![]));
+        c.note_stale(0, &with_goal(0, 5, 1, None, vec![]));
+        assert_eq!(c.stale_goals, 1);
     }
 
     #[test]

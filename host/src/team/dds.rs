@@ -14,7 +14,7 @@
 
 use super::coordinator::Coordinator;
 use super::robot::TeamRobot;
-use super::{codec, starts, Status, TeamResult, TeamSpec};
+use super::{codec, Status, TeamResult, TeamSpec};
 use crate::link::ros2::wire::{dds_topic, dds_type, Qos, Raw, RawCdr};
 use rustdds::no_key::{DataReader, DataWriter};
 use rustdds::{DomainParticipant, DomainParticipantBuilder, TopicKind};
@@ -40,14 +40,14 @@ pub struct DdsOptions {
     pub link_timeout: Duration,
 }
 
-struct Bus {
+pub(super) struct Bus {
     dp: DomainParticipant,
     publisher: rustdds::Publisher,
     subscriber: rustdds::Subscriber,
 }
 
 impl Bus {
-    fn join(o: &DdsOptions) -> Result<Bus, String> {
+    pub(super) fn join(o: &DdsOptions) -> Result<Bus, String> {
         let mut b = DomainParticipantBuilder::new(o.domain);
         if o.localhost_only {
             b = b.with_only_networks([IpAddr::V4(Ipv4Addr::LOCALHOST)]);
@@ -62,22 +62,22 @@ impl Bus {
         self.dp.create_topic(dds_topic(name), dds_type(ty), &qos.policies(), TopicKind::NoKey).map_err(|e| format!("topic {name}: {e:?}"))
     }
 
-    fn writer(&self, name: &str, ty: &str, qos: Qos) -> Result<DataWriter<Raw, RawCdr>, String> {
+    pub(super) fn writer(&self, name: &str, ty: &str, qos: Qos) -> Result<DataWriter<Raw, RawCdr>, String> {
         let t = self.topic(name, ty, qos)?;
         self.publisher.create_datawriter_no_key::<Raw, RawCdr>(&t, Some(qos.policies())).map_err(|e| format!("writer {name}: {e:?}"))
     }
 
-    fn reader(&self, name: &str, ty: &str, qos: Qos) -> Result<DataReader<Raw, RawCdr>, String> {
+    pub(super) fn reader(&self, name: &str, ty: &str, qos: Qos) -> Result<DataReader<Raw, RawCdr>, String> {
         let t = self.topic(name, ty, qos)?;
         self.subscriber.create_datareader_no_key::<Raw, RawCdr>(&t, Some(qos.policies())).map_err(|e| format!("reader {name}: {e:?}"))
     }
 }
 
-fn status_topic(i: usize) -> String {
+pub(super) fn status_topic(i: usize) -> String {
     format!("team/robot_{i}/status")
 }
 
-fn assignment_topic(i: usize) -> String {
+pub(super) fn assignment_topic(i: usize) -> String {
     format!("team/robot_{i}/assignment")
 }
 
@@ -85,7 +85,7 @@ const TICK_TOPIC: &str = "team/tick";
 const STATUS_QOS: Qos = Qos::Reliable(64);
 
 /// Every sample a reader holds, as bytes (a sample DDS could not hand over is skipped).
-fn take(r: &mut DataReader<Raw, RawCdr>) -> Vec<Vec<u8>> {
+pub(super) fn take(r: &mut DataReader<Raw, RawCdr>) -> Vec<Vec<u8>> {
     let mut out = Vec::new();
     while let Ok(Some(s)) = r.take_next_sample() {
         out.push(s.into_value().0);
@@ -93,7 +93,7 @@ fn take(r: &mut DataReader<Raw, RawCdr>) -> Vec<Vec<u8>> {
     out
 }
 
-fn send(w: &DataWriter<Raw, RawCdr>, bytes: &[u8], what: &str) -> Result<u64, String> {
+pub(super) fn send(w: &DataWriter<Raw, RawCdr>, bytes: &[u8], what: &str) -> Result<u64, String> {
     w.write(Raw(bytes.to_vec()), None).map_err(|e| format!("publishing {what}: {e:?}"))?;
     Ok(bytes.len() as u64)
 }
@@ -101,7 +101,7 @@ fn send(w: &DataWriter<Raw, RawCdr>, bytes: &[u8], what: &str) -> Result<u64, St
 /// The coordinator's side: spawns the robots (`robot_args(i)` are robot `i`'s arguments to
 /// this program), runs the search, stops and reaps them.
 pub fn run(spec: &TeamSpec, opts: &DdsOptions, robot_args: impl Fn(usize) -> Vec<String>) -> Result<TeamResult, String> {
-    super::local::check(spec)?;
+    spec.check()?;
     let bus = Bus::join(opts)?;
     let tick_w = bus.writer(TICK_TOPIC, codec::TICK_TYPE, Qos::Latched)?;
     let mut assign_w = Vec::new();
@@ -110,9 +110,17 @@ pub fn run(spec: &TeamSpec, opts: &DdsOptions, robot_args: impl Fn(usize) -> Vec
         assign_w.push(bus.writer(&assignment_topic(i), codec::ASSIGNMENT_TYPE, Qos::Latched)?);
         status_r.push(bus.reader(&status_topic(i), codec::STATUS_TYPE, STATUS_QOS)?);
     }
+    let mut children = spawn(spec.robots, robot_args)?;
+    let out = coordinate(spec, opts, &tick_w, &assign_w, &mut status_r, &mut children);
+    stop_and_reap(&tick_w, &mut children);
+    out
+}
+
+/// Starts robot processes `0..n`, robot `i` as this program with arguments `robot_args(i)`.
+pub(super) fn spawn(n: usize, robot_args: impl Fn(usize) -> Vec<String>) -> Result<Vec<Option<Child>>, String> {
     let exe = std::env::current_exe().map_err(|e| format!("cannot find this program to start the robots: {e}"))?;
     let mut children: Vec<Option<Child>> = Vec::new();
-    for i in 0..spec.robots {
+    for i in 0..n {
         let child = Command::new(&exe)
             .args(robot_args(i))
             .stdin(Stdio::null())
@@ -121,8 +129,15 @@ pub fn run(spec: &TeamSpec, opts: &DdsOptions, robot_args: impl Fn(usize) -> Vec
             .map_err(|e| format!("cannot start robot {i}: {e}"))?;
         children.push(Some(child));
     }
-    let out = coordinate(spec, opts, &tick_w, &assign_w, &mut status_r, &mut children);
-    // Stop and reap every robot, whatever happened.
+    Ok(children)
+}
+
+/// Tells every robot to stop (on `orders`, the topic the robots take their orders from), then
+/// reaps the robot processes: those still running after 5 s are killed. The stop is sent again
+/// every [`RESEND`] meanwhile; with no processes of its own to wait for (robots started
+/// elsewhere) it lingers [`STOP_LINGER`], so that the stop reaches robots before this
+/// participant leaves.
+pub(super) fn stop_and_reap(orders: &DataWriter<Raw, RawCdr>, children: &mut [Option<Child>]) {
     let stop = codec::encode_tick(&super::TickMsg {
         tick: u32::MAX,
         stop: true,
@@ -132,17 +147,29 @@ pub fn run(spec: &TeamSpec, opts: &DdsOptions, robot_args: impl Fn(usize) -> Vec
         seen: Vec::new(),
         lidar: Vec::new(),
     });
-    let _ = send(&tick_w, &stop, "the stop");
-    let deadline = Instant::now() + Duration::from_secs(5);
-    for c in children.iter_mut().flatten() {
-        while Instant::now() < deadline && matches!(c.try_wait(), Ok(None)) {
-            std::thread::sleep(Duration::from_millis(20));
+    let started = Instant::now();
+    let deadline = started + Duration::from_secs(5);
+    let mut sent: Option<Instant> = None;
+    loop {
+        if sent.is_none_or(|t| t.elapsed() >= RESEND) {
+            let _ = send(orders, &stop, "the stop");
+            sent = Some(Instant::now());
         }
+        let running = children.iter_mut().flatten().any(|c| matches!(c.try_wait(), Ok(None)));
+        let lingering = children.is_empty() && started.elapsed() < STOP_LINGER;
+        if !(running || lingering) || Instant::now() >= deadline {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    for c in children.iter_mut().flatten() {
         let _ = c.kill();
         let _ = c.wait();
     }
-    out
 }
+
+/// How long a coordinator of robots started elsewhere keeps sending its stop.
+pub const STOP_LINGER: Duration = Duration::from_secs(2);
 
 fn coordinate(
     spec: &TeamSpec,
@@ -153,52 +180,8 @@ fn coordinate(
     children: &mut [Option<Child>],
 ) -> Result<TeamResult, String> {
     let n = spec.robots;
-    let mut bytes = vec![[0u64; 2]; n];
-    let mut instance: Vec<Option<u32>> = vec![None; n];
-    // One status a robot and tick, whoever sent it: a second process for one robot is an error.
-    let mut read = |i: usize, r: &mut DataReader<Raw, RawCdr>, bytes: &mut [[u64; 2]]| -> Result<Vec<Status>, String> {
-        let mut got = Vec::new();
-        for b in take(r) {
-            bytes[i][0] += b.len() as u64;
-            let s = codec::decode_status(&b).map_err(|e| format!("robot {i}'s status: {e}"))?;
-            if s.robot as usize != i {
-                return Err(format!("robot {} reports on robot {i}'s topic", s.robot));
-            }
-            match instance[i] {
-                None => instance[i] = Some(s.instance),
-                Some(p) if p != s.instance => {
-                    return Err(format!("robot {i} is announced twice: by process {p} and by process {}", s.instance))
-                }
-                _ => {}
-            }
-            got.push(s);
-        }
-        Ok(got)
-    };
-
-    // Everyone announces itself.
-    let mut hellos: Vec<Option<Status>> = vec![None; n];
-    let t0 = Instant::now();
-    while hellos.iter().any(Option::is_none) {
-        for (i, r) in status_r.iter_mut().enumerate() {
-            for s in read(i, r, &mut bytes)? {
-                if s.tick.is_none() {
-                    hellos[i] = Some(s);
-                }
-            }
-        }
-        for (i, c) in children.iter_mut().enumerate() {
-            if let Some(Ok(Some(code))) = c.as_mut().map(Child::try_wait) {
-                return Err(format!("robot {i} exited before it joined ({code})"));
-            }
-        }
-        if t0.elapsed() > JOIN_TIMEOUT {
-            let missing: Vec<String> = (0..n).filter(|&i| hellos[i].is_none()).map(|i| i.to_string()).collect();
-            return Err(format!("robots {} did not join within {} s", missing.join(", "), JOIN_TIMEOUT.as_secs()));
-        }
-        std::thread::sleep(Duration::from_millis(2));
-    }
-    let hellos: Vec<Status> = hellos.into_iter().flatten().collect();
+    let mut inbox = Inbox::new(status_r);
+    let hellos = inbox.join(children)?;
     let mut coord = super::local::coordinator(spec)?;
     let mut pending = coord.start(&hellos)?;
     let tick_s = crate::run::TICK_US as f64 / 1e6;
@@ -215,7 +198,7 @@ fn coordinate(
         }
         for a in pending.drain(..) {
             let i = a.robot as usize;
-            bytes[i][1] += send(&assign_w[i], &codec::encode_assignment(&a), "an assignment")?;
+            inbox.bytes[i][1] += send(&assign_w[i], &codec::encode_assignment(&a), "an assignment")?;
         }
         let order = codec::encode_tick(&coord.tick_msg(tick, false));
         let mut statuses: Vec<Option<Status>> = vec![None; n];
@@ -226,17 +209,17 @@ fn coordinate(
         while waiting(&statuses, &coord) > 0 && started.elapsed() < opts.link_timeout {
             if last_sent.is_none_or(|t| t.elapsed() >= RESEND) {
                 let b = send(tick_w, &order, "a tick")?;
-                for (i, c) in bytes.iter_mut().enumerate() {
+                for (i, c) in inbox.bytes.iter_mut().enumerate() {
                     if coord.alive(i) {
                         c[1] += b;
                     }
                 }
                 last_sent = Some(Instant::now());
             }
-            for (i, r) in status_r.iter_mut().enumerate() {
-                for s in read(i, r, &mut bytes)? {
+            for (i, slot) in statuses.iter_mut().enumerate() {
+                for s in inbox.read(i)? {
                     if s.tick == Some(tick) && coord.alive(i) {
-                        statuses[i] = Some(s);
+                        *slot = Some(s);
                     }
                 }
             }
@@ -249,18 +232,78 @@ fn coordinate(
         }
         tick += 1;
     }
-    Ok(coord.result(spec, "dds", &bytes))
+    Ok(coord.result(spec, "dds", &inbox.bytes))
+}
+
+/// The coordinator's side of the robots' status topics: every status read is decoded, checked
+/// to be from the robot whose topic it came on and from one process only, and counted.
+pub(super) struct Inbox<'a> {
+    readers: &'a mut [DataReader<Raw, RawCdr>],
+    instance: Vec<Option<u32>>,
+    /// Payload bytes per robot: `[received from it, sent to it]`.
+    pub bytes: Vec<[u64; 2]>,
+}
+
+impl<'a> Inbox<'a> {
+    pub(super) fn new(readers: &'a mut [DataReader<Raw, RawCdr>]) -> Self {
+        let n = readers.len();
+        Inbox { readers, instance: vec![None; n], bytes: vec![[0; 2]; n] }
+    }
+
+    /// Every status robot `i` has sent since the last call, in order.
+    pub(super) fn read(&mut self, i: usize) -> Result<Vec<Status>, String> {
+        let mut got = Vec::new();
+        for b in take(&mut self.readers[i]) {
+            self.bytes[i][0] += b.len() as u64;
+            let s = codec::decode_status(&b).map_err(|e| format!("robot {i}'s status: {e}"))?;
+            if s.robot as usize != i {
+                return Err(format!("robot {} reports on robot {i}'s topic", s.robot));
+            }
+            // One robot, one process: a second process announcing it is an error.
+            match self.instance[i] {
+                None => self.instance[i] = Some(s.instance),
+                Some(p) if p != s.instance => {
+                    return Err(format!("robot {i} is announced twice: by process {p} and by process {}", s.instance))
+                }
+                _ => {}
+            }
+            got.push(s);
+        }
+        Ok(got)
+    }
+
+    /// Waits until every robot has announced itself (or one of `children`, the robots this
+    /// process started, has exited, or [`JOIN_TIMEOUT`] has passed): their announcements, in
+    /// robot order.
+    pub(super) fn join(&mut self, children: &mut [Option<Child>]) -> Result<Vec<Status>, String> {
+        let n = self.readers.len();
+        let mut hellos: Vec<Option<Status>> = vec![None; n];
+        let t0 = Instant::now();
+        while hellos.iter().any(Option::is_none) {
+            for (i, h) in hellos.iter_mut().enumerate() {
+                if let Some(s) = self.read(i)?.into_iter().rev().find(|s| s.tick.is_none()) {
+                    *h = Some(s);
+                }
+            }
+            for (i, c) in children.iter_mut().enumerate() {
+                if let Some(Ok(Some(code))) = c.as_mut().map(Child::try_wait) {
+                    return Err(format!("robot {i} exited before it joined ({code})"));
+                }
+            }
+            if t0.elapsed() > JOIN_TIMEOUT {
+                let missing: Vec<String> = (0..n).filter(|&i| hellos[i].is_none()).map(|i| i.to_string()).collect();
+                return Err(format!("robots {} did not join within {} s", missing.join(", "), JOIN_TIMEOUT.as_secs()));
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        Ok(hellos.into_iter().flatten().collect())
+    }
 }
 
 /// Robot `id`'s side (a process of its own): joins, announces itself, steps every tick the
 /// coordinator orders once it holds the assignment that tick names, reports, and ends on a stop.
 pub fn robot(spec: &TeamSpec, id: usize, opts: &DdsOptions) -> Result<(), String> {
-    super::local::check(spec)?;
-    if id >= spec.robots {
-        return Err(format!("--as-robot {id}: the team has robots 0..{}", spec.robots - 1));
-    }
-    let start = starts(&spec.base, spec.robots)?[id];
-    let mut robot = TeamRobot::new(id as u32, std::process::id(), &spec.member(id, start)?, spec.robots > 1)?;
+    let mut robot = TeamRobot::of_team(spec, id)?;
     let bus = Bus::join(opts)?;
     let status_w = bus.writer(&status_topic(id), codec::STATUS_TYPE, STATUS_QOS)?;
     let mut tick_r = bus.reader(TICK_TOPIC, codec::TICK_TYPE, Qos::Latched)?;
@@ -292,7 +335,7 @@ pub fn robot(spec: &TeamSpec, id: usize, opts: &DdsOptions) -> Result<(), String
             heard = Instant::now();
             let want = t.epochs.get(id).copied().unwrap_or(0);
             // Step only on the assignment the order names (it may still be on its way).
-            while robot.epoch < want {
+            while robot.epoch() < want {
                 for b in take(&mut assign_r) {
                     if let Ok(a) = codec::decode_assignment(&b) {
                         robot.assign(&a);

@@ -14,32 +14,16 @@ pub fn coordinator(spec: &TeamSpec) -> Result<Coordinator, String> {
     Ok(Coordinator::new(cfg, base.prior_map.clone(), spec.speeds()?, TICK_US as f64 / 1e6, base.world.time_limit_s))
 }
 
-/// Checks a team spec: robots, the robot whose link is cut.
-pub fn check(spec: &TeamSpec) -> Result<(), String> {
-    if spec.robots == 0 || spec.robots > super::MAX_ROBOTS {
-        return Err(format!("--robots {}: 1 to {}", spec.robots, super::MAX_ROBOTS));
-    }
-    if let Some((r, t)) = spec.kill {
-        if r >= spec.robots || !t.is_finite() || t < 0.0 {
-            return Err(format!("--kill {r}@{t}: a robot 0..{} and a time ≥ 0 s", spec.robots - 1));
-        }
-    }
-    if let Some((r, a)) = spec.sim_for.iter().find(|(r, _)| *r >= spec.robots) {
-        return Err(format!("--sim-for {r}:{a}: a robot 0..{}", spec.robots - 1));
-    }
-    spec.speeds().map(|_| ())
-}
-
 /// Runs `spec`'s team in this process.
 pub fn run(spec: &TeamSpec) -> Result<TeamResult, String> {
-    check(spec)?;
+    spec.check()?;
     let starts = starts(&spec.base, spec.robots)?;
     let mut robots = Vec::with_capacity(spec.robots);
     for (i, s) in starts.iter().enumerate() {
         robots.push(TeamRobot::new(i as u32, std::process::id(), &spec.member(i, *s)?, spec.robots > 1)?);
     }
     let mut coord = coordinator(spec)?;
-    let hellos: Vec<Status> = robots.iter().map(TeamRobot::hello).collect();
+    let hellos: Vec<Status> = robots.iter_mut().map(TeamRobot::hello).collect();
     let mut bytes = vec![[0u64; 2]; spec.robots];
     for (i, h) in hellos.iter().enumerate() {
         bytes[i][0] += codec::encode_status(h).len() as u64;

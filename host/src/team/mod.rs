@@ -24,6 +24,9 @@ pub mod coordinator;
 pub mod dds;
 pub mod eval;
 pub mod local;
+pub mod member;
+#[cfg(feature = "ros2")]
+pub mod realtime;
 pub mod robot;
 
 use crate::search::SearchSpec;
@@ -152,6 +155,23 @@ impl TeamSpec {
             crate::overrides::apply_sim(&mut s.sim, &mut s.controller, a).map_err(|e| format!("robot {i}: {e}"))?;
         }
         Ok(s)
+    }
+
+    /// Checks the team: its size, the robot whose link is cut, the robots `--sim-for` names
+    /// and their settings.
+    pub fn check(&self) -> Result<(), String> {
+        if self.robots == 0 || self.robots > MAX_ROBOTS {
+            return Err(format!("--robots {}: 1 to {}", self.robots, MAX_ROBOTS));
+        }
+        if let Some((r, t)) = self.kill {
+            if r >= self.robots || !t.is_finite() || t < 0.0 {
+                return Err(format!("--kill {r}@{t}: a robot 0..{} and a time ≥ 0 s", self.robots - 1));
+            }
+        }
+        if let Some((r, a)) = self.sim_for.iter().find(|(r, _)| *r >= self.robots) {
+            return Err(format!("--sim-for {r}:{a}: a robot 0..{}", self.robots - 1));
+        }
+        self.speeds().map(|_| ())
     }
 
     /// Every robot's top speed, m/s.

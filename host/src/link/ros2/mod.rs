@@ -724,17 +724,47 @@ pub struct Ros2Run {
     pub rejected: BTreeMap<String, u64>,
 }
 
-/// Runs the controller configured by `cfg` (its grid's lower-left corner at `origin`, or
-/// centred on the first placed scan; classifier `model`) on the graph until the target is found,
-/// the search is exhausted, `stop` is set or `opts.max_wall` passes.
-pub fn run(
-    opts: Ros2Options,
-    cfg: Config,
-    origin: Option<[f64; 2]>,
-    model: Option<&'static [u8]>,
-    stop: Arc<AtomicBool>,
-) -> Result<Ros2Run, Ros2Error> {
-    let mut source = Ros2Source::join(opts, stop)?;
+/// What `lives ros2` runs besides its graph: the controller's configuration, the grid's origin,
+/// the classifier, a known map, a seat in a team.
+#[derive(Clone, Default)]
+pub struct Ros2Brain {
+    /// The grid's lower-left corner in the scans' root frame (`None`: centred on the first
+    /// placed scan).
+    pub origin: Option<[f64; 2]>,
+    /// The classifier `lives` runs.
+    pub model: Option<&'static [u8]>,
+    /// LIVE's known-map mode: the building's map, in the scans' root frame. It seeds the grid
+    /// and labels the scans; a route follower (`live`, `visual-cpp`, `lidar-cpp`) alone is given
+    /// its coverage route from where the first scan was placed.
+    pub map: Option<crate::io::map_file::PriorMap>,
+    /// A seat in a team in real time (`crate::team::realtime`): robot `id` of a team whose
+    /// coordinator runs elsewhere on the same DDS domain.
+    pub team: Option<TeamSeat>,
+}
+
+/// Robot `id` of a team; a robot is lost to the coordinator after `link_timeout` of silence.
+#[derive(Clone, Copy, Debug)]
+pub struct TeamSeat {
+    pub id: usize,
+    pub link_timeout: Duration,
+}
+
+/// Runs the controller configured by `cfg` (and `brain`) on the graph until the target is
+/// found, the search is exhausted, `stop` is set or `opts.max_wall` passes (in a team: until the
+/// coordinator says stop or the target is found).
+pub fn run(opts: Ros2Options, cfg: Config, brain: Ros2Brain, stop: Arc<AtomicBool>) -> Result<Ros2Run, Ros2Error> {
+    let Ros2Brain { origin, model, map, team } = brain;
+    if team.is_some() && origin.is_none() {
+        return Err(Ros2Error(
+            "a team shares one grid: give every robot and the coordinator the same --origin X,Y (in the frame the robots share)".into(),
+        ));
+    }
+    let dds = crate::team::dds::DdsOptions {
+        domain: opts.domain,
+        localhost_only: opts.localhost_only,
+        link_timeout: team.map_or(Duration::from_secs(10), |t| t.link_timeout),
+    };
+    let mut source = Ros2Source::join(opts, stop.clone())?;
     // The grid is placed once the first scan is: centred on it unless told where.
     let Some(first) = source.sense(0) else {
         return Ok(source.finish(End::Source, 0));
@@ -751,17 +781,50 @@ pub fn run(
     if let Some(blob) = model {
         ctrl.set_model(blob).map_err(|e| Ros2Error(format!("the classifier model does not validate: {e}")))?;
     }
+    if let Some(map) = &map {
+        // On the grid as the controller holds it (its origin in fixed point), as `lives search` draws it.
+        let grid_origin = [cfg.origin_x_m.to_num::<f64>(), cfg.origin_y_m.to_num::<f64>()];
+        let cells = map.to_controller_grid(grid_origin).map_err(|e| Ros2Error(e.to_string()))?;
+        crate::live::load(&mut ctrl, &cells);
+        // In a team the coordinator shares the route out.
+        if team.is_none() {
+            let s = crate::live::plan_and_give(&mut ctrl, &cells, [first.base_pose[0], first.base_pose[1]]);
+            eprintln!("lives ros2: known map loaded; {} route waypoints", s.route_waypoints);
+        }
+    }
     let root = source.root.borrow().clone();
+    let start = first.base_pose;
     source.ready.push_front((first, root));
     let continuous = source.opts.continuous;
-    let mut brain = if continuous { InProcess::restarting(ctrl, cfg.replan_interval_us) } else { InProcess::new(ctrl) };
-    let mut publish = |src: &Ros2Source, frame: &Frame, brain: &InProcess, answer: &Answer| src.publish(frame, answer, brain);
-    let ended = drive(&mut source, &mut brain, &mut [&mut publish]).unwrap_or_else(|e| match e {});
+    let (ended, ctrl) = if let Some(seat) = team {
+        let inner = InProcess::waiting(ctrl, cfg.replan_interval_us);
+        let mut brain = crate::team::realtime::TeamBrain::join(inner, &dds, seat.id, map.is_some(), start, stop)
+            .map_err(|e| Ros2Error(format!("team: {e}")))?;
+        let mut publish =
+            |src: &Ros2Source, frame: &Frame, b: &crate::team::realtime::TeamBrain, answer: &Answer| src.publish(frame, answer, &b.inner);
+        match drive(&mut source, &mut brain, &mut [&mut publish]) {
+            Ok(ended) => {
+                brain.say_missed();
+                (ended, brain.inner.ctrl)
+            }
+            Err(e) => {
+                // The team is gone (no order for too long, a link error): the base stands.
+                source.announce_stop("team", &e);
+                let _ = source.finish(End::Stopped, 0);
+                return Err(Ros2Error(format!("team: {e}")));
+            }
+        }
+    } else {
+        let mut brain = if continuous { InProcess::restarting(ctrl, cfg.replan_interval_us) } else { InProcess::new(ctrl) };
+        let mut publish = |src: &Ros2Source, frame: &Frame, brain: &InProcess, answer: &Answer| src.publish(frame, answer, brain);
+        let ended = drive(&mut source, &mut brain, &mut [&mut publish]).unwrap_or_else(|e| match e {});
+        (ended, brain.ctrl)
+    };
     // The final grids (latched: a late subscriber gets them too).
     let t_ns = source.pose.get().map_or(0, |(_, t)| t);
-    source.publish_maps(&wire::header_at(t_ns, &source.root.borrow()), &brain.ctrl);
-    if ended.end == End::Source {
-        // Told to stop or out of time: the base stands.
+    source.publish_maps(&wire::header_at(t_ns, &source.root.borrow()), &ctrl);
+    if matches!(ended.end, End::Source | End::Stopped) {
+        // Told to stop (by a signal, the coordinator) or out of time: the base stands.
         source.announce_stop("shutdown", "lives ros2 stopped");
     }
     Ok(source.finish(ended.end, ended.ticks))

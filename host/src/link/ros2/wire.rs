@@ -82,6 +82,9 @@ pub enum Qos {
     Reliable(i32),
     /// `tf_static`, maps (`map_server`'s): reliable, transient local ("latched"), keep last 1.
     Latched,
+    /// Reliable, transient local, keep last `depth`: a reader that matches late still gets the
+    /// last `depth` messages (a stream of changes, such as a team's orders).
+    Durable(i32),
 }
 
 impl Qos {
@@ -92,6 +95,7 @@ impl Qos {
             Qos::Sensor => (Reliability::BestEffort, Durability::Volatile, 5),
             Qos::Reliable(depth) => (reliable, Durability::Volatile, depth),
             Qos::Latched => (reliable, Durability::TransientLocal, 1),
+            Qos::Durable(depth) => (reliable, Durability::TransientLocal, depth),
         };
         QosPolicyBuilder::new().reliability(rel).durability(dur).history(History::KeepLast { depth }).build()
     }
