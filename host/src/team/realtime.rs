@@ -318,6 +318,9 @@ impl RobotLink {
             if self.round.is_some_and(|r| t.tick <= r) {
                 continue; // a repeat, or older than one taken
             }
+            if t.epochs.len() <= self.id {
+                return Err(format!("robot {}: the coordinator's team has robots 0 to {} only", self.id, t.epochs.len().max(1) - 1));
+            }
             if let Some(r) = self.round {
                 self.orders_missed += t.tick - r - 1;
             }
