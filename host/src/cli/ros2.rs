@@ -126,9 +126,11 @@ pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
     }
     let link_timeout = positive_secs("--link-timeout", link_timeout)?;
     let map = map.as_deref().map(host::io::map_file::PriorMap::load).transpose().map_err(|e| e.to_string())?;
-    let team = team_robot.map(|id| ros2::TeamSeat { id, link_timeout });
-    let brain = ros2::Ros2Brain { origin, model: blob, map, team };
-    let run = ros2::run(opts, cfg, brain, stop).map_err(|e| e.to_string())?;
+    let brain = ros2::Ros2Brain { origin, model: blob, map };
+    let run = match team_robot {
+        Some(id) => team_member(opts, cfg, brain, id, link_timeout, stop)?,
+        None => ros2::run(opts, cfg, brain, stop).map_err(|e| e.to_string())?,
+    };
     let lat = host::link::Summary::of(&run.answer_us);
     if json {
         say!(
@@ -148,6 +150,18 @@ pub fn run(args: Ros2Args) -> Result<ExitCode, String> {
         say!("scan to answer: p50 {:.0} us, p95 {:.0} us; received {:?}; rejected {:?}", lat.p50, lat.p95, run.received, run.rejected);
     }
     Ok(if run.end == host::run::End::Found { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}
+
+/// `--team-robot I`: robot I of a team in real time (host::team::realtime, docs/team.md).
+fn team_member(
+    opts: Ros2Options,
+    cfg: firmware::Config,
+    brain: ros2::Ros2Brain,
+    id: usize,
+    link_timeout: Duration,
+    stop: Arc<AtomicBool>,
+) -> Result<ros2::Ros2Run, String> {
+    host::team::realtime::ros2_member(opts, cfg, brain, host::team::realtime::TeamSeat { id, link_timeout }, stop)
 }
 
 fn positive_secs(flag: &str, s: f64) -> Result<Duration, String> {

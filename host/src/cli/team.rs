@@ -50,8 +50,8 @@ pub struct TeamArgs {
     #[arg(long, default_value_t = 1.0)]
     speedup: f64,
     /// Coordinate robots started elsewhere, in real time: real robots running `lives ros2
-    /// --team-robot I --team-size N` (or simulated ones, `lives team --real-time --as-robot I`)
-    /// on this DDS domain. The world, planner and map say what the coordinator plans on.
+    /// --team-robot I --origin X,Y` (or simulated ones, `lives team --real-time --as-robot I`)
+    /// on this DDS domain. --planner, --map and --origin say what the coordinator plans on.
     #[arg(long)]
     external: bool,
     /// With --external: the grid's lower-left corner `X,Y` every robot was given (`lives ros2

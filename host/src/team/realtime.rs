@@ -498,6 +498,56 @@ impl crate::run::Brain for TeamBrain {
     }
 }
 
+/// Robot `id` of a team; a robot is lost to the coordinator after `link_timeout` of silence.
+#[derive(Clone, Copy, Debug)]
+pub struct TeamSeat {
+    pub id: usize,
+    pub link_timeout: Duration,
+}
+
+/// `lives ros2 --team-robot I`: the controller on the robot's ROS 2 graph (configured by `cfg`
+/// and `brain`; `brain.origin` is needed: the team shares one grid), as robot `seat.id` of a team
+/// whose coordinator runs elsewhere on the same DDS domain, until the coordinator says stop or
+/// the target is found. If the team is lost (no order for too long) the base is stopped.
+pub fn ros2_member(
+    opts: crate::link::ros2::Ros2Options,
+    cfg: firmware::Config,
+    brain: crate::link::ros2::Ros2Brain,
+    seat: TeamSeat,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+) -> Result<crate::link::ros2::Ros2Run, String> {
+    if brain.origin.is_none() {
+        return Err(
+            "a team shares one grid: give every robot and the coordinator the same --origin X,Y (in the frame the robots share)".into()
+        );
+    }
+    let dds = DdsOptions { domain: opts.domain, localhost_only: opts.localhost_only, link_timeout: seat.link_timeout };
+    let started = match crate::link::ros2::start(opts, cfg, &brain, stop.clone()).map_err(|e| e.to_string())? {
+        Ok(s) => s,
+        Err(run) => return Ok(run),
+    };
+    let crate::link::ros2::Ros2Started { mut source, ctrl, start, .. } = started;
+    let interval = ctrl.config().replan_interval_us;
+    let mut team = match TeamBrain::join(crate::run::InProcess::waiting(ctrl, interval), &dds, seat.id, brain.map.is_some(), start, stop) {
+        Ok(t) => t,
+        Err(e) => {
+            source.abort("team", &e);
+            return Err(format!("team: {e}"));
+        }
+    };
+    match source.drive(&mut team, |t| &t.inner) {
+        Ok(ended) => {
+            team.say_missed();
+            Ok(source.end(ended, &team.inner.ctrl))
+        }
+        Err(e) => {
+            // The team is gone (no order for too long, a link error): the base stands.
+            source.abort("team", &e);
+            Err(format!("team: {e}"))
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
