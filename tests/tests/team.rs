@@ -210,3 +210,29 @@ fn the_team_in_real_time_survives_a_cut_link_and_finds_the_target() {
     let (_, err, rc) = lives_team("--world hallway --robots 2 --external");
     assert!(rc == 2 && err.contains("--origin"), "{rc} {err}");
 }
+
+/// In real time a link that drops and comes back (robot 2's process frozen for 8 s of wall
+/// time at the team's 20 s): the robot is lost and its work shared out; when it answers again
+/// (it joins the team's topics anew after 10 s without an order) it is taken in where it stands
+/// and what is left is shared out among all three; the team finds the target with no stale goal.
+#[test]
+fn in_real_time_a_robot_whose_link_comes_back_is_taken_in_again() {
+    let args = "--world hallway --scenario hard --seed 2 --planner live --known-map --robots 3 --link-timeout 3 \
+                --processes --real-time --speedup 2 --pause 2@20:8 --domain 24 --json";
+    let (v, err, rc) = lives_team(args);
+    let v = v.unwrap_or_else(|| panic!("no JSON from lives team --pause (exit {rc}): {err}"));
+    assert_eq!(v["found"], true, "{v}");
+    assert_eq!(v["stale_goals"], 0, "{v}");
+    let r2 = &v["per_robot"][2];
+    let lost = r2["lost_s"].as_f64().unwrap_or_else(|| panic!("robot 2 not lost: {v}"));
+    let back = r2["rejoined_s"].as_f64().unwrap_or_else(|| panic!("robot 2 not taken in again: {v}\n{err}"));
+    assert!(lost >= 20.0 && back > lost, "{v}");
+    // Two shares when it was lost, three when it came back.
+    assert!(v["reassignments"].as_u64().unwrap() >= 5, "{v}");
+    assert!(r2["waypoints_done"].as_u64().unwrap() > 0 || r2["path_m"].as_f64().unwrap() > 5.0, "it went on searching: {v}");
+    assert!(err.contains("robot 2: no order for") && err.contains("joining the team's topics again"), "{err}");
+    let (_, err, rc) = lives_team("--world hallway --robots 2 --pause 1@5:2");
+    assert!(rc == 2 && err.contains("--pause"), "{rc} {err}");
+    let (_, err, rc) = lives_team("--world hallway --robots 2 --processes --real-time --pause 1@5:x");
+    assert!(rc == 2 && err.contains("ROBOT@SECONDS:WALL_SECONDS"), "{rc} {err}");
+}

@@ -46,6 +46,11 @@ pub struct TeamArgs {
     /// 0.2 s of wall time divided by --speedup.
     #[arg(long)]
     real_time: bool,
+    /// With --processes --real-time: freeze robot R's process at the team's time T seconds for
+    /// D seconds of wall time (`R@T:D`), a link that drops and comes back: the robot is lost,
+    /// its work shared out, and it is taken in again when it answers.
+    #[arg(long, value_name = "R@T:D")]
+    pause: Option<String>,
     /// With --real-time: simulated seconds per wall second (e.g. 4: a 0.2 s tick every 50 ms).
     #[arg(long, default_value_t = 1.0)]
     speedup: f64,
@@ -75,6 +80,14 @@ fn parse_sim_for(s: &str) -> Result<(usize, String), String> {
     Ok((r, a.trim().to_string()))
 }
 
+fn parse_pause(s: &str) -> Result<(usize, f64, f64), String> {
+    let bad = || format!("--pause {s}: expected ROBOT@SECONDS:WALL_SECONDS, e.g. 1@20:5");
+    let (rt, d) = s.split_once(':').ok_or_else(bad)?;
+    let (r, t) = parse_kill(rt).map_err(|_| bad())?;
+    let d = d.trim().parse::<f64>().ok().filter(|d| d.is_finite() && *d > 0.0 && *d <= 3600.0).ok_or_else(bad)?;
+    Ok((r, t, d))
+}
+
 fn parse_kill(s: &str) -> Result<(usize, f64), String> {
     let (r, t) = s.split_once('@').ok_or_else(|| format!("--kill {s}: expected ROBOT@SECONDS, e.g. 1@60"))?;
     let r = r.trim().parse::<usize>().map_err(|_| format!("--kill {s}: `{r}` is not a robot index"))?;
@@ -99,6 +112,12 @@ pub fn run(args: TeamArgs) -> Result<ExitCode, String> {
         return Err(
             "--real-time (and --speedup) run a team of processes over DDS: add --processes (or --external, always in real time)".into()
         );
+    }
+    let pause = args.pause.as_deref().map(parse_pause).transpose()?;
+    if let Some((r, _, _)) = pause {
+        if !(args.real_time && args.processes) || r >= args.robots {
+            return Err(format!("--pause: a robot 0..{} of a team run with --processes --real-time", args.robots.max(1) - 1));
+        }
     }
     if args.external {
         return external(&args);
@@ -188,7 +207,7 @@ fn coordinate_external(
         localhost_only: opts.localhost_only,
         link_timeout: std::time::Duration::from_secs_f64(args.link_timeout),
     };
-    team::realtime::coordinate_external(spec, origin, map, &team::realtime::RealtimeOptions { dds, speedup: args.speedup })
+    team::realtime::coordinate_external(spec, origin, map, &team::realtime::RealtimeOptions { dds, speedup: args.speedup, pause: None })
 }
 
 #[cfg(not(feature = "ros2"))]
@@ -208,7 +227,8 @@ fn over_dds(args: &TeamArgs, spec: &TeamSpec) -> Result<Option<TeamResult>, Stri
         None => host::link::ros2::Ros2Options::from_env()?.domain,
     };
     let opts = team::dds::DdsOptions { domain, localhost_only: true, link_timeout: std::time::Duration::from_secs_f64(args.link_timeout) };
-    let realtime = team::realtime::RealtimeOptions { dds: opts.clone(), speedup: args.speedup };
+    let pause = args.pause.as_deref().map(parse_pause).transpose()?;
+    let realtime = team::realtime::RealtimeOptions { dds: opts.clone(), speedup: args.speedup, pause };
     if let Some(i) = args.as_robot {
         if args.real_time {
             team::realtime::sim_robot(spec, i, &realtime)?;
@@ -227,11 +247,11 @@ fn over_dds(args: &TeamArgs, spec: &TeamSpec) -> Result<Option<TeamResult>, Stri
         }
         match a.as_str() {
             "--processes" | "--json" => continue,
-            "--kill" | "--domain" => {
+            "--kill" | "--domain" | "--pause" => {
                 skip = true;
                 continue;
             }
-            _ if a.starts_with("--kill=") || a.starts_with("--domain=") => continue,
+            _ if a.starts_with("--kill=") || a.starts_with("--domain=") || a.starts_with("--pause=") => continue,
             _ => base.push(a),
         }
     }

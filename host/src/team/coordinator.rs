@@ -200,7 +200,8 @@ impl Coordinator {
             let Some(s) = s else {
                 if self.alive[i] {
                     self.alive[i] = false;
-                    self.reports[i].lost_s = Some(crate::run::round3(tick as f64 * self.tick_s));
+                    // The first loss (in real time a robot may come back and be lost again).
+                    self.reports[i].lost_s.get_or_insert(crate::run::round3(tick as f64 * self.tick_s));
                     lost_now.push(i);
                 }
                 continue;
@@ -261,6 +262,25 @@ impl Coordinator {
         Ok(decision)
     }
 
+    /// Real time: robot `i`, lost, answers again with `s` in round `round` (before
+    /// [`Coordinator::after_tick`] takes that round's statuses, `s` among them): it is taken in
+    /// again where it stands, and what is left is shared out anew among every robot answering
+    /// (their new assignments, named from the next round). Nothing for a robot not lost.
+    pub fn rejoin(&mut self, i: usize, round: u32, s: Status) -> Result<Vec<Assignment>, String> {
+        if i >= self.n() || self.alive[i] {
+            return Ok(Vec::new());
+        }
+        self.alive[i] = true;
+        self.next_round = round + 1;
+        self.reports[i].rejoined_s = Some(crate::run::round3(round as f64 * self.tick_s));
+        self.reports[i].path_m = s.path_m;
+        self.last[i] = Some(s);
+        let answering: Vec<usize> = (0..self.n()).filter(|&r| self.alive[r]).collect();
+        let a = self.plan(&answering)?;
+        self.reassignments += a.len() as u32;
+        Ok(a)
+    }
+
     /// Free cells of the known map no camera has seen (`None` without a map).
     fn entropy(&self) -> Option<u32> {
         let cells = self.cells.as_ref()?;
@@ -285,7 +305,7 @@ impl Coordinator {
         }
         let end_s = ((self.last_tick + 1) as f64 * self.tick_s).min(self.limit_s);
         for r in &mut per_robot {
-            let s = r.lost_s.unwrap_or(end_s).max(self.tick_s);
+            let s = if r.rejoined_s.is_some() { end_s } else { r.lost_s.unwrap_or(end_s) }.max(self.tick_s);
             r.up_bps = crate::run::round3(r.bytes_up as f64 / s);
             r.down_bps = crate::run::round3(r.bytes_down as f64 / s);
         }

@@ -195,6 +195,10 @@ pub struct RobotReport {
     /// It stopped answering (its link was cut) at this time, seconds.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lost_s: Option<f64>,
+    /// In real time: it answered again after it was lost (`lost_s` is the first loss), at this
+    /// time, seconds (the last return), and was taken in again (what was left shared out anew).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rejoined_s: Option<f64>,
     /// Payload bytes it sent (statuses) and received (ticks, assignments), CDR as on the wire.
     pub bytes_up: u64,
     pub bytes_down: u64,
@@ -317,7 +321,8 @@ impl TeamResult {
                 p.path_m,
                 p.waypoints_done,
                 p.waypoints_assigned,
-                p.lost_s.map_or(String::new(), |t| format!(", link lost at {t:.1} s")),
+                p.lost_s.map_or(String::new(), |t| format!(", link lost at {t:.1} s"))
+                    + &p.rejoined_s.map_or(String::new(), |t| format!(", back at {t:.1} s")),
                 p.up_bps,
                 p.down_bps
             );

@@ -56,6 +56,9 @@ pub struct RealtimeOptions {
     pub dds: DdsOptions,
     /// Simulated seconds per wall second (1: real time; a simulated team may run faster).
     pub speedup: f64,
+    /// Robot `.0`'s process is frozen (SIGSTOP) at the team's time `.1` seconds for `.2` seconds
+    /// of wall time, then goes on (SIGCONT): a link that drops and comes back.
+    pub pause: Option<(usize, f64, f64)>,
 }
 
 impl RealtimeOptions {
@@ -175,7 +178,8 @@ fn coordinate(
     let mut heard = vec![Instant::now(); n];
     let mut deadline = Instant::now();
     let mut round = 0u32;
-    loop {
+    let mut frozen = Frozen::NotYet;
+    let out = loop {
         if let Some((r, t)) = spec.kill {
             if round as f64 * tick_s >= t {
                 if let Some(mut c) = children.get_mut(r).and_then(Option::take) {
@@ -185,6 +189,7 @@ fn coordinate(
                 }
             }
         }
+        frozen = pause(opts.pause, frozen, round as f64 * tick_s, children);
         for a in pending.drain(..) {
             let i = a.robot as usize;
             inbox.bytes[i][1] += send(&ends.assign_w[i], &codec::encode_assignment(&a), "an assignment")?;
@@ -208,9 +213,18 @@ fn coordinate(
             }
             std::thread::sleep((deadline - now).min(Duration::from_millis(2)));
         }
+        let busy = Instant::now();
         let mut statuses: Vec<Option<Status>> = Vec::with_capacity(n);
         for (i, g) in got.into_iter().enumerate() {
-            if !coord.alive(i) {
+            if !coord.alive(i) && !g.is_empty() {
+                // A lost robot answers again (its link came back): it is taken in again where it
+                // stands, what is left is shared out anew, and its news (a find too) counts.
+                heard[i] = Instant::now();
+                let s = fold(g);
+                last[i] = s.clone();
+                pending.extend(coord.rejoin(i, round, s.clone())?);
+                statuses.push(Some(s));
+            } else if !coord.alive(i) {
                 statuses.push(None);
             } else if g.is_empty() {
                 let silent = heard[i].elapsed() > opts.dds.link_timeout;
@@ -226,13 +240,50 @@ fn coordinate(
             }
         }
         let d = coord.after_tick(round, &statuses)?;
-        pending = d.assignments;
+        pending.extend(d.assignments);
+        // The coordinator's own planning (1 to 6 s in the built-in buildings) is no robot's
+        // silence: the robots' clocks of silence start again after it.
+        if busy.elapsed() > period {
+            let now = Instant::now();
+            heard.iter_mut().for_each(|h| *h = now);
+        }
         if d.stop || (round + 1) as f64 * tick_s >= limit_s - 1e-9 {
-            break;
+            break coord.result(spec, "dds-realtime", &inbox.bytes);
         }
         round += 1;
+    };
+    // A robot still frozen goes on, to be told to stop.
+    pause(opts.pause, frozen, f64::INFINITY, children);
+    Ok(out)
+}
+
+/// Where `--pause` stands.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Frozen {
+    NotYet,
+    Until(Instant),
+    Done,
+}
+
+/// Freezes the paused robot's process once the team's time reaches the pause (`now_s`), and
+/// lets it go on when its wall time is up (or at the end, `now_s` infinite).
+fn pause(p: Option<(usize, f64, f64)>, frozen: Frozen, now_s: f64, children: &[Option<std::process::Child>]) -> Frozen {
+    let Some((r, at, wall)) = p else { return frozen };
+    let Some(pid) = children.get(r).and_then(Option::as_ref).map(std::process::Child::id) else { return Frozen::Done };
+    let signal = |sig: &str| {
+        let _ = std::process::Command::new("kill").args(["-s", sig, &pid.to_string()]).status();
+    };
+    match frozen {
+        Frozen::NotYet if now_s >= at && now_s.is_finite() => {
+            signal("STOP");
+            Frozen::Until(Instant::now() + Duration::from_secs_f64(wall))
+        }
+        Frozen::Until(t) if Instant::now() >= t || now_s.is_infinite() => {
+            signal("CONT");
+            Frozen::Done
+        }
+        f => f,
     }
-    Ok(coord.result(spec, "dds-realtime", &inbox.bytes))
 }
 
 /// What a robot heard from the coordinator.
@@ -248,13 +299,36 @@ pub enum Heard {
     Stop,
 }
 
-/// A robot's end of the team's topics (real time).
-pub struct RobotLink {
-    id: usize,
+/// A robot's endpoints on the team's topics.
+struct RobotEnds {
     _bus: Bus,
     status_w: DataWriter<Raw, RawCdr>,
     order_r: DataReader<Raw, RawCdr>,
     assign_r: DataReader<Raw, RawCdr>,
+}
+
+impl RobotEnds {
+    fn open(o: &DdsOptions, id: usize) -> Result<Self, String> {
+        let bus = Bus::join(o)?;
+        let status_w = bus.writer(&status_topic(id), codec::STATUS_TYPE, Qos::Reliable(STATUS_DEPTH))?;
+        let order_r = bus.reader(ORDER_TOPIC, codec::TICK_TYPE, Qos::Durable(ORDER_DEPTH))?;
+        let assign_r = bus.reader(&assignment_topic(id), codec::ASSIGNMENT_TYPE, Qos::Latched)?;
+        Ok(RobotEnds { _bus: bus, status_w, order_r, assign_r })
+    }
+}
+
+/// A robot that has heard no order for this long joins the team's topics again, as a new DDS
+/// participant: after a link that stalled (a process frozen, a radio out of range) the old
+/// endpoints' reliable streams may wait for messages the other side no longer holds. Longer than
+/// the coordinator's longest planning in the built-in buildings (6.5 s, office, three robots),
+/// during which no order comes.
+pub const REJOIN_AFTER: Duration = Duration::from_secs(10);
+
+/// A robot's end of the team's topics (real time).
+pub struct RobotLink {
+    id: usize,
+    dds: DdsOptions,
+    ends: RobotEnds,
     /// The newest round taken (`None`: no order yet).
     pub round: Option<u32>,
     /// The epoch of its own assignment the newest order names.
@@ -262,34 +336,35 @@ pub struct RobotLink {
     stopped: bool,
     /// Rounds it never got the order of.
     pub orders_missed: u32,
+    /// Times it joined the team's topics again ([`REJOIN_AFTER`]).
+    pub rejoins: u32,
     heard: Instant,
+    opened: Instant,
     last_hello: Option<Instant>,
 }
 
 impl RobotLink {
     /// Joins the team as robot `id`.
     pub fn join(o: &DdsOptions, id: usize) -> Result<Self, String> {
-        let bus = Bus::join(o)?;
-        let status_w = bus.writer(&status_topic(id), codec::STATUS_TYPE, Qos::Reliable(STATUS_DEPTH))?;
-        let order_r = bus.reader(ORDER_TOPIC, codec::TICK_TYPE, Qos::Durable(ORDER_DEPTH))?;
-        let assign_r = bus.reader(&assignment_topic(id), codec::ASSIGNMENT_TYPE, Qos::Latched)?;
+        let ends = RobotEnds::open(o, id)?;
+        let now = Instant::now();
         Ok(RobotLink {
             id,
-            _bus: bus,
-            status_w,
-            order_r,
-            assign_r,
+            dds: o.clone(),
+            ends,
             round: None,
             named: 0,
             stopped: false,
             orders_missed: 0,
-            heard: Instant::now(),
+            rejoins: 0,
+            heard: now,
+            opened: now,
             last_hello: None,
         })
     }
 
     fn take_assignments(&mut self, member: &mut TeamMember, ctrl: &mut Controller) {
-        for b in take(&mut self.assign_r) {
+        for b in take(&mut self.ends.assign_r) {
             match codec::decode_assignment(&b) {
                 Ok(a) => member.assign(ctrl, &a),
                 Err(e) => eprintln!("robot {}: an assignment refused: {e}", self.id),
@@ -303,7 +378,7 @@ impl RobotLink {
     pub fn poll(&mut self, member: &mut TeamMember, ctrl: &mut Controller) -> Result<Heard, String> {
         self.take_assignments(member, ctrl);
         let mut newest: Option<TickMsg> = None;
-        for b in take(&mut self.order_r) {
+        for b in take(&mut self.ends.order_r) {
             let t = match codec::decode_tick(&b) {
                 Ok(t) => t,
                 Err(e) => {
@@ -341,6 +416,12 @@ impl RobotLink {
         if self.heard.elapsed() > ORDER_TIMEOUT {
             return Err(format!("robot {}: no order from the coordinator for {} s", self.id, ORDER_TIMEOUT.as_secs()));
         }
+        if self.round.is_some() && self.heard.elapsed() > REJOIN_AFTER && self.opened.elapsed() > REJOIN_AFTER {
+            eprintln!("robot {}: no order for {:.1} s: joining the team's topics again", self.id, self.heard.elapsed().as_secs_f64());
+            self.ends = RobotEnds::open(&self.dds, self.id)?;
+            self.opened = Instant::now();
+            self.rejoins += 1;
+        }
         Ok(match self.round {
             None => Heard::Nothing,
             Some(_) if member.epoch < self.named => Heard::Hold,
@@ -351,24 +432,27 @@ impl RobotLink {
     /// Announces the robot (`hello`: its status with no tick), at most every [`RESEND`].
     pub fn announce(&mut self, hello: &Status) -> Result<(), String> {
         if self.last_hello.is_none_or(|t| t.elapsed() >= RESEND) {
-            send(&self.status_w, &codec::encode_status(hello), "an announcement")?;
+            send(&self.ends.status_w, &codec::encode_status(hello), "an announcement")?;
             self.last_hello = Some(Instant::now());
         }
         Ok(())
     }
 
-    /// Says on stderr how many orders never came, if any (what teammates saw in those rounds
-    /// was not merged).
+    /// Says on stderr how many orders never came (what teammates saw in those rounds was not
+    /// merged) and how often it joined again, if any.
     pub fn say_missed(&self) {
-        if self.orders_missed > 0 {
-            eprintln!("robot {}: {} of the coordinator's orders never came", self.id, self.orders_missed);
+        if self.orders_missed > 0 || self.rejoins > 0 {
+            eprintln!(
+                "robot {}: orders that never came: {}; times it joined the team's topics again: {}",
+                self.id, self.orders_missed, self.rejoins
+            );
         }
     }
 
     /// Reports `s` as the status after the newest round taken.
     pub fn report(&mut self, mut s: Status) -> Result<(), String> {
         s.tick = Some(self.round.unwrap_or(0));
-        send(&self.status_w, &codec::encode_status(&s), "a status").map(|_| ())
+        send(&self.ends.status_w, &codec::encode_status(&s), "a status").map(|_| ())
     }
 }
 
