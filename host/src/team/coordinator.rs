@@ -183,6 +183,11 @@ impl Coordinator {
         }
     }
 
+    /// Robot `r`'s last status taken (its announcement before the first).
+    pub fn last_status(&self, r: usize) -> Option<&Status> {
+        self.last.get(r)?.as_ref()
+    }
+
     /// Whether robot `r` still answers.
     pub fn alive(&self, r: usize) -> bool {
         self.alive[r]

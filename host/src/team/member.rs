@@ -16,6 +16,8 @@ pub struct TeamMember {
     /// The epoch of the assignment it follows (0: none yet).
     pub epoch: u32,
     goal_epoch: Option<u32>,
+    /// Holding still without a goal ([`TeamMember::drop_goal`]) until the controller answers again.
+    holding: bool,
     /// The waypoints of the assignment it follows.
     route_len: usize,
     /// Cells already reported seen.
@@ -35,6 +37,7 @@ impl TeamMember {
             instance,
             epoch: 0,
             goal_epoch: None,
+            holding: false,
             route_len: 0,
             reported: vec![0; n.div_ceil(64)],
             lidar_known: (!known_map).then(|| vec![0; n]),
@@ -102,6 +105,7 @@ impl TeamMember {
     /// After the controller answered a tick (`out`: its outputs; `ended`: the run ends with
     /// this answer): a new goal comes from the assignment it follows.
     pub fn answered(&mut self, out: Option<&Outputs>, ended: bool) {
+        self.holding = false;
         let Some(out) = out else { return };
         if out.goal.is_none() {
             self.goal_epoch = None;
@@ -110,10 +114,11 @@ impl TeamMember {
         }
     }
 
-    /// Its goal was dropped without the controller's say (the base held still for an
-    /// assignment on its way).
+    /// Its goal was dropped without the controller's say (the base holds still for an
+    /// assignment on its way): reported as no goal until the controller answers again.
     pub fn drop_goal(&mut self) {
         self.goal_epoch = None;
+        self.holding = true;
     }
 
     /// The status after tick `tick` (`None`: announcing itself), with the cells its camera saw
@@ -144,7 +149,7 @@ impl TeamMember {
             epoch: self.epoch,
             goal_epoch: self.goal_epoch,
             done: (0..self.route_len.min(route.waypoints().len())).filter(|&i| route.is_done(i)).map(|i| i as u16).collect(),
-            goal: out.and_then(|o| o.goal.as_ref()).map(|g| [g.pose.x.to_num::<f64>(), g.pose.y.to_num::<f64>()]),
+            goal: out.filter(|_| !self.holding).and_then(|o| o.goal.as_ref()).map(|g| [g.pose.x.to_num::<f64>(), g.pose.y.to_num::<f64>()]),
             seen,
             lidar,
             path_m: crate::run::round3(path_m),

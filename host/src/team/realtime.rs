@@ -174,7 +174,6 @@ fn coordinate(
     let tick_s = TICK_US as f64 / 1e6;
     let limit_s = spec.base.world.time_limit_s;
     let period = opts.period();
-    let mut last: Vec<Status> = hellos;
     let mut heard = vec![Instant::now(); n];
     let mut deadline = Instant::now();
     let mut round = 0u32;
@@ -216,28 +215,23 @@ fn coordinate(
         let busy = Instant::now();
         let mut statuses: Vec<Option<Status>> = Vec::with_capacity(n);
         for (i, g) in got.into_iter().enumerate() {
-            if !coord.alive(i) && !g.is_empty() {
+            if g.is_empty() {
+                // Nothing this round: where it last said, unless lost or silent too long.
+                let silent = !coord.alive(i) || heard[i].elapsed() > opts.dds.link_timeout;
+                statuses.push(if silent { None } else { coord.last_status(i).map(quiet) });
+                continue;
+            }
+            heard[i] = Instant::now();
+            for s in &g {
+                coord.note_stale(i, s);
+            }
+            let s = fold(g);
+            if !coord.alive(i) {
                 // A lost robot answers again (its link came back): it is taken in again where it
                 // stands, what is left is shared out anew, and its news (a find too) counts.
-                heard[i] = Instant::now();
-                let s = fold(g);
-                last[i] = s.clone();
                 pending.extend(coord.rejoin(i, round, s.clone())?);
-                statuses.push(Some(s));
-            } else if !coord.alive(i) {
-                statuses.push(None);
-            } else if g.is_empty() {
-                let silent = heard[i].elapsed() > opts.dds.link_timeout;
-                statuses.push((!silent).then(|| quiet(&last[i])));
-            } else {
-                heard[i] = Instant::now();
-                for s in &g {
-                    coord.note_stale(i, s);
-                }
-                let s = fold(g);
-                last[i] = s.clone();
-                statuses.push(Some(s));
             }
+            statuses.push(Some(s));
         }
         let d = coord.after_tick(round, &statuses)?;
         pending.extend(d.assignments);

@@ -119,9 +119,7 @@ impl TeamRobot {
     pub fn hold(&mut self, tick: u32) -> Status {
         self.member.drop_goal();
         self.stand();
-        let mut s = self.status(Some(tick));
-        s.goal = None;
-        s
+        self.status(Some(tick))
     }
 
     fn status(&mut self, tick: Option<u32>) -> Status {
